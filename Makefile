@@ -1,0 +1,35 @@
+# workbench: `make demo` and `make test` each set up .venv on a fresh machine, then run.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+OUT ?= out
+
+.PHONY: demo test lint format studies benchmarks clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/workbench run studies/default.toml -o $(OUT)/default.nc --figures $(OUT)/figures
+	@echo "demo: netCDF run in $(OUT)/default.nc, figures in $(OUT)/figures/"
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check workbench tests benchmarks studies
+	$(VENV)/bin/ruff format --check workbench tests benchmarks studies
+
+format: $(STAMP)
+	$(VENV)/bin/ruff format workbench tests benchmarks studies
+	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies
+
+test: lint
+	$(PY) -m pytest -q --timeout=900
+
+benchmarks: $(STAMP)
+	$(PY) benchmarks/solver_reference.py
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache

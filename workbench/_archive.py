@@ -1,0 +1,56 @@
+"""netCDF archives: atomic writing, exact reading."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["save_run", "open_run"]
+
+
+def _encodable(ds: xr.Dataset) -> xr.Dataset:
+    """netCDF cannot store booleans or None in attributes: store them as int8 / omit them."""
+    ds = ds.copy(deep=False)
+    for obj in [ds, *ds.variables.values()]:
+        for k, v in list(obj.attrs.items()):
+            if isinstance(v, bool | np.bool_):
+                obj.attrs[k] = np.int8(v)
+            elif v is None:
+                del obj.attrs[k]
+    return ds
+
+
+def save_run(ds: xr.Dataset, path: str | os.PathLike, *, compress: bool = True) -> Path:
+    """Write a dataset to netCDF-4 atomically: a temporary file beside ``path``, then a rename.
+
+    A reader never sees a half-written file, and an interrupted write leaves any previous file
+    at ``path`` intact. Float variables are zlib-compressed (level 4, lossless) when ``compress``.
+
+    Returns the path written.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    encoding = {}
+    if compress:
+        for name, var in ds.data_vars.items():
+            if var.dtype.kind in "fiu" and var.ndim > 0:
+                encoding[name] = {"zlib": True, "complevel": 4}
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        _encodable(ds).to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def open_run(path: str | os.PathLike) -> xr.Dataset:
+    """Read a stored run (or campaign) fully into memory and close the file."""
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        return ds.load()

@@ -1,0 +1,62 @@
+"""Lorenz (1963) system, a reference system for the solver and the analysis.
+
+x' = sigma (y - x),  y' = x (rho - z) - y,  z' = x y - beta z (non-dimensional; "s" is the
+model's time unit and "1" its state unit).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from workbench.models import register
+from workbench.models._base import Model, Parameter, Problem, Quantity
+
+
+@njit(cache=True)
+def rhs(t, y, p, ip, aux, dydt):
+    sigma, rho, beta = p[0], p[1], p[2]
+    dydt[0] = sigma * (y[1] - y[0])
+    dydt[1] = y[0] * (rho - y[2]) - y[1]
+    dydt[2] = y[0] * y[1] - beta * y[2]
+    return 0
+
+
+@njit(cache=True)
+def event_values(t, y, p, ip, aux, g):
+    return None
+
+
+@njit(cache=True)
+def apply_event(k, t, y, p, ip, aux):
+    return 0
+
+
+@register
+class Lorenz(Model):
+    """Lorenz system; autonomous (no forcing period)."""
+
+    name = "lorenz"
+    description = "Lorenz (1963) convection model"
+    reference = "Lorenz (1963), J. Atmos. Sci. 20:130"
+    parameters = (
+        Parameter("sigma", 10.0, "1", "Prandtl number"),
+        Parameter("rho", 28.0, "1", "reduced Rayleigh number"),
+        Parameter("beta", 8.0 / 3.0, "1", "geometric factor"),
+        Parameter("x0", 1.0, "1", "initial x"),
+        Parameter("y0", 1.0, "1", "initial y"),
+        Parameter("z0", 1.0, "1", "initial z"),
+    )
+    _STATES = (
+        Quantity("x", "1", "convection intensity"),
+        Quantity("y", "1", "horizontal temperature difference"),
+        Quantity("z", "1", "vertical temperature difference"),
+    )
+
+    def states(self, effects):
+        return self._STATES
+
+    def problem(self, params, effects, initial, requested):
+        p = np.array([params["sigma"], params["rho"], params["beta"]])
+        y0 = [initial.get(s, params[s + "0"]) for s in ("x", "y", "z")]
+        return Problem(hooks=__name__, states=self._STATES, y0=np.array(y0), p=p)

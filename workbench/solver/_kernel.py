@@ -1,0 +1,473 @@
+"""Compiled adaptive Runge–Kutta integration loop (a template, specialised per model).
+
+The whole loop runs in numba-compiled code: embedded-pair step-size control, dense output,
+records at exactly requested times, and event location by root finding on the dense output with
+the state update an event asks for. The model's compiled hooks are imported by name; the line
+marked ``@@HOOKS@@`` is rewritten by :mod:`workbench.solver._compile` to import them from the
+model's module, so that every model gets its own cacheable compiled loop and adding a model never
+touches this file.
+
+Hooks (all ``numba.njit``), in SI units of the model's state:
+
+``rhs(t, y, p, ip, aux, dydt) -> int``
+    Writes dy/dt; returns 0, or a positive model failure code (the step is then rejected and
+    retried smaller; if it persists the run fails with that code).
+``event_values(t, y, p, ip, aux, g) -> None``
+    Writes the event functions g_k; an event fires where g_k changes sign in its direction.
+``apply_event(k, t, y, p, ip, aux) -> int``
+    Applies the update of event k in place (state ``y`` and discrete state ``aux``); returns 1 to
+    stop the integration, else 0.
+
+Algorithms: Dormand & Prince (1980) DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853
+(Hairer, Nørsett & Wanner 1993, Sec. II.10); step-size control and initial step as in Hairer's
+codes and ``scipy.integrate`` (Hairer et al. 1993, Sec. II.4); event location by the Illinois
+variant of regula falsi (Dowell & Jarratt 1971) on the dense output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from workbench.solver._hooks_template import apply_event, event_values, rhs  # @@HOOKS@@
+from workbench.solver._tableaux import (
+    DOP853_A,
+    DOP853_A_EXTRA,
+    DOP853_B,
+    DOP853_C,
+    DOP853_C_EXTRA,
+    DOP853_D,
+    DOP853_E3,
+    DOP853_E5,
+    MAX_FACTOR,
+    MIN_FACTOR,
+    RK45_A,
+    RK45_B,
+    RK45_C,
+    RK45_E,
+    RK45_P,
+    SAFETY,
+)
+
+DOPRI5 = 0
+DOP853 = 1
+
+# Return codes of `advance`.
+DONE = 0
+PAUSED = 1
+TERMINATED = 2
+STEP_UNDERFLOW = -1
+NON_FINITE = -2
+MAX_STEPS = -3
+MODEL_FAILURE = -4
+
+# Indices of the int64 statistics array.
+ST_STEPS = 0
+ST_REJECTED = 1
+ST_RHS = 2
+ST_EVENTS = 3
+ST_RECORDED = 4
+ST_MODEL_CODE = 5
+N_STATS = 6
+
+# Indices of the float64 controller array: current time (s), next step size (s), flag "last
+# failure was non-finite".
+CT_T = 0
+CT_H = 1
+CT_NONFINITE = 2
+N_CTRL = 3
+
+
+@njit(cache=True)
+def _n_stages(method):
+    return 12 if method == DOP853 else 6
+
+
+@njit(cache=True)
+def _stage_point(K, a, s, h, y, out):
+    """out = y + h * sum_{j<s} a[j] K[j]."""
+    n = y.size
+    for i in range(n):
+        acc = 0.0
+        for j in range(s):
+            acc += a[j] * K[j, i]
+        out[i] = y[i] + h * acc
+
+
+@njit(cache=True)
+def _rk_step(method, t, y, f, h, p, ip, aux, K, y_new, ytmp, stats):
+    """One explicit RK step; stages in K, FSAL derivative in K[ns]. Returns the hook code."""
+    ns = _n_stages(method)
+    n = y.size
+    for i in range(n):
+        K[0, i] = f[i]
+    for s in range(1, ns):
+        if method == DOP853:
+            _stage_point(K, DOP853_A[s], s, h, y, ytmp)
+            c = DOP853_C[s]
+        else:
+            _stage_point(K, RK45_A[s], s, h, y, ytmp)
+            c = RK45_C[s]
+        stats[ST_RHS] += 1
+        code = rhs(t + c * h, ytmp, p, ip, aux, K[s])
+        if code != 0:
+            return code
+    if method == DOP853:
+        _stage_point(K, DOP853_B, ns, h, y, y_new)
+    else:
+        _stage_point(K, RK45_B, ns, h, y, y_new)
+    stats[ST_RHS] += 1
+    return rhs(t + h, y_new, p, ip, aux, K[ns])
+
+
+@njit(cache=True)
+def _error_norm(method, K, h, y, y_new, rtol, atol):
+    """Scaled RMS error estimate of the step (Hairer et al. 1993, Eq. II.4.11; DOP853's
+    combination of its 5th- and 3rd-order estimators)."""
+    n = y.size
+    if method == DOP853:
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(n):
+            sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
+            a5 = 0.0
+            a3 = 0.0
+            for j in range(13):
+                a5 += DOP853_E5[j] * K[j, i]
+                a3 += DOP853_E3[j] * K[j, i]
+            e5 += (a5 / sc) ** 2
+            e3 += (a3 / sc) ** 2
+        if e5 == 0.0 and e3 == 0.0:
+            return 0.0
+        return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * n)
+    acc = 0.0
+    for i in range(n):
+        sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
+        e = 0.0
+        for j in range(7):
+            e += RK45_E[j] * K[j, i]
+        acc += (h * e / sc) ** 2
+    return np.sqrt(acc / n)
+
+
+@njit(cache=True)
+def _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats):
+    """Coefficients of the continuous extension over the last step. Returns the hook code."""
+    n = y.size
+    if method == DOP853:
+        for r in range(3):
+            s = 13 + r
+            _stage_point(K, DOP853_A_EXTRA[r], s, h, y, ytmp)
+            stats[ST_RHS] += 1
+            code = rhs(t + DOP853_C_EXTRA[r] * h, ytmp, p, ip, aux, K[s])
+            if code != 0:
+                return code
+        for i in range(n):
+            dy = y_new[i] - y[i]
+            F[0, i] = dy
+            F[1, i] = h * K[0, i] - dy
+            F[2, i] = 2.0 * dy - h * (K[12, i] + K[0, i])
+            for r in range(4):
+                acc = 0.0
+                for s in range(16):
+                    acc += DOP853_D[r, s] * K[s, i]
+                F[3 + r, i] = h * acc
+    else:
+        for i in range(n):
+            for j in range(4):
+                acc = 0.0
+                for s in range(7):
+                    acc += K[s, i] * RK45_P[s, j]
+                F[j, i] = acc
+    return 0
+
+
+@njit(cache=True)
+def _dense_eval(method, t_old, h, y_old, F, t, out):
+    """State at time t inside the last step from the continuous extension."""
+    x = (t - t_old) / h
+    n = y_old.size
+    if method == DOP853:
+        for i in range(n):
+            acc = 0.0
+            for r in range(6, -1, -1):
+                acc += F[r, i]
+                if (6 - r) % 2 == 0:
+                    acc *= x
+                else:
+                    acc *= 1.0 - x
+            out[i] = y_old[i] + acc
+    else:
+        for i in range(n):
+            acc = 0.0
+            xp = x
+            for j in range(4):
+                acc += F[j, i] * xp
+                xp *= x
+            out[i] = y_old[i] + h * acc
+
+
+@njit(cache=True)
+def _crossed(direction, g_a, g_b):
+    if direction >= 0 and g_a < 0.0 and g_b >= 0.0:
+        return True
+    if direction <= 0 and g_a > 0.0 and g_b <= 0.0:
+        return True
+    return False
+
+
+@njit(cache=True)
+def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, yint, gtmp):
+    """Root of event k in [t_a, t_b] by the Illinois method on the dense output.
+
+    Returns the right end of the final bracket, where the event function already has its
+    post-crossing sign, so that the event does not fire again at the same root.
+    """
+    side = 0
+    tol = 4.0 * 2.220446049250313e-16 * max(abs(t_a), abs(t_b), abs(h))
+    for _ in range(200):
+        if t_b - t_a <= tol:
+            break
+        t_m = (t_a * g_b - t_b * g_a) / (g_b - g_a)
+        if not (t_m > t_a and t_m < t_b):
+            t_m = 0.5 * (t_a + t_b)
+        _dense_eval(method, t_old, h, y_old, F, t_m, yint)
+        event_values(t_m, yint, p, ip, aux, gtmp)
+        g_m = gtmp[k]
+        if g_m != 0.0 and (g_m < 0.0) == (g_a < 0.0):
+            t_a = t_m
+            g_a = g_m
+            if side == -1:
+                g_b *= 0.5
+            side = -1
+        else:
+            t_b = t_m
+            g_b = g_m
+            if side == 1:
+                g_a *= 0.5
+            side = 1
+    return t_b
+
+
+@njit(cache=True)
+def start(t, y, p, ip, aux, f, g, stats):
+    """Derivative and event functions at the initial point. Returns the hook code."""
+    stats[ST_RHS] += 1
+    code = rhs(t, y, p, ip, aux, f)
+    if g.size > 0:
+        event_values(t, y, p, ip, aux, g)
+    return code
+
+
+@njit(cache=True)
+def initial_step(method, t0, y0, f0, p, ip, aux, rtol, atol, max_step, t_end, stats):
+    """Initial step size (Hairer et al. 1993, Sec. II.4, "starting step size"), s."""
+    n = y0.size
+    interval = abs(t_end - t0)
+    if interval == 0.0:
+        return 0.0
+    order = 7 if method == DOP853 else 4
+    d0 = 0.0
+    d1 = 0.0
+    for i in range(n):
+        sc = atol[i] + abs(y0[i]) * rtol
+        d0 += (y0[i] / sc) ** 2
+        d1 += (f0[i] / sc) ** 2
+    d0 = np.sqrt(d0 / n)
+    d1 = np.sqrt(d1 / n)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    y1 = np.empty(n)
+    f1 = np.empty(n)
+    for i in range(n):
+        y1[i] = y0[i] + h0 * f0[i]
+    stats[ST_RHS] += 1
+    rhs(t0 + h0, y1, p, ip, aux, f1)
+    d2 = 0.0
+    for i in range(n):
+        sc = atol[i] + abs(y0[i]) * rtol
+        d2 += ((f1[i] - f0[i]) / sc) ** 2
+    d2 = np.sqrt(d2 / n) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
+    return min(100.0 * h0, h1, interval, max_step)
+
+
+@njit(cache=True)
+def advance(
+    method,
+    t_end,
+    t_pause,
+    t_rec,
+    p,
+    ip,
+    rtol,
+    atol,
+    max_step,
+    max_steps,
+    ev_dir,
+    ctrl,
+    y,
+    f,
+    aux,
+    g_old,
+    stats,
+    Yrec,
+    AUXrec,
+):
+    """Integrate from ctrl[CT_T] until t_end (or the first step ending at or after t_pause).
+
+    All loop state lives in the caller's arrays (ctrl, y, f, aux, g_old, stats), so calling
+    again continues exactly where the last call stopped: a run split into pauses is bit-identical
+    to an unbroken one. Records ``Yrec[i] = y(t_rec[i])`` and ``AUXrec[i] = aux(t_rec[i])``.
+    Returns DONE, PAUSED, TERMINATED or a negative failure code.
+    """
+    n = y.size
+    ne = ev_dir.size
+    nrec = t_rec.size
+    ns = _n_stages(method)
+    exponent = -1.0 / 8.0 if method == DOP853 else -1.0 / 5.0
+    K = np.empty((16, n))
+    F = np.empty((7, n))
+    y_new = np.empty(n)
+    ytmp = np.empty(n)
+    yint = np.empty(n)
+    g_new = np.empty(ne)
+    gtmp = np.empty(ne)
+    t = ctrl[CT_T]
+    h_abs = ctrl[CT_H]
+    i_rec = stats[ST_RECORDED]
+    status = DONE
+    while i_rec < nrec and t_rec[i_rec] <= t:
+        Yrec[i_rec, :] = y
+        AUXrec[i_rec, :] = aux
+        i_rec += 1
+    while True:
+        if t >= t_end:
+            status = DONE
+            break
+        if t >= t_pause:
+            status = PAUSED
+            break
+        if stats[ST_STEPS] >= max_steps:
+            status = MAX_STEPS
+            break
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        if h_abs > max_step:
+            h_abs = max_step
+        elif h_abs < min_step:
+            h_abs = min_step
+        rejected = False
+        last_code = 0
+        failed = False
+        while True:
+            if h_abs < min_step:
+                failed = True
+                break
+            t_new = t + h_abs
+            if t_new > t_end:
+                t_new = t_end
+            h = t_new - t
+            code = _rk_step(method, t, y, f, h, p, ip, aux, K, y_new, ytmp, stats)
+            if code != 0:
+                last_code = code
+                err = np.inf
+            else:
+                err = _error_norm(method, K, h, y, y_new, rtol, atol)
+                if not np.isfinite(err):
+                    ctrl[CT_NONFINITE] = 1.0
+                    err = np.inf
+            if err < 1.0:
+                if err == 0.0:
+                    factor = MAX_FACTOR
+                else:
+                    factor = min(MAX_FACTOR, SAFETY * err**exponent)
+                if rejected:
+                    factor = min(1.0, factor)
+                h_abs = h * factor
+                break
+            stats[ST_REJECTED] += 1
+            if np.isfinite(err):
+                h_abs = h * max(MIN_FACTOR, SAFETY * err**exponent)
+            else:
+                h_abs = h * MIN_FACTOR
+            rejected = True
+        if failed:
+            if last_code != 0:
+                stats[ST_MODEL_CODE] = last_code
+                status = MODEL_FAILURE
+            elif ctrl[CT_NONFINITE] > 0.0:
+                status = NON_FINITE
+            else:
+                status = STEP_UNDERFLOW
+            break
+        ctrl[CT_NONFINITE] = 0.0
+        stats[ST_STEPS] += 1
+        dense_ready = False
+        fired = -1
+        t_stop = t_new
+        if ne > 0:
+            event_values(t_new, y_new, p, ip, aux, g_new)
+            for k in range(ne):
+                if _crossed(ev_dir[k], g_old[k], g_new[k]):
+                    if not dense_ready:
+                        code = _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats)
+                        if code != 0:
+                            stats[ST_MODEL_CODE] = code
+                            status = MODEL_FAILURE
+                            break
+                        dense_ready = True
+                    t_k = _locate(
+                        method, k, t, h, y, F, t, g_old[k], t_new, g_new[k], p, ip, aux, yint, gtmp
+                    )
+                    if fired < 0 or t_k < t_stop:
+                        fired = k
+                        t_stop = t_k
+            if status == MODEL_FAILURE:
+                break
+        while i_rec < nrec and t_rec[i_rec] <= t_stop:
+            if t_rec[i_rec] == t_new and fired < 0:
+                Yrec[i_rec, :] = y_new
+            else:
+                if not dense_ready:
+                    code = _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats)
+                    if code != 0:
+                        stats[ST_MODEL_CODE] = code
+                        status = MODEL_FAILURE
+                        break
+                    dense_ready = True
+                _dense_eval(method, t, h, y, F, t_rec[i_rec], yint)
+                Yrec[i_rec, :] = yint
+            AUXrec[i_rec, :] = aux
+            i_rec += 1
+        if status == MODEL_FAILURE:
+            break
+        if fired >= 0:
+            _dense_eval(method, t, h, y, F, t_stop, yint)
+            y[:] = yint
+            t = t_stop
+            stats[ST_EVENTS] += 1
+            stop = apply_event(fired, t, y, p, ip, aux)
+            code = start(t, y, p, ip, aux, f, g_old, stats)
+            if code != 0:
+                stats[ST_MODEL_CODE] = code
+                status = MODEL_FAILURE
+                break
+            if stop != 0:
+                status = TERMINATED
+                break
+        else:
+            t = t_new
+            y[:] = y_new
+            f[:] = K[ns]
+            if ne > 0:
+                g_old[:] = g_new
+    ctrl[CT_T] = t
+    ctrl[CT_H] = h_abs
+    stats[ST_RECORDED] = i_rec
+    return status

@@ -1,0 +1,135 @@
+"""Reference backend: the same compiled right-hand side integrated by ``scipy.integrate.solve_ivp``.
+
+It shares nothing with the compiled loop but the model's hooks: scipy's own step control, dense
+output and event location (Brent's method), so agreement between the two is an independent check.
+Events that change the state stop scipy's integration (``terminal=True``); the update is applied
+and a new ``solve_ivp`` call continues. Rejected steps are not reported by scipy (stored as -1).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import time as _time
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from workbench._errors import SolverError
+
+
+class _ModelFailure(Exception):
+    def __init__(self, code: int, t: float) -> None:
+        self.code, self.t = code, t
+
+
+def integrate(problem, t_rec, name, rtol, atol, max_step):
+    """Integrate ``problem`` with ``solve_ivp(method=name)`` and record at ``t_rec`` (s)."""
+    from workbench.solver._simulate import RunResult, _state
+
+    hooks = importlib.import_module(problem.hooks)
+    p, ip = problem.p, problem.ip
+    aux = problem.aux0.copy()
+    ne = problem.event_direction.size
+    nfev = [0]
+
+    def fun(t, y):
+        nfev[0] += 1
+        dydt = np.empty(y.size)
+        code = hooks.rhs(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, dydt)
+        if code != 0:
+            raise _ModelFailure(code, t)
+        return dydt
+
+    def make_event(k, guard):
+        direction = int(problem.event_direction[k])
+
+        def ev(t, y):
+            g = np.empty(ne)
+            hooks.event_values(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, g)
+            if guard is not None and t <= guard[0]:
+                return guard[1] * max(abs(g[k]), 1e-300)
+            return g[k]
+
+        ev.terminal = True
+        ev.direction = direction
+        return ev
+
+    t = problem.t0
+    y = problem.y0.copy()
+    t_end = float(t_rec[-1])
+    Y = np.full((t_rec.size, y.size), np.nan)
+    AUX = np.full((t_rec.size, aux.size), np.nan)
+    i_rec = 0
+    steps = events = 0
+    guard: dict[int, tuple[float, float]] = {}
+    status = "done"
+    wall0 = _time.perf_counter()
+    while True:
+        while i_rec < t_rec.size and t_rec[i_rec] <= t:
+            Y[i_rec], AUX[i_rec] = y, aux
+            i_rec += 1
+        if t >= t_end:
+            break
+        evs = [make_event(k, guard.get(k)) for k in range(ne)]
+        try:
+            sol = solve_ivp(
+                fun,
+                (t, t_end),
+                y,
+                method=name,
+                rtol=rtol,
+                atol=atol,
+                max_step=max_step,
+                dense_output=True,
+                events=evs or None,
+            )
+        except _ModelFailure as exc:
+            raise SolverError(
+                f"scipy:{name} failed at t = {exc.t:.9g} s: {problem.failure(exc.code)}",
+                time=exc.t,
+                state=_state(problem, y),
+                cause=f"model_{exc.code}",
+            ) from None
+        steps += len(sol.t) - 1
+        if sol.status == -1:
+            raise SolverError(
+                f"scipy:{name} failed after t = {sol.t[-1]:.9g} s: {sol.message}",
+                time=float(sol.t[-1]),
+                state=_state(problem, sol.y[:, -1]),
+                cause="scipy_failure",
+            )
+        t_seg = float(sol.t[-1])
+        while i_rec < t_rec.size and t_rec[i_rec] <= t_seg:
+            Y[i_rec], AUX[i_rec] = sol.sol(t_rec[i_rec]), aux
+            i_rec += 1
+        y = np.ascontiguousarray(sol.y[:, -1], dtype=np.float64)
+        t = t_seg
+        guard = {}
+        if sol.status == 1:
+            fired = [k for k in range(ne) if sol.t_events[k].size]
+            k = min(fired, key=lambda j: sol.t_events[j][0])
+            events += 1
+            stop = hooks.apply_event(k, t, y, p, ip, aux)
+            g = np.empty(ne)
+            hooks.event_values(t, y, p, ip, aux, g)
+            post = float(problem.event_direction[k]) or (math.copysign(1.0, g[k]) if g[k] else 0.0)
+            if post:
+                guard[k] = (t + 1e-12 * max(1.0, abs(t)), post)
+            if stop:
+                status = "terminated"
+                break
+    stats = {
+        "method": f"scipy:{name}",
+        "rtol": rtol,
+        "atol": float(np.max(atol)) if np.ndim(atol) else atol,
+        "max_step": max_step,
+        "steps": steps,
+        "rejected_steps": -1,
+        "rhs_evaluations": nfev[0],
+        "events": events,
+        "wall_time": _time.perf_counter() - wall0,
+    }
+    if status == "terminated":
+        t_rec, Y, AUX = t_rec[:i_rec], Y[:i_rec], AUX[:i_rec]
+    return RunResult(t_rec, Y, AUX, stats, status)
