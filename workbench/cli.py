@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from pathlib import Path
 
@@ -66,13 +67,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("run", help="netCDF run written by 'workbench run'")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the PNGs")
     p.set_defaults(func=_cmd_plot)
-    for register in _EXTRA_COMMANDS:
-        register(sub)
+    for module in _COMMAND_MODULES:
+        importlib.import_module(module).register_cli(sub)
     return parser
 
 
-# Further commands register themselves here (campaign, analyse, ...): name -> function(sub).
-_EXTRA_COMMANDS: list = []
+# Modules that add their own subcommands: each defines ``register_cli(subparsers)``.
+_COMMAND_MODULES: tuple[str, ...] = ()
 
 
 def main(argv: list[str] | None = None) -> int:
