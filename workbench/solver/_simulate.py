@@ -56,6 +56,12 @@ def integrate(
         result = _scipy_backend.integrate(problem, t_rec, method[6:], rtol, atol_arr, max_step)
         result.stats["atol"] = atol
         return result
+    if problem.y0.size == 0:  # nothing to integrate (e.g. a mechanism with ideal joints)
+        Y = np.empty((t_rec.size, 0))
+        AUX = np.tile(problem.aux0, (t_rec.size, 1))
+        stats = {"method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": 0,
+                 "rejected_steps": 0, "rhs_evaluations": 0, "events": 0, "wall_time": 0.0}
+        return RunResult(t_rec, Y, AUX, stats, "done")
     k = kernel_for(problem.hooks)
     mid = _METHOD_IDS[method]
     n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
