@@ -73,7 +73,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 # Modules that add their own subcommands: each defines ``register_cli(subparsers)``.
-_COMMAND_MODULES: tuple[str, ...] = ()
+_COMMAND_MODULES: tuple[str, ...] = ("workbench._accuracy_cli",)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,66 @@
+"""Work-precision study on a reference system (the nine-bar study is in the hard-case suite)."""
+
+import numpy as np
+import pytest
+
+from workbench._accuracy import accuracy, recommend
+from workbench.cli import main
+
+DUFFING = {"model": {"name": "duffing"}, "run": {"cycles": 10}}
+
+
+@pytest.fixture(scope="module")
+def study():
+    return accuracy(DUFFING, methods=["dop853", "dopri5"], tolerances=[1e-3, 1e-5, 1e-7, 1e-9])
+
+
+def test_errors_fall_as_tolerance_tightens(study):
+    for method in study.solver_method.values:
+        err = study.short_error.sel(solver_method=method).values
+        assert np.all(np.diff(np.log10(err)) < 0.3), err  # monotone within noise
+        assert err[-1] < 1e-3 * err[0]
+
+
+def test_cost_grows_sublinearly_in_inverse_tolerance(study):
+    steps = study.steps.sel(solver_method="dop853").values
+    growth = np.log(steps[-1] / steps[0]) / np.log(1e-3 / 1e-9)
+    assert 0 < growth < 0.5  # ~1/8 for an 8th-order method
+
+
+def test_study_is_self_described(study):
+    for name, var in study.variables.items():
+        if name != "failure":
+            assert var.attrs.get("units"), name
+    assert study.attrs["reference_method"] == "dop853"
+
+
+def test_recommend_picks_cheapest_meeting_target(study):
+    r = recommend(study, 1e-4)
+    assert r["short_error"] < 1e-4 and r["peak_error"] < 1e-4
+    ok = study.short_error.where((study.short_error < 1e-4) & (study.peak_error < 1e-4))
+    assert r["wall_time"] <= float(study.wall_time.where(ok.notnull()).min()) + 1e-12
+    with pytest.raises(ValueError, match="no setting"):
+        recommend(study, 1e-30)
+
+
+def test_cli_accuracy(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text('[model]\nname = "duffing"\n[run]\ncycles = 3\n')
+    out = tmp_path / "wp.nc"
+    assert (
+        main(
+            [
+                "accuracy",
+                str(scene),
+                "-o",
+                str(out),
+                "--methods",
+                "dop853",
+                "--tolerances",
+                "1e-4,1e-8",
+            ]
+        )
+        == 0
+    )
+    assert "recommended" in capsys.readouterr().out
+    assert out.with_suffix(".png").stat().st_size > 10_000

@@ -1,0 +1,260 @@
+"""What accuracy costs in time: work-precision studies of a scene.
+
+Impact dynamics are chaotic, so two correct runs diverge after a few impacts; accuracy is judged
+on quantities that stay meaningful (Hairer, Nørsett & Wanner 1993, Sec. II.10, for
+work-precision diagrams; for non-smooth systems e.g. Acary & Brogliato 2008, Ch. 1):
+
+(a) ``short_error``: the largest difference from the reference over a short horizon before
+    chaotic divergence (the first forcing period from t0), relative to the reference's range;
+(b) ``peak_error``: the relative error of the peak of each variable over that horizon (e.g. the
+    peak contact force), and ``events_error``: the relative error of the number of events (e.g.
+    contact onsets and ends) per forcing period over the whole run;
+(c) ``statistic_error``: the error of the mean and of the standard deviation of the stroboscopic
+    samples of the whole run, relative to the reference's standard deviation.
+
+The reference is the most accurate method at the tightest tolerance (stated in the result).
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from collections.abc import Sequence
+
+import numpy as np
+import xarray as xr
+
+from workbench._errors import SolverError
+from workbench._scene import Scene, load_scene
+from workbench.solver import simulate
+
+__all__ = ["accuracy", "recommend", "DEFAULT_METHODS", "DEFAULT_TOLERANCES"]
+
+DEFAULT_METHODS = ("dop853", "dopri5", "scipy:DOP853", "scipy:Radau", "scipy:LSODA")
+DEFAULT_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
+_ERRORS = ("short_error", "peak_error", "events_error", "statistic_error")
+
+
+def _solver(scene: Scene, method: str, tol: float) -> dict:
+    return {**scene.solver, "method": method, "rtol": tol, "atol": tol}
+
+
+def _short_scene(scene: Scene, method: str, tol: float) -> Scene:
+    """The first forcing period from t0 (or the first 10 % of the run), densely recorded."""
+    if "cycles" in scene.run:
+        run, record = {"cycles": 1, "transient_cycles": 0}, {"samples_per_period": 400}
+    else:
+        horizon = 0.1 * (scene.run["duration"] + scene.run["transient"])
+        run, record = {"duration": horizon, "transient": 0.0}, {"dt": horizon / 400}
+    record["variables"] = list(scene.variables)
+    return scene.replace(solver=_solver(scene, method, tol), run=run, record=record, sweep={})
+
+
+def _long_scene(scene: Scene, method: str, tol: float) -> Scene:
+    return scene.replace(solver=_solver(scene, method, tol), sweep={})
+
+
+def _strobe(ds: xr.Dataset) -> xr.Dataset:
+    spp = int(ds.attrs.get("samples_per_period", 1))
+    return ds.isel(time=slice(None, None, spp))
+
+
+def _measure(
+    short: xr.Dataset, long: xr.Dataset, ref_short: xr.Dataset, ref_long: xr.Dataset, periods: float
+) -> dict[str, float]:
+    short_err, peak_err, stat_err = 0.0, 0.0, 0.0
+    for name in ref_short.data_vars:
+        r = ref_short[name].values
+        span = float(np.nanmax(r) - np.nanmin(r)) or 1.0
+        short_err = max(short_err, float(np.nanmax(np.abs(short[name].values - r))) / span)
+        peak_ref = float(np.nanmax(np.abs(r)))
+        if peak_ref > 0:
+            peak = float(np.nanmax(np.abs(short[name].values)))
+            peak_err = max(peak_err, abs(peak - peak_ref) / peak_ref)
+    s, sr = _strobe(long), _strobe(ref_long)
+    for name in sr.data_vars:
+        spread = float(sr[name].std()) or 1.0
+        d_mean = abs(float(s[name].mean() - sr[name].mean())) / spread
+        d_std = abs(float(s[name].std() - sr[name].std())) / spread
+        stat_err = max(stat_err, d_mean, d_std)
+    ev, ev_ref = long.attrs["solver_events"] / periods, ref_long.attrs["solver_events"] / periods
+    events_err = abs(ev - ev_ref) / ev_ref if ev_ref else float(ev != ev_ref)
+    return {
+        "short_error": short_err,
+        "peak_error": peak_err,
+        "events_error": events_err,
+        "statistic_error": stat_err,
+    }
+
+
+def accuracy(
+    scene: Scene | str,
+    *,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    tolerances: Sequence[float] = DEFAULT_TOLERANCES,
+    reference: tuple[str, float] | None = None,
+    progress: bool = False,
+) -> xr.Dataset:
+    """Work-precision study: run a scene with every method at every tolerance.
+
+    Parameters
+    ----------
+    scene : Scene or path
+        The scene studied (no sweep).
+    methods : sequence of str
+        Solver methods (``"dop853"``, ``"dopri5"``, ``"scipy:<name>"``).
+    tolerances : sequence of float
+        rtol = atol values (atol is scaled per state by the model; see the model docs).
+    reference : (method, tolerance), optional
+        The reference run; default ``("dop853", min(tolerances) / 10)`` (at least 1e-13).
+    progress : bool
+        Print one line per run.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``solver_method`` (not ``method``, a keyword of ``Dataset.sel``) and
+        ``tolerance``; variables ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
+        the errors (dimensionless, see the module docstring) and ``status`` (0 ok, 1 failed);
+        the reference in the attributes.
+
+    Examples
+    --------
+    >>> wp = accuracy({"model": {"name": "duffing"}, "run": {"cycles": 5}},
+    ...               methods=["dop853"], tolerances=[1e-4, 1e-8])
+    >>> bool(wp.short_error.sel(tolerance=1e-8) < wp.short_error.sel(tolerance=1e-4))
+    True
+    """
+    scene = scene if isinstance(scene, Scene) else load_scene(scene)
+    ref_method, ref_tol = reference or ("dop853", max(min(tolerances) / 10, 1e-13))
+    ref_short = simulate(_short_scene(scene, ref_method, ref_tol))
+    ref_long = simulate(_long_scene(scene, ref_method, ref_tol))
+    period = ref_long.attrs.get("forcing_period")
+    total = float(ref_long.time[-1])
+    periods = total / period if period else total
+    shape = (len(methods), len(tolerances))
+    out = {k: np.full(shape, np.nan) for k in ("wall_time", "steps", "rhs_evaluations", *_ERRORS)}
+    status = np.zeros(shape, np.int8)
+    failures = np.full(shape, "", dtype=object)
+    for i, method in enumerate(methods):
+        for j, tol in enumerate(tolerances):
+            t0 = _time.perf_counter()
+            try:
+                short = simulate(_short_scene(scene, method, tol))
+                long = simulate(_long_scene(scene, method, tol))
+            except SolverError as exc:
+                status[i, j] = 1
+                failures[i, j] = str(exc)
+                continue
+            out["wall_time"][i, j] = long.attrs["solver_wall_time"]
+            out["steps"][i, j] = long.attrs["solver_steps"]
+            out["rhs_evaluations"][i, j] = long.attrs["solver_rhs_evaluations"]
+            for k, v in _measure(short, long, ref_short, ref_long, periods).items():
+                out[k][i, j] = v
+            if progress:
+                print(
+                    f"{method:14s} tol {tol:7.0e}: {out['wall_time'][i, j]:8.4f} s, "
+                    f"short error {out['short_error'][i, j]:.2e} "
+                    f"({_time.perf_counter() - t0:.1f} s incl. overhead)"
+                )
+    units = {"wall_time": "s", "steps": "1", "rhs_evaluations": "1"}
+    long_names = {
+        "wall_time": "solver wall time of the whole run",
+        "steps": "accepted steps of the whole run",
+        "rhs_evaluations": "right-hand-side evaluations of the whole run",
+        "short_error": "largest error over the first period, relative to the variable's range",
+        "peak_error": "relative error of the peak over the first period",
+        "events_error": "relative error of the number of events per period",
+        "statistic_error": "error of mean and spread of the stroboscopic samples, relative to "
+        "the reference spread",
+    }
+    dims = ("solver_method", "tolerance")
+    data = {
+        k: (dims, v, {"units": units.get(k, "1"), "long_name": long_names[k]})
+        for k, v in out.items()
+    }
+    data["status"] = (
+        dims,
+        status,
+        {
+            "units": "1",
+            "long_name": "run status",
+            "flag_values": np.array([0, 1], np.int8),
+            "flag_meanings": "ok solver_failed",
+        },
+    )
+    data["failure"] = (dims, failures.astype(str), {"long_name": "failure message"})
+    ds = xr.Dataset(
+        data,
+        coords={
+            "solver_method": (
+                "solver_method",
+                list(methods),
+                {"long_name": "solver method", "units": "1"},
+            ),
+            "tolerance": (
+                "tolerance",
+                np.asarray(tolerances, float),
+                {"long_name": "rtol = atol", "units": "1"},
+            ),
+        },
+    )
+    from workbench.solver._simulate import provenance
+
+    ds.attrs.update(provenance(scene))
+    ds.attrs["statistic_noise_floor"] = 1.0 / math.sqrt(_strobe(ref_long).sizes["time"])
+    ds.attrs.update(
+        reference_method=ref_method,
+        reference_tolerance=ref_tol,
+        reference_wall_time=ref_long.attrs["solver_wall_time"],
+        reference_steps=ref_long.attrs["solver_steps"],
+    )
+    return ds
+
+
+def recommend(
+    wp: xr.Dataset, target: float, *, errors: Sequence[str] = ("short_error", "peak_error")
+) -> dict:
+    """The cheapest (method, tolerance) whose errors are all below ``target``.
+
+    By default the deterministic errors (a) and (b) decide; the long-run statistic and the event
+    count of a chaotic run have a sampling-noise floor (about ``statistic_noise_floor`` in the
+    study's attributes) that no tolerance removes.
+
+    Returns a dict with ``method``, ``tolerance``, ``wall_time`` (s) and the errors; raises
+    ValueError naming the best error reached if no setting meets the target.
+    """
+    worst = wp[list(errors)].to_array("error").max("error")
+    ok = (worst < target) & (wp.status == 0)
+    if not bool(ok.any()):
+        best = float(worst.min())
+        raise ValueError(
+            f"no setting reaches errors below target={target!r}; the best is "
+            f"{best:.3g}: loosen the target or add tighter tolerances"
+        )
+    cost = wp.wall_time.where(ok)
+    idx = np.unravel_index(int(np.nanargmin(cost.values)), cost.shape)
+    pick = wp.isel(solver_method=idx[0], tolerance=idx[1])
+    return {
+        "method": str(pick.solver_method.values),
+        "tolerance": float(pick.tolerance),
+        "wall_time": float(pick.wall_time),
+        **{e: float(pick[e]) for e in errors},
+    }
+
+
+def check_error(scene: Scene) -> dict[str, float]:
+    """Self-check of a run (``solver.check = true``): the first period at the scene's tolerance
+    against one 100x tighter; returns the largest error relative to each variable's range."""
+    tight = max(scene.solver["rtol"] / 100, 1e-13)
+    a = simulate(_short_scene(scene, scene.solver["method"], scene.solver["rtol"]))
+    b = simulate(_short_scene(scene, scene.solver["method"], tight))
+    worst = 0.0
+    for name in a.data_vars:
+        span = float(np.nanmax(b[name]) - np.nanmin(b[name])) or 1.0
+        worst = max(worst, float(np.nanmax(np.abs(a[name] - b[name]))) / span)
+    return {
+        "check_error": worst,
+        "check_tolerance": tight,
+        "check_horizon": float(a.time[-1] - a.time[0]),
+    }
