@@ -14,8 +14,8 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/workbench run studies/default.toml -o $(OUT)/default.nc --figures $(OUT)/figures
-	@echo "demo: netCDF run in $(OUT)/default.nc, figures in $(OUT)/figures/"
+	$(VENV)/bin/workbench run studies/ninebar.toml -o $(OUT)/ninebar.nc --figures $(OUT)/figures
+	@echo "demo: netCDF run in $(OUT)/ninebar.nc, figures in $(OUT)/figures/"
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check workbench tests benchmarks studies

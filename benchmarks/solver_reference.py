@@ -1,7 +1,8 @@
 """Compiled DOP853 against scipy's DOP853 on the same compiled right-hand side.
 
 Duffing (delta 0.3, alpha -1, beta 1, gamma 0.5, omega 1.2), 1000 forcing periods, rtol 1e-9.
-Prints wall times, steps and the speed-up; target >= 50x. Run: ``python benchmarks/solver_reference.py``.
+Prints wall times, steps and the speed-up; target >= 50x.
+Run: ``python benchmarks/solver_reference.py``.
 """
 
 from __future__ import annotations

@@ -8,14 +8,16 @@ import workbench
 def effective_restitution(c_e: float, speed: float = 0.5, gap: float = 0.5e-3) -> float:
     """Launch the journal radially ``gap`` (m) from the wall at ``speed`` (m/s)."""
     duration = gap / speed + 5e-4 * (0.5 / speed) ** 0.2  # reach the wall, one contact
-    ds = workbench.simulate({
-        "model": {"name": "free_journal"},
-        "parameters": {"restitution": c_e, "speed": speed},
-        "initial": {"x": 0.5e-3 - gap},
-        "run": {"duration": duration},
-        "record": {"dt": duration / 300},
-        "solver": {"rtol": 1e-10, "atol": 1e-10},
-    })
+    ds = workbench.simulate(
+        {
+            "model": {"name": "free_journal"},
+            "parameters": {"restitution": c_e, "speed": speed},
+            "initial": {"x": 0.5e-3 - gap},
+            "run": {"duration": duration},
+            "record": {"dt": duration / 300},
+            "solver": {"rtol": 1e-10, "atol": 1e-10},
+        }
+    )
     assert ds.attrs["solver_events"] == 2  # one contact: onset and end
     assert float(ds.onset_velocity[-1]) == pytest.approx(speed, rel=1e-3)
     return -float(ds.vx[-1]) / speed

@@ -52,7 +52,7 @@ def test_stroboscopic_records_are_exact():
 
     def f(t, y):
         out = np.empty(2)
-        duffing_rhs(t, y, p, np.zeros(0, np.int64), np.zeros(0), out)
+        duffing_rhs(t, y, p, np.zeros(0, np.int64), np.zeros(0), np.zeros(1), out)
         return out
 
     sol = solve_ivp(

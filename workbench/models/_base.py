@@ -91,6 +91,8 @@ class Problem:
         state), so that one number means the same for states of very different magnitude.
     t0 : float
         Initial time, s.
+    work_size : int
+        Length of the scratch array passed to the hooks (allocated once per run).
     failure : callable
         ``failure(code) -> str``: explains a model failure code returned by ``rhs``.
     data : dict
@@ -106,6 +108,7 @@ class Problem:
     event_direction: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     atol_scale: np.ndarray | None = None
     t0: float = 0.0
+    work_size: int = 0
     failure: Callable[[int], str] = lambda code: f"model failure code {code}"
     data: dict = field(default_factory=dict)
 

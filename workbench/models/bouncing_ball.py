@@ -14,19 +14,19 @@ from workbench.models._base import Model, Parameter, Problem, Quantity
 
 
 @njit(cache=True)
-def rhs(t, y, p, ip, aux, dydt):
+def rhs(t, y, p, ip, aux, work, dydt):
     dydt[0] = y[1]
     dydt[1] = -p[0]
     return 0
 
 
 @njit(cache=True)
-def event_values(t, y, p, ip, aux, g):
+def event_values(t, y, p, ip, aux, work, g):
     g[0] = y[0]
 
 
 @njit(cache=True)
-def apply_event(k, t, y, p, ip, aux):
+def apply_event(k, t, y, p, ip, aux, work):
     y[0] = 0.0
     y[1] = -p[1] * y[1]
     aux[0] += 1.0  # bounce counter

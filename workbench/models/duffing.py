@@ -16,7 +16,7 @@ from workbench.models._base import Model, Parameter, Problem, Quantity
 
 
 @njit(cache=True)
-def rhs(t, y, p, ip, aux, dydt):
+def rhs(t, y, p, ip, aux, work, dydt):
     delta, alpha, beta, gamma, omega = p[0], p[1], p[2], p[3], p[4]
     x = y[0]
     v = y[1]
@@ -26,12 +26,12 @@ def rhs(t, y, p, ip, aux, dydt):
 
 
 @njit(cache=True)
-def event_values(t, y, p, ip, aux, g):
+def event_values(t, y, p, ip, aux, work, g):
     return None
 
 
 @njit(cache=True)
-def apply_event(k, t, y, p, ip, aux):
+def apply_event(k, t, y, p, ip, aux, work):
     return 0
 
 

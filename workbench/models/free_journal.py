@@ -22,7 +22,7 @@ from workbench.models.contact import hertz_internal_stiffness, lankarani_nikrave
 
 
 @njit(cache=True)
-def rhs(t, y, p, ip, aux, dydt):
+def rhs(t, y, p, ip, aux, work, dydt):
     x, yy, vx, vy = y[0], y[1], y[2], y[3]
     e = math.sqrt(x * x + yy * yy)
     fx = 0.0
@@ -42,14 +42,14 @@ def rhs(t, y, p, ip, aux, dydt):
 
 
 @njit(cache=True)
-def event_values(t, y, p, ip, aux, g):
+def event_values(t, y, p, ip, aux, work, g):
     d = math.sqrt(y[0] * y[0] + y[1] * y[1]) - p[1]
     g[0] = d
     g[1] = d
 
 
 @njit(cache=True)
-def apply_event(k, t, y, p, ip, aux):
+def apply_event(k, t, y, p, ip, aux, work):
     if k == 0:
         e = math.sqrt(y[0] * y[0] + y[1] * y[1])
         aux[0] = max((y[0] * y[2] + y[1] * y[3]) / e, 1e-300)
@@ -73,10 +73,23 @@ class FreeJournal(Model):
         Parameter("youngs_modulus", 207e9, "Pa", "Young's modulus", lower=0.0, lower_open=True),
         Parameter("poisson_ratio", 0.3, "1", "Poisson's ratio", lower=0.0, upper=0.5),
         Parameter("contact_exponent", 1.5, "1", "contact exponent n", lower=0.0, lower_open=True),
-        Parameter("restitution", 0.9, "1", "coefficient of restitution c_e", lower=0.0,
-                  upper=1.0, lower_open=True),
-        Parameter("impact_velocity_floor", 1e-4, "m s-1", "floor of the onset velocity",
-                  lower=0.0, lower_open=True),
+        Parameter(
+            "restitution",
+            0.9,
+            "1",
+            "coefficient of restitution c_e",
+            lower=0.0,
+            upper=1.0,
+            lower_open=True,
+        ),
+        Parameter(
+            "impact_velocity_floor",
+            1e-4,
+            "m s-1",
+            "floor of the onset velocity",
+            lower=0.0,
+            lower_open=True,
+        ),
         Parameter("speed", 0.5, "m s-1", "initial radial speed (along +x from the centre)"),
     )
     _STATES = (
@@ -95,16 +108,31 @@ class FreeJournal(Model):
 
     def problem(self, params, effects, initial, requested):
         c = params["clearance"]
-        k = hertz_internal_stiffness(params["bearing_radius"], c, params["youngs_modulus"],
-                                     params["poisson_ratio"])
-        p = np.array([params["mass"], c, k, params["contact_exponent"], params["restitution"],
-                      params["impact_velocity_floor"]])
+        k = hertz_internal_stiffness(
+            params["bearing_radius"], c, params["youngs_modulus"], params["poisson_ratio"]
+        )
+        p = np.array(
+            [
+                params["mass"],
+                c,
+                k,
+                params["contact_exponent"],
+                params["restitution"],
+                params["impact_velocity_floor"],
+            ]
+        )
         y0 = np.array([initial.get(s.name, 0.0) for s in self._STATES])
         if "vx" not in initial:
             y0[2] = params["speed"]
-        return Problem(hooks=__name__, states=self._STATES, y0=y0, p=p,
-                       aux0=np.array([0.0, np.nan]), event_direction=np.array([1, -1]),
-                       atol_scale=np.array([c, c, c * 1e3, c * 1e3]))
+        return Problem(
+            hooks=__name__,
+            states=self._STATES,
+            y0=y0,
+            p=p,
+            aux0=np.array([0.0, np.nan]),
+            event_direction=np.array([1, -1]),
+            atol_scale=np.array([c, c, c * 1e3, c * 1e3]),
+        )
 
     def derive(self, problem, t, Y, AUX, requested):
         return {"onset_velocity": AUX[:, 1]}

@@ -14,7 +14,7 @@ from workbench.models._base import Model, Parameter, Problem, Quantity
 
 
 @njit(cache=True)
-def rhs(t, y, p, ip, aux, dydt):
+def rhs(t, y, p, ip, aux, work, dydt):
     sigma, rho, beta = p[0], p[1], p[2]
     dydt[0] = sigma * (y[1] - y[0])
     dydt[1] = y[0] * (rho - y[2]) - y[1]
@@ -23,12 +23,12 @@ def rhs(t, y, p, ip, aux, dydt):
 
 
 @njit(cache=True)
-def event_values(t, y, p, ip, aux, g):
+def event_values(t, y, p, ip, aux, work, g):
     return None
 
 
 @njit(cache=True)
-def apply_event(k, t, y, p, ip, aux):
+def apply_event(k, t, y, p, ip, aux, work):
     return 0
 
 

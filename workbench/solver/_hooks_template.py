@@ -10,17 +10,17 @@ from numba import njit
 
 
 @njit(cache=True)
-def rhs(t, y, p, ip, aux, dydt):  # noqa: ARG001
+def rhs(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
     for i in range(y.size):
         dydt[i] = -y[i]
     return 0
 
 
 @njit(cache=True)
-def event_values(t, y, p, ip, aux, g):  # noqa: ARG001
+def event_values(t, y, p, ip, aux, work, g):  # noqa: ARG001
     return None
 
 
 @njit(cache=True)
-def apply_event(k, t, y, p, ip, aux):  # noqa: ARG001
+def apply_event(k, t, y, p, ip, aux, work):  # noqa: ARG001
     return 0

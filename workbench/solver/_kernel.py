@@ -9,14 +9,17 @@ touches this file.
 
 Hooks (all ``numba.njit``), in SI units of the model's state:
 
-``rhs(t, y, p, ip, aux, dydt) -> int``
+``rhs(t, y, p, ip, aux, work, dydt) -> int``
     Writes dy/dt; returns 0, or a positive model failure code (the step is then rejected and
     retried smaller; if it persists the run fails with that code).
-``event_values(t, y, p, ip, aux, g) -> None``
+``event_values(t, y, p, ip, aux, work, g) -> None``
     Writes the event functions g_k; an event fires where g_k changes sign in its direction.
-``apply_event(k, t, y, p, ip, aux) -> int``
+``apply_event(k, t, y, p, ip, aux, work) -> int``
     Applies the update of event k in place (state ``y`` and discrete state ``aux``); returns 1 to
     stop the integration, else 0.
+
+``work`` is a scratch array of the model's ``Problem.work_size`` floats, allocated once per run,
+so that the hot right-hand side allocates nothing.
 
 Algorithms: Dormand & Prince (1980) DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853
 (Hairer, Nørsett & Wanner 1993, Sec. II.10); step-size control and initial step as in Hairer's
@@ -95,7 +98,7 @@ def _stage_point(K, a, s, h, y, out):
 
 
 @njit(cache=True)
-def _rk_step(method, t, y, f, h, p, ip, aux, K, y_new, ytmp, stats):
+def _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats):
     """One explicit RK step; stages in K, FSAL derivative in K[ns]. Returns the hook code."""
     ns = _n_stages(method)
     n = y.size
@@ -109,7 +112,7 @@ def _rk_step(method, t, y, f, h, p, ip, aux, K, y_new, ytmp, stats):
             _stage_point(K, RK45_A[s], s, h, y, ytmp)
             c = RK45_C[s]
         stats[ST_RHS] += 1
-        code = rhs(t + c * h, ytmp, p, ip, aux, K[s])
+        code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
         if code != 0:
             return code
     if method == DOP853:
@@ -117,7 +120,7 @@ def _rk_step(method, t, y, f, h, p, ip, aux, K, y_new, ytmp, stats):
     else:
         _stage_point(K, RK45_B, ns, h, y, y_new)
     stats[ST_RHS] += 1
-    return rhs(t + h, y_new, p, ip, aux, K[ns])
+    return rhs(t + h, y_new, p, ip, aux, work, K[ns])
 
 
 @njit(cache=True)
@@ -151,7 +154,7 @@ def _error_norm(method, K, h, y, y_new, rtol, atol):
 
 
 @njit(cache=True)
-def _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats):
+def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats):
     """Coefficients of the continuous extension over the last step. Returns the hook code."""
     n = y.size
     if method == DOP853:
@@ -159,7 +162,7 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats):
             s = 13 + r
             _stage_point(K, DOP853_A_EXTRA[r], s, h, y, ytmp)
             stats[ST_RHS] += 1
-            code = rhs(t + DOP853_C_EXTRA[r] * h, ytmp, p, ip, aux, K[s])
+            code = rhs(t + DOP853_C_EXTRA[r] * h, ytmp, p, ip, aux, work, K[s])
             if code != 0:
                 return code
         for i in range(n):
@@ -217,7 +220,7 @@ def _crossed(direction, g_a, g_b):
 
 
 @njit(cache=True)
-def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, yint, gtmp):
+def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, work, yint, gtmp):
     """Root of event k in [t_a, t_b] by the Illinois method on the dense output.
 
     Returns the right end of the final bracket, where the event function already has its
@@ -232,7 +235,7 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, yint,
         if not (t_m > t_a and t_m < t_b):
             t_m = 0.5 * (t_a + t_b)
         _dense_eval(method, t_old, h, y_old, F, t_m, yint)
-        event_values(t_m, yint, p, ip, aux, gtmp)
+        event_values(t_m, yint, p, ip, aux, work, gtmp)
         g_m = gtmp[k]
         if g_m != 0.0 and (g_m < 0.0) == (g_a < 0.0):
             t_a = t_m
@@ -250,17 +253,17 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, yint,
 
 
 @njit(cache=True)
-def start(t, y, p, ip, aux, f, g, stats):
+def start(t, y, p, ip, aux, work, f, g, stats):
     """Derivative and event functions at the initial point. Returns the hook code."""
     stats[ST_RHS] += 1
-    code = rhs(t, y, p, ip, aux, f)
+    code = rhs(t, y, p, ip, aux, work, f)
     if g.size > 0:
-        event_values(t, y, p, ip, aux, g)
+        event_values(t, y, p, ip, aux, work, g)
     return code
 
 
 @njit(cache=True)
-def initial_step(method, t0, y0, f0, p, ip, aux, rtol, atol, max_step, t_end, stats):
+def initial_step(method, t0, y0, f0, p, ip, aux, work, rtol, atol, max_step, t_end, stats):
     """Initial step size (Hairer et al. 1993, Sec. II.4, "starting step size"), s."""
     n = y0.size
     interval = abs(t_end - t0)
@@ -285,7 +288,7 @@ def initial_step(method, t0, y0, f0, p, ip, aux, rtol, atol, max_step, t_end, st
     for i in range(n):
         y1[i] = y0[i] + h0 * f0[i]
     stats[ST_RHS] += 1
-    rhs(t0 + h0, y1, p, ip, aux, f1)
+    rhs(t0 + h0, y1, p, ip, aux, work, f1)
     d2 = 0.0
     for i in range(n):
         sc = atol[i] + abs(y0[i]) * rtol
@@ -315,6 +318,7 @@ def advance(
     y,
     f,
     aux,
+    work,
     g_old,
     stats,
     Yrec,
@@ -373,7 +377,7 @@ def advance(
             if t_new > t_end:
                 t_new = t_end
             h = t_new - t
-            code = _rk_step(method, t, y, f, h, p, ip, aux, K, y_new, ytmp, stats)
+            code = _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats)
             if code != 0:
                 last_code = code
                 err = np.inf
@@ -412,18 +416,35 @@ def advance(
         fired = -1
         t_stop = t_new
         if ne > 0:
-            event_values(t_new, y_new, p, ip, aux, g_new)
+            event_values(t_new, y_new, p, ip, aux, work, g_new)
             for k in range(ne):
                 if _crossed(ev_dir[k], g_old[k], g_new[k]):
                     if not dense_ready:
-                        code = _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats)
+                        code = _dense_prepare(
+                            method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats
+                        )
                         if code != 0:
                             stats[ST_MODEL_CODE] = code
                             status = MODEL_FAILURE
                             break
                         dense_ready = True
                     t_k = _locate(
-                        method, k, t, h, y, F, t, g_old[k], t_new, g_new[k], p, ip, aux, yint, gtmp
+                        method,
+                        k,
+                        t,
+                        h,
+                        y,
+                        F,
+                        t,
+                        g_old[k],
+                        t_new,
+                        g_new[k],
+                        p,
+                        ip,
+                        aux,
+                        work,
+                        yint,
+                        gtmp,
                     )
                     if fired < 0 or t_k < t_stop:
                         fired = k
@@ -435,7 +456,9 @@ def advance(
                 Yrec[i_rec, :] = y_new
             else:
                 if not dense_ready:
-                    code = _dense_prepare(method, t, y, y_new, h, p, ip, aux, K, F, ytmp, stats)
+                    code = _dense_prepare(
+                        method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats
+                    )
                     if code != 0:
                         stats[ST_MODEL_CODE] = code
                         status = MODEL_FAILURE
@@ -452,8 +475,8 @@ def advance(
             y[:] = yint
             t = t_stop
             stats[ST_EVENTS] += 1
-            stop = apply_event(fired, t, y, p, ip, aux)
-            code = start(t, y, p, ip, aux, f, g_old, stats)
+            stop = apply_event(fired, t, y, p, ip, aux, work)
+            code = start(t, y, p, ip, aux, work, f, g_old, stats)
             if code != 0:
                 stats[ST_MODEL_CODE] = code
                 status = MODEL_FAILURE

@@ -18,11 +18,6 @@ from scipy.integrate import solve_ivp
 from workbench._errors import SolverError
 
 
-class _ModelFailure(Exception):
-    def __init__(self, code: int, t: float) -> None:
-        self.code, self.t = code, t
-
-
 def integrate(problem, t_rec, name, rtol, atol, max_step):
     """Integrate ``problem`` with ``solve_ivp(method=name)`` and record at ``t_rec`` (s)."""
     from workbench.solver._simulate import RunResult, _state
@@ -30,15 +25,20 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
     hooks = importlib.import_module(problem.hooks)
     p, ip = problem.p, problem.ip
     aux = problem.aux0.copy()
+    work = np.zeros(max(problem.work_size, 1))
     ne = problem.event_direction.size
     nfev = [0]
+    last_failure = [0, 0.0]
 
     def fun(t, y):
         nfev[0] += 1
         dydt = np.empty(y.size)
-        code = hooks.rhs(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, dydt)
+        code = hooks.rhs(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, work, dydt)
         if code != 0:
-            raise _ModelFailure(code, t)
+            # a trial stage outside the model's domain: NaN makes scipy reject the step and
+            # retry smaller, as the compiled loop does; a persistent failure ends the run
+            last_failure[:] = [code, t]
+            dydt[:] = np.nan
         return dydt
 
     def make_event(k, guard):
@@ -46,7 +46,7 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
 
         def ev(t, y):
             g = np.empty(ne)
-            hooks.event_values(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, g)
+            hooks.event_values(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, work, g)
             if guard is not None and t <= guard[0]:
                 return guard[1] * max(abs(g[k]), 1e-300)
             return g[k]
@@ -72,29 +72,24 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
         if t >= t_end:
             break
         evs = [make_event(k, guard.get(k)) for k in range(ne)]
-        try:
-            sol = solve_ivp(
-                fun,
-                (t, t_end),
-                y,
-                method=name,
-                rtol=rtol,
-                atol=atol,
-                max_step=max_step,
-                dense_output=True,
-                events=evs or None,
-            )
-        except _ModelFailure as exc:
-            raise SolverError(
-                f"scipy:{name} failed at t = {exc.t:.9g} s: {problem.failure(exc.code)}",
-                time=exc.t,
-                state=_state(problem, y),
-                cause=f"model_{exc.code}",
-            ) from None
+        sol = solve_ivp(
+            fun,
+            (t, t_end),
+            y,
+            method=name,
+            rtol=rtol,
+            atol=atol,
+            max_step=max_step,
+            dense_output=True,
+            events=evs or None,
+        )
         steps += len(sol.t) - 1
         if sol.status == -1:
+            why = sol.message
+            if last_failure[0]:
+                why += f"; last model failure: {problem.failure(int(last_failure[0]))}"
             raise SolverError(
-                f"scipy:{name} failed after t = {sol.t[-1]:.9g} s: {sol.message}",
+                f"scipy:{name} failed after t = {sol.t[-1]:.9g} s: {why}",
                 time=float(sol.t[-1]),
                 state=_state(problem, sol.y[:, -1]),
                 cause="scipy_failure",
@@ -110,9 +105,9 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
             fired = [k for k in range(ne) if sol.t_events[k].size]
             k = min(fired, key=lambda j: sol.t_events[j][0])
             events += 1
-            stop = hooks.apply_event(k, t, y, p, ip, aux)
+            stop = hooks.apply_event(k, t, y, p, ip, aux, work)
             g = np.empty(ne)
-            hooks.event_values(t, y, p, ip, aux, g)
+            hooks.event_values(t, y, p, ip, aux, work, g)
             post = float(problem.event_direction[k]) or (math.copysign(1.0, g[k]) if g[k] else 0.0)
             if post:
                 guard[k] = (t + 1e-12 * max(1.0, abs(t)), post)

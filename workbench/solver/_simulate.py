@@ -59,14 +59,24 @@ def integrate(
     if problem.y0.size == 0:  # nothing to integrate (e.g. a mechanism with ideal joints)
         Y = np.empty((t_rec.size, 0))
         AUX = np.tile(problem.aux0, (t_rec.size, 1))
-        stats = {"method": method, "rtol": rtol, "atol": atol, "max_step": max_step, "steps": 0,
-                 "rejected_steps": 0, "rhs_evaluations": 0, "events": 0, "wall_time": 0.0}
+        stats = {
+            "method": method,
+            "rtol": rtol,
+            "atol": atol,
+            "max_step": max_step,
+            "steps": 0,
+            "rejected_steps": 0,
+            "rhs_evaluations": 0,
+            "events": 0,
+            "wall_time": 0.0,
+        }
         return RunResult(t_rec, Y, AUX, stats, "done")
     k = kernel_for(problem.hooks)
     mid = _METHOD_IDS[method]
     n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
     y = problem.y0.copy()
     aux = problem.aux0.copy()
+    work = np.zeros(max(problem.work_size, 1))
     f = np.empty(n)
     g = np.empty(ne)
     stats = np.zeros(k.N_STATS, np.int64)
@@ -75,7 +85,7 @@ def integrate(
     AUX = np.full((t_rec.size, na), np.nan)
     _compiled(k, mid, problem, rtol, atol_arr, max_step)
     wall0 = _time.perf_counter()
-    code = k.start(problem.t0, y, problem.p, problem.ip, aux, f, g, stats)
+    code = k.start(problem.t0, y, problem.p, problem.ip, aux, work, f, g, stats)
     if code != 0:
         raise SolverError(
             f"the model cannot start at t = {problem.t0:g} s: {problem.failure(code)}",
@@ -84,7 +94,19 @@ def integrate(
             cause=f"model_{code}",
         )
     h0 = k.initial_step(
-        mid, problem.t0, y, f, problem.p, problem.ip, aux, rtol, atol_arr, max_step, t_end, stats
+        mid,
+        problem.t0,
+        y,
+        f,
+        problem.p,
+        problem.ip,
+        aux,
+        work,
+        rtol,
+        atol_arr,
+        max_step,
+        t_end,
+        stats,
     )
     ctrl[k.CT_T] = problem.t0
     ctrl[k.CT_H] = h0
@@ -107,6 +129,7 @@ def integrate(
             y,
             f,
             aux,
+            work,
             g,
             stats,
             Y,
@@ -144,29 +167,18 @@ def _compiled(k, mid, problem, rtol, atol_arr, max_step) -> None:
     n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
     y, f, aux = problem.y0.copy(), np.empty(n), problem.aux0.copy()
     g, stats, ctrl = np.empty(ne), np.zeros(k.N_STATS, np.int64), np.zeros(k.N_CTRL)
-    ctrl[k.CT_T] = problem.t0
-    k.start(problem.t0, y, problem.p, problem.ip, aux, f, g, stats)
-    k.initial_step(
-        mid,
-        problem.t0,
-        y,
-        f,
-        problem.p,
-        problem.ip,
-        aux,
-        1e-3,
-        atol_arr,
-        max_step,
-        problem.t0 + 1.0,
-        stats,
-    )
+    work = np.zeros(max(problem.work_size, 1))
+    p, ip, t0 = problem.p, problem.ip, problem.t0
+    ctrl[k.CT_T] = t0
+    k.start(t0, y, p, ip, aux, work, f, g, stats)
+    k.initial_step(mid, t0, y, f, p, ip, aux, work, 1e-3, atol_arr, max_step, t0 + 1.0, stats)
     k.advance(
         mid,
-        problem.t0,
-        problem.t0,
+        t0,
+        t0,
         np.zeros(0),
-        problem.p,
-        problem.ip,
+        p,
+        ip,
         1e-3,
         atol_arr,
         max_step,
@@ -176,6 +188,7 @@ def _compiled(k, mid, problem, rtol, atol_arr, max_step) -> None:
         y,
         f,
         aux,
+        work,
         g,
         stats,
         np.empty((0, n)),

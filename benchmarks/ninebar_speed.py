@@ -1,0 +1,70 @@
+"""Speed of the nine-bar model: seconds per crank cycle, steps and evaluations per cycle.
+
+The default scene (studies/ninebar.toml: A and B, 0.5 mm, omega = 2.5 pi, modified Coulomb),
+2 transient + 10 recorded cycles at rtol 1e-6, with the compiled DOP853 and DOPRI5, and one
+cycle with ``scipy:DOP853`` on the same compiled right-hand side; then the same with LuGre.
+Targets on one core: <= 0.02 s per cycle (Coulomb), <= 0.06 s (LuGre); >= 50x scipy.
+The paper's MATLAB needed 20.05 s (Coulomb) and 37.29 s (LuGre) per cycle.
+
+Run: ``python benchmarks/ninebar_speed.py``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import workbench
+
+SCENE = Path(__file__).resolve().parents[1] / "studies" / "ninebar.toml"
+PAPER = {"coulomb": 20.05, "lugre": 37.29}
+
+
+def per_cycle(friction: str, method: str, cycles: int, transient: int) -> dict:
+    base = workbench.load_scene(SCENE)
+    scene = base.replace(
+        effects={
+            **base.effects,
+            "friction": friction,
+            "clearance": list(base.effects["clearance"]),
+        },
+        solver={**base.solver, "method": method, "rtol": 1e-6, "atol": 1e-6},
+        run={"cycles": cycles, "transient_cycles": transient},
+        record={"samples_per_period": 100, "variables": ["clearance_x"]},
+    )
+    ds = workbench.simulate(scene)
+    a = ds.attrs
+    n = cycles + transient
+    return {
+        "s_per_cycle": a["solver_wall_time"] / n,
+        "steps": a["solver_steps"] / n,
+        "rhs": a["solver_rhs_evaluations"] / n,
+        "events": a["solver_events"] / n,
+    }
+
+
+def main() -> None:
+    for friction in ("coulomb", "lugre"):
+        print(f"--- friction = {friction} (paper's MATLAB: {PAPER[friction]} s per cycle)")
+        per_cycle(friction, "dop853", 1, 0)  # compile / load the kernel
+        rows = {
+            "dop853": per_cycle(friction, "dop853", 10, 2),
+            "dopri5": per_cycle(friction, "dopri5", 10, 2),
+            "scipy:DOP853": per_cycle(friction, "scipy:DOP853", 1, 0),
+        }
+        for method, r in rows.items():
+            print(
+                f"{method:13s} {r['s_per_cycle']:9.4f} s/cycle  {r['steps']:9.0f} steps/cycle  "
+                f"{r['rhs']:10.0f} rhs/cycle  {r['events']:6.0f} events/cycle  "
+                f"{PAPER[friction] / r['s_per_cycle']:8.0f}x the paper"
+            )
+        ratio = rows["scipy:DOP853"]["s_per_cycle"] / rows["dop853"]["s_per_cycle"]
+        target = 0.02 if friction == "coulomb" else 0.06
+        print(
+            f"compiled dop853 vs scipy:DOP853 (same rhs): {ratio:.0f}x (target >= 50x); "
+            f"target <= {target} s/cycle: "
+            f"{'met' if rows['dop853']['s_per_cycle'] <= target else 'NOT met'}"
+        )
+
+
+if __name__ == "__main__":
+    main()

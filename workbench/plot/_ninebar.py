@@ -1,0 +1,63 @@
+"""Overview figure of a nine-bar run: journal orbits (in units of c), contact forces, driving
+torques and slider acceleration."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import xarray as xr
+
+from workbench.plot._runs import axis_label, plt, register_overview
+
+
+def _clearances(ds: xr.Dataset) -> dict[str, float]:
+    from workbench.models import get_model
+
+    scene = tomllib.loads(ds.attrs["scene"])
+    model = get_model("ninebar")
+    params = model.default_parameters()
+    params.update(scene.get("parameters", {}))
+    return model.clearances(params)
+
+
+@register_overview("ninebar")
+def ninebar_overview(ds: xr.Dataset) -> plt.Figure:
+    """Journal orbits in units of c beside the time series of forces, torques and slider."""
+    joints = list(ds.joint.values) if "joint" in ds.coords and ds.sizes.get("joint") else []
+    series = [v for v in ("contact_force", "torque", "slider_acceleration") if v in ds]
+    ncol = max(len(joints), 1)
+    fig = plt.figure(figsize=(4.2 * ncol + 6, 7.5))
+    grid = fig.add_gridspec(max(len(series), 1), 2, width_ratios=[4.2 * ncol, 6])
+    if joints and "clearance_x" in ds:
+        sub = grid[:, 0].subgridspec(1, ncol, wspace=0.35)
+        c = _clearances(ds)
+        theta = np.linspace(0, 2 * np.pi, 200)
+        for i, j in enumerate(joints):
+            ax = fig.add_subplot(sub[0, i])
+            x = ds.clearance_x.sel(joint=j) / c[j]
+            y = ds.clearance_y.sel(joint=j) / c[j]
+            ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.8, label="e = c")
+            ax.plot(x, y, lw=0.5)
+            ax.set_aspect("equal")
+            ax.set_xlabel("x / c [1]")
+            ax.set_ylabel("y / c [1]")
+            ax.set_title(f"journal centre, joint {j} (c = {c[j] * 1e3:g} mm)", fontsize=9)
+            ax.legend(fontsize=7, loc="upper right")
+    for r, name in enumerate(series):
+        ax = fig.add_subplot(grid[r, 1])
+        da = ds[name]
+        extra = [d for d in da.dims if d != "time"]
+        if extra:
+            for label in da[extra[0]].values:
+                ax.plot(ds.time, da.sel({extra[0]: label}), lw=0.7, label=f"{extra[0]} {label}")
+            ax.legend(fontsize=7)
+        else:
+            ax.plot(ds.time, da, lw=0.7)
+        ax.set_ylabel(axis_label(da), fontsize=8)
+        ax.grid(alpha=0.3)
+        if r == len(series) - 1:
+            ax.set_xlabel(axis_label(ds.time))
+    fig.suptitle(ds.attrs.get("title", "nine-bar run"), fontsize=10)
+    fig.tight_layout()
+    return fig
