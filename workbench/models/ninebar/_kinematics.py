@@ -51,10 +51,10 @@ G_LS6, G_LS8 = _G["Ls6"], _G["Ls8"]
 
 
 @njit(cache=True)
-def _arm(P, JP, BP, out, base, L, k, ang, Ja, ba, w):
+def _arm(P, JP, BP, out, base, L, k, cs, sn, Ja, ba, w):
     """Point ``out`` = point ``base`` + L e(angle k), with its Jacobian and bias acceleration."""
-    c = math.cos(ang[k])
-    s = math.sin(ang[k])
+    c = cs[k]
+    s = sn[k]
     P[out, 0] = P[base, 0] + L * c
     P[out, 1] = P[base, 1] + L * s
     for col in range(6):
@@ -65,7 +65,7 @@ def _arm(P, JP, BP, out, base, L, k, ang, Ja, ba, w):
 
 
 @njit(cache=True)
-def _rrr(P, JP, BP, i1, l1, i2, l2, side, k1, k2, ang, Ja, ba, w, qd):
+def _rrr(P, JP, BP, i1, l1, i2, l2, side, k1, k2, ang, cs, sn, Ja, ba, w, qd):
     """RRR dyad: links of lengths l1 from point i1 and l2 from point i2 meet at a joint X on
     ``side`` (+1: left of i1 -> i2). Sets angles k1 = angle(X - P_i1), k2 = angle(X - P_i2) with
     their Jacobians, rates and bias accelerations. Returns False if the dyad cannot close."""
@@ -86,8 +86,9 @@ def _rrr(P, JP, BP, i1, l1, i2, l2, side, k1, k2, ang, Ja, ba, w, qd):
     xy = P[i1, 1] + a * uy + side * h * ux
     ang[k1] = math.atan2(xy - P[i1, 1], xx - P[i1, 0])
     ang[k2] = math.atan2(xy - P[i2, 1], xx - P[i2, 0])
-    c1, s1 = math.cos(ang[k1]), math.sin(ang[k1])
-    c2, s2 = math.cos(ang[k2]), math.sin(ang[k2])
+    c1, s1 = (xx - P[i1, 0]) / l1, (xy - P[i1, 1]) / l1
+    c2, s2 = (xx - P[i2, 0]) / l2, (xy - P[i2, 1]) / l2
+    cs[k1], sn[k1], cs[k2], sn[k2] = c1, s1, c2, s2
     # l1 w1 (-s1, c1) - l2 w2 (-s2, c2) = v_i2 - v_i1
     m00, m01, m10, m11 = -l1 * s1, l2 * s2, l1 * c1, -l2 * c2
     det = m00 * m11 - m01 * m10
@@ -131,7 +132,7 @@ def _body(pos, J, gam, b, P, JP, BP, pt, k, ang, Ja, ba):
             J[b, 2, col] = 0.0
 
 
-KIN_SCRATCH = _NPT * 2 + _NPT * 12 + _NPT * 2 + 7 + 42 + 7 + 7  # floats of scratch
+KIN_SCRATCH = _NPT * 2 + _NPT * 12 + _NPT * 2 + 7 + 42 + 7 + 7 + 14  # floats of scratch
 
 
 @njit(cache=True)
@@ -172,17 +173,21 @@ def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, scratch):
     Ja = scratch[o + 7 : o + 49].reshape((7, 6))
     ba = scratch[o + 49 : o + 56]
     w = scratch[o + 56 : o + 63]
+    cs = scratch[o + 63 : o + 70]  # cos and sin of each angle, computed once
+    sn = scratch[o + 70 : o + 77]
     P[_O4, 0] = geo[G_L5]
     P[_O6, 0] = geo[G_O6X]
     P[_O6, 1] = geo[G_O6Y]
     ang[A_TH1] = q[0]
     ang[A_TH4] = q[1]
+    cs[A_TH1], sn[A_TH1] = math.cos(q[0]), math.sin(q[0])
+    cs[A_TH4], sn[A_TH4] = math.cos(q[1]), math.sin(q[1])
     Ja[A_TH1, 0] = 1.0
     Ja[A_TH4, 1] = 1.0
     w[A_TH1] = qd[0]
     w[A_TH4] = qd[1]
-    _arm(P, JP, BP, PT_A, _O1, geo[G_L1], A_TH1, ang, Ja, ba, w)
-    _arm(P, JP, BP, PT_B, _O4, geo[G_L4], A_TH4, ang, Ja, ba, w)
+    _arm(P, JP, BP, PT_A, _O1, geo[G_L1], A_TH1, cs, sn, Ja, ba, w)
+    _arm(P, JP, BP, PT_B, _O4, geo[G_L4], A_TH4, cs, sn, Ja, ba, w)
     for r in range(2):
         P[PT_AJ, r] = P[PT_A, r] + q[2 + r]
         P[PT_BJ, r] = P[PT_B, r] + q[4 + r]
@@ -194,24 +199,28 @@ def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, scratch):
         JP[PT_AJ, r, 2 + r] += 1.0
         JP[PT_BJ, r, 4 + r] += 1.0
     if not _rrr(
-        P, JP, BP, PT_AJ, geo[G_L2], PT_BJ, geo[G_L3], 1.0, A_TH2, A_TH3, ang, Ja, ba, w, qd
+        P, JP, BP, PT_AJ, geo[G_L2], PT_BJ, geo[G_L3], 1.0, A_TH2, A_TH3, ang, cs, sn, Ja, ba, w, qd
     ):
         return FAIL_LINKS_23
-    _arm(P, JP, BP, PT_P, PT_AJ, geo[G_L2], A_TH2, ang, Ja, ba, w)
+    _arm(P, JP, BP, PT_P, PT_AJ, geo[G_L2], A_TH2, cs, sn, Ja, ba, w)
     if not _rrr(
-        P, JP, BP, _O6, geo[G_L6], PT_P, geo[G_L71], -1.0, A_TH6, A_TH7, ang, Ja, ba, w, qd
+        P, JP, BP, _O6, geo[G_L6], PT_P, geo[G_L71], -1.0, A_TH6, A_TH7, ang, cs, sn, Ja, ba, w, qd
     ):
         return FAIL_ROCKER_PANEL
-    _arm(P, JP, BP, PT_C, _O6, geo[G_L6], A_TH6, ang, Ja, ba, w)
-    ang[A_TH7] += math.pi  # theta7 is the angle of P - C
-    ang[A_TH7] = math.atan2(math.sin(ang[A_TH7]), math.cos(ang[A_TH7]))
+    _arm(P, JP, BP, PT_C, _O6, geo[G_L6], A_TH6, cs, sn, Ja, ba, w)
+    # theta7 is the angle of P - C, i.e. that of C - P plus pi
+    ang[A_TH7] = math.atan2(-sn[A_TH7], -cs[A_TH7])
+    cs[A_TH7], sn[A_TH7] = -cs[A_TH7], -sn[A_TH7]
     # D = C + L72 e(theta7 + beta): an arm on a shifted angle (slot A_TH8 used as scratch)
     ang[A_TH8] = ang[A_TH7] + geo[G_BETA]
+    cb, sb = math.cos(geo[G_BETA]), math.sin(geo[G_BETA])
+    cs[A_TH8] = cs[A_TH7] * cb - sn[A_TH7] * sb
+    sn[A_TH8] = sn[A_TH7] * cb + cs[A_TH7] * sb
     ba[A_TH8] = ba[A_TH7]
     w[A_TH8] = w[A_TH7]
     for col in range(6):
         Ja[A_TH8, col] = Ja[A_TH7, col]
-    _arm(P, JP, BP, PT_D, PT_C, geo[G_L72], A_TH8, ang, Ja, ba, w)
+    _arm(P, JP, BP, PT_D, PT_C, geo[G_L72], A_TH8, cs, sn, Ja, ba, w)
     # RRP dyad: E = D + L8 e(theta8) on y = y_O6, E on the -X side of D
     L8 = geo[G_L8]
     dy = geo[G_O6Y] - P[PT_D, 1]
@@ -219,14 +228,15 @@ def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, scratch):
         return FAIL_LINK8
     dx = -math.sqrt(L8 * L8 - dy * dy)
     ang[A_TH8] = math.atan2(dy, dx)
-    c8, s8 = math.cos(ang[A_TH8]), math.sin(ang[A_TH8])
+    c8, s8 = dx / L8, dy / L8
+    cs[A_TH8], sn[A_TH8] = c8, s8
     w8 = 0.0
     for col in range(6):
         Ja[A_TH8, col] = -JP[PT_D, 1, col] / (L8 * c8)
         w8 += Ja[A_TH8, col] * qd[col]
     w[A_TH8] = w8
     ba[A_TH8] = (L8 * w8 * w8 * s8 - BP[PT_D, 1]) / (L8 * c8)
-    _arm(P, JP, BP, PT_E, PT_D, L8, A_TH8, ang, Ja, ba, w)
+    _arm(P, JP, BP, PT_E, PT_D, L8, A_TH8, cs, sn, Ja, ba, w)
     # body centroids
     _body(pos, J, gam, SLIDER9, P, JP, BP, PT_E, -1, ang, Ja, ba)
     for b, base, L, k in (
@@ -237,7 +247,7 @@ def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, scratch):
         (ROCKER6, _O6, geo[G_LS6], A_TH6),
         (LINK8, PT_D, geo[G_LS8], A_TH8),
     ):
-        _centroid(pos, J, gam, b, P, JP, BP, base, L, k, ang, Ja, ba, w)
+        _centroid(pos, J, gam, b, P, JP, BP, base, L, k, ang, cs, sn, Ja, ba, w)
     # panel 7: triangle centroid (C + P + D) / 3
     for r in range(2):
         pos[PANEL7, r] = (P[PT_C, r] + P[PT_P, r] + P[PT_D, r]) / 3.0
@@ -258,10 +268,10 @@ def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, scratch):
 
 
 @njit(cache=True)
-def _centroid(pos, J, gam, b, P, JP, BP, base, L, k, ang, Ja, ba, w):
+def _centroid(pos, J, gam, b, P, JP, BP, base, L, k, ang, cs, sn, Ja, ba, w):
     """Body b with centroid at distance L from point ``base`` along angle k."""
-    c = math.cos(ang[k])
-    s = math.sin(ang[k])
+    c = cs[k]
+    s = sn[k]
     pos[b, 0] = P[base, 0] + L * c
     pos[b, 1] = P[base, 1] + L * s
     pos[b, 2] = ang[k]
