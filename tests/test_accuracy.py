@@ -64,3 +64,32 @@ def test_cli_accuracy(tmp_path, capsys):
     )
     assert "recommended" in capsys.readouterr().out
     assert out.with_suffix(".png").stat().st_size > 10_000
+
+
+def test_run_estimates_its_own_error_when_asked():
+    """``solver.check = true``: a second run 100x tighter over the first period. For the Duffing
+    oscillator at rtol = atol = 1e-5 the estimate is a small, nonzero fraction of the range and it
+    falls when the run's own tolerance is tightened."""
+    import workbench
+
+    def checked(tol: float) -> dict:
+        ds = workbench.simulate(
+            {
+                "model": {"name": "duffing"},
+                "solver": {"rtol": tol, "atol": tol, "check": True},
+                "run": {"cycles": 3},
+            }
+        )
+        return ds.attrs
+
+    loose, tight = checked(1e-5), checked(1e-8)
+    assert 0 < tight["solver_check_error"] < loose["solver_check_error"] < 1e-3
+    assert loose["solver_check_tolerance"] == pytest.approx(1e-7)
+    assert loose["solver_check_horizon"] == pytest.approx(loose["forcing_period"], rel=1e-12)
+
+
+def test_check_must_be_boolean():
+    import workbench
+
+    with pytest.raises(workbench.SceneError, match=r"solver\.check.*'yes'.*true or false"):
+        workbench.load_scene({"model": {"name": "duffing"}, "solver": {"check": "yes"}})

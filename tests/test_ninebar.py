@@ -9,7 +9,7 @@ import workbench
 from workbench.models import get_model
 from workbench.models.ninebar import _dynamics as dyn
 from workbench.models.ninebar._geometry import geometry_array
-from workbench.models.ninebar._kinematics import KIN_SCRATCH, N_POINTS, PT_E, kinematics
+from workbench.models.ninebar._kinematics import N_POINTS, PT_E, kinematics
 
 SCENE = "studies/ninebar.toml"
 
@@ -24,9 +24,7 @@ def kin(q, qd=None):
         np.empty((8, 3)),
         np.empty((N_POINTS, 2)),
     )
-    code = kinematics(
-        np.asarray(q, float), np.asarray(qd, float), geometry_array(), *out, np.empty(KIN_SCRATCH)
-    )
+    code = kinematics(np.asarray(q, float), np.asarray(qd, float), geometry_array(), *out)
     return code, out
 
 
@@ -153,8 +151,9 @@ def test_energy_balance(joints, friction):
 
 
 def test_torques_converge_to_ideal_as_clearance_vanishes():
-    """Measured (rtol 1e-6, 2 cycles, omega 2.5 pi, no friction): max |tau - tau_ideal| =
-    53.6, 7.5, 0.66 N m and rms 3.4, 0.55, 0.075 N m for c = 100, 10, 1 um (ideal peak 10.9 N m)."""
+    """Measured (rtol 1e-6, 1 recorded cycle after 1, omega 2.5 pi, no friction; ideal peak
+    10.9 N m): rms |tau - tau_ideal| = 1.4-3.6, 0.53-0.61, 0.075-0.085 N m for c = 100, 10, 1 um
+    (ranges over initial offsets of 1e-12 c: the impacts are chaotic, the 100 um case most)."""
     base = workbench.load_scene(SCENE)
     common = {
         "run": {"cycles": 1, "transient_cycles": 1},
@@ -173,8 +172,8 @@ def test_torques_converge_to_ideal_as_clearance_vanishes():
             )
         )
         rms.append(float(np.sqrt(((ds.torque - ideal.torque) ** 2).mean())))
-    assert rms[0] > 3 * rms[1] > 9 * rms[2]
-    assert rms[2] < 0.02 * float(abs(ideal.torque).max())
+    assert rms[0] > 2 * rms[1] and rms[1] > 4 * rms[2]
+    assert rms[2] < 0.01 * float(abs(ideal.torque).max())
 
 
 def test_compiled_and_scipy_agree_over_one_cycle():

@@ -17,6 +17,7 @@ configure_numba_cache()
 from workbench._archive import open_run, save_run  # noqa: E402
 from workbench._errors import SceneError, SolverError  # noqa: E402
 from workbench._scene import Scene, load_scene  # noqa: E402
+from workbench.campaign import run_campaign  # noqa: E402
 from workbench.solver import simulate  # noqa: E402
 
 __version__ = "0.1.0"
@@ -27,6 +28,7 @@ __all__ = [
     "SolverError",
     "load_scene",
     "open_run",
+    "run_campaign",
     "save_run",
     "simulate",
     "__version__",

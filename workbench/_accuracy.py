@@ -35,11 +35,12 @@ DEFAULT_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 _ERRORS = ("short_error", "peak_error", "events_error", "statistic_error")
 
 
-def _solver(scene: Scene, method: str, tol: float) -> dict:
-    return {**scene.solver, "method": method, "rtol": tol, "atol": tol}
+def _solver(scene: Scene, method: str, tol: float, atol: float | None = None) -> dict:
+    atol = tol if atol is None else atol
+    return {**scene.solver, "method": method, "rtol": tol, "atol": atol, "check": False}
 
 
-def _short_scene(scene: Scene, method: str, tol: float) -> Scene:
+def _short_scene(scene: Scene, method: str, tol: float, atol: float | None = None) -> Scene:
     """The first forcing period from t0 (or the first 10 % of the run), densely recorded."""
     if "cycles" in scene.run:
         run, record = {"cycles": 1, "transient_cycles": 0}, {"samples_per_period": 400}
@@ -47,7 +48,7 @@ def _short_scene(scene: Scene, method: str, tol: float) -> Scene:
         horizon = 0.1 * (scene.run["duration"] + scene.run["transient"])
         run, record = {"duration": horizon, "transient": 0.0}, {"dt": horizon / 400}
     record["variables"] = list(scene.variables)
-    return scene.replace(solver=_solver(scene, method, tol), run=run, record=record, sweep={})
+    return scene.replace(solver=_solver(scene, method, tol, atol), run=run, record=record, sweep={})
 
 
 def _long_scene(scene: Scene, method: str, tol: float) -> Scene:
@@ -244,11 +245,18 @@ def recommend(
 
 
 def check_error(scene: Scene) -> dict[str, float]:
-    """Self-check of a run (``solver.check = true``): the first period at the scene's tolerance
-    against one 100x tighter; returns the largest error relative to each variable's range."""
-    tight = max(scene.solver["rtol"] / 100, 1e-13)
-    a = simulate(_short_scene(scene, scene.solver["method"], scene.solver["rtol"]))
-    b = simulate(_short_scene(scene, scene.solver["method"], tight))
+    """Self-check of a run (``solver.check = true``): the first period (or the first 10 % of the
+    run) at the scene's tolerances against a run 100x tighter in both rtol and atol.
+
+    Returns ``check_error``, the largest difference relative to each recorded variable's range
+    (dimensionless), ``check_tolerance`` (the reference rtol) and ``check_horizon`` (s).
+    :func:`workbench.simulate` stores them as ``solver_check_*`` attributes.
+    """
+    s = scene.solver
+    factor = max(s["rtol"] / 100, 1e-13) / s["rtol"]
+    tight, tight_atol = s["rtol"] * factor, s["atol"] * factor
+    a = simulate(_short_scene(scene, s["method"], s["rtol"], s["atol"]))
+    b = simulate(_short_scene(scene, s["method"], tight, tight_atol))
     worst = 0.0
     for name in a.data_vars:
         span = float(np.nanmax(b[name]) - np.nanmin(b[name])) or 1.0

@@ -50,6 +50,7 @@ _SOLVER_DEFAULTS = {
     "atol": 1e-10,
     "max_step": math.inf,
     "max_steps": 50_000_000,
+    "check": False,
 }
 
 
@@ -324,6 +325,12 @@ def _validate_solver(given: dict) -> dict:
     s["atol"] = _positive("solver.atol", s["atol"])
     s["max_step"] = _positive("solver.max_step", s["max_step"], allow_inf=True)
     s["max_steps"] = _integer("solver.max_steps", s["max_steps"], 1)
+    if not isinstance(s["check"], bool):
+        raise SceneError(
+            "solver.check",
+            f"got {s['check']!r}; allowed: true or false (estimate the run's own "
+            "error by a second run 100x tighter over the first period)",
+        )
     return s
 
 

@@ -68,6 +68,15 @@ class Effect:
     allowed: tuple = ()
 
 
+# Hook protocol: besides 0 (fine) and positive model failure codes, ``rhs`` may return
+# EVENT_INSIDE_STEP after filling ``dydt`` completely, to say that this (trial) state lies beyond
+# an event surface whose event has not fired (e.g. a journal in contact whose onset was not
+# located). The compiled loop then keeps the step only if the step's end also lies beyond that
+# surface, so that the event is located; otherwise the whole event happened between the step's
+# ends, where the sign test on g cannot see it, and the step is retried at half the size.
+EVENT_INSIDE_STEP = -1
+
+
 @dataclass
 class Problem:
     """Everything the solver needs for one run of a model (built by :meth:`Model.problem`).

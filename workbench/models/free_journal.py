@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from workbench.models import register
-from workbench.models._base import Model, Parameter, Problem, Quantity
+from workbench.models._base import EVENT_INSIDE_STEP, Model, Parameter, Problem, Quantity
 from workbench.models.contact import hertz_internal_stiffness, lankarani_nikravesh
 
 # p: mass, clearance, K, n, c_e, v_floor
@@ -38,6 +38,8 @@ def rhs(t, y, p, ip, aux, work, dydt):
     dydt[1] = vy
     dydt[2] = fx / p[0]
     dydt[3] = fy / p[0]
+    if delta > 0.0 and aux[0] == 0.0:
+        return EVENT_INSIDE_STEP  # in contact, but its onset has not been located
     return 0
 
 

@@ -21,6 +21,8 @@ from types import ModuleType
 from workbench._cache import cache_root, package_digest
 
 _TEMPLATE = Path(__file__).with_name("_kernel.py")
+# read at import, like the package digest that keys the cache, so that both describe one source
+_TEMPLATE_SOURCE = _TEMPLATE.read_text()
 _MARKER = re.compile(r"^from .* import apply_event, event_values, rhs  # @@HOOKS@@$", re.M)
 
 
@@ -33,7 +35,7 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    source = _TEMPLATE.read_text()
+    source = _TEMPLATE_SOURCE
     line = f"from {hooks} import apply_event, event_values, rhs  # generated"
     source, n = _MARKER.subn(line, source)
     if n != 1:  # pragma: no cover - guards an edit of the template

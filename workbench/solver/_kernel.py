@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.solver._hooks_template import apply_event, event_values, rhs  # @@HOOKS@@
 from workbench.solver._tableaux import (
     DOP853_A,
@@ -71,14 +72,16 @@ ST_RHS = 2
 ST_EVENTS = 3
 ST_RECORDED = 4
 ST_MODEL_CODE = 5
-N_STATS = 6
+ST_EVENT_RETRIES = 6  # steps retried because an event happened between their ends
+N_STATS = 7
 
 # Indices of the float64 controller array: current time (s), next step size (s), flag "last
-# failure was non-finite".
+# failure was non-finite", flag "the current derivative f was flagged EVENT_INSIDE_STEP".
 CT_T = 0
 CT_H = 1
 CT_NONFINITE = 2
-N_CTRL = 3
+CT_F_INSIDE = 3
+N_CTRL = 4
 
 
 @njit(cache=True)
@@ -99,9 +102,14 @@ def _stage_point(K, a, s, h, y, out):
 
 @njit(cache=True)
 def _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats):
-    """One explicit RK step; stages in K, FSAL derivative in K[ns]. Returns the hook code."""
+    """One explicit RK step; stages in K, FSAL derivative in K[ns].
+
+    Returns ``(code, inside_stage, inside_end)``: the first model failure code (0 if none) and
+    whether an intermediate stage, and the step's end, returned EVENT_INSIDE_STEP.
+    """
     ns = _n_stages(method)
     n = y.size
+    inside_stage = False
     for i in range(n):
         K[0, i] = f[i]
     for s in range(1, ns):
@@ -113,14 +121,19 @@ def _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats):
             c = RK45_C[s]
         stats[ST_RHS] += 1
         code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
-        if code != 0:
-            return code
+        if code == EVENT_INSIDE_STEP:
+            inside_stage = True
+        elif code != 0:
+            return code, inside_stage, False
     if method == DOP853:
         _stage_point(K, DOP853_B, ns, h, y, y_new)
     else:
         _stage_point(K, RK45_B, ns, h, y, y_new)
     stats[ST_RHS] += 1
-    return rhs(t + h, y_new, p, ip, aux, work, K[ns])
+    code = rhs(t + h, y_new, p, ip, aux, work, K[ns])
+    if code == EVENT_INSIDE_STEP:
+        return 0, inside_stage, True
+    return code, inside_stage, False
 
 
 @njit(cache=True)
@@ -163,7 +176,7 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats):
             _stage_point(K, DOP853_A_EXTRA[r], s, h, y, ytmp)
             stats[ST_RHS] += 1
             code = rhs(t + DOP853_C_EXTRA[r] * h, ytmp, p, ip, aux, work, K[s])
-            if code != 0:
+            if code != 0 and code != EVENT_INSIDE_STEP:
                 return code
         for i in range(n):
             dy = y_new[i] - y[i]
@@ -254,7 +267,8 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, work,
 
 @njit(cache=True)
 def start(t, y, p, ip, aux, work, f, g, stats):
-    """Derivative and event functions at the initial point. Returns the hook code."""
+    """Derivative and event functions at the initial point. Returns the hook code (0, a
+    failure code, or EVENT_INSIDE_STEP when the point lies beyond an event surface)."""
     stats[ST_RHS] += 1
     code = rhs(t, y, p, ip, aux, work, f)
     if g.size > 0:
@@ -345,6 +359,7 @@ def advance(
     gtmp = np.empty(ne)
     t = ctrl[CT_T]
     h_abs = ctrl[CT_H]
+    f_inside = ctrl[CT_F_INSIDE] > 0.0
     i_rec = stats[ST_RECORDED]
     status = DONE
     while i_rec < nrec and t_rec[i_rec] <= t:
@@ -377,7 +392,9 @@ def advance(
             if t_new > t_end:
                 t_new = t_end
             h = t_new - t
-            code = _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats)
+            code, inside_stage, inside_end = _rk_step(
+                method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats
+            )
             if code != 0:
                 last_code = code
                 err = np.inf
@@ -386,6 +403,16 @@ def advance(
                 if not np.isfinite(err):
                     ctrl[CT_NONFINITE] = 1.0
                     err = np.inf
+            if err < 1.0 and inside_stage and not inside_end and not f_inside:
+                # a stage lay beyond an event surface that both ends of the step are short of:
+                # the event began and ended inside the step, invisible to the sign test on g
+                # and, when few stages see it, to the error estimate. Halve until an end of a
+                # step lands beyond the surface, so that the event is located.
+                stats[ST_REJECTED] += 1
+                stats[ST_EVENT_RETRIES] += 1
+                h_abs = 0.5 * h
+                rejected = True
+                continue
             if err < 1.0:
                 if err == 0.0:
                     factor = MAX_FACTOR
@@ -477,7 +504,8 @@ def advance(
             stats[ST_EVENTS] += 1
             stop = apply_event(fired, t, y, p, ip, aux, work)
             code = start(t, y, p, ip, aux, work, f, g_old, stats)
-            if code != 0:
+            f_inside = code == EVENT_INSIDE_STEP
+            if code != 0 and not f_inside:
                 stats[ST_MODEL_CODE] = code
                 status = MODEL_FAILURE
                 break
@@ -488,9 +516,11 @@ def advance(
             t = t_new
             y[:] = y_new
             f[:] = K[ns]
+            f_inside = inside_end
             if ne > 0:
                 g_old[:] = g_new
     ctrl[CT_T] = t
+    ctrl[CT_F_INSIDE] = 1.0 if f_inside else 0.0
     ctrl[CT_H] = h_abs
     stats[ST_RECORDED] = i_rec
     return status

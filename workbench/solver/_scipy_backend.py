@@ -16,6 +16,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from workbench._errors import SolverError
+from workbench.models._base import EVENT_INSIDE_STEP
 
 
 def integrate(problem, t_rec, name, rtol, atol, max_step):
@@ -34,7 +35,7 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
         nfev[0] += 1
         dydt = np.empty(y.size)
         code = hooks.rhs(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, work, dydt)
-        if code != 0:
+        if code != 0 and code != EVENT_INSIDE_STEP:
             # a trial stage outside the model's domain: NaN makes scipy reject the step and
             # retry smaller, as the compiled loop does; a persistent failure ends the run
             last_failure[:] = [code, t]
@@ -123,6 +124,7 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
         "rejected_steps": -1,
         "rhs_evaluations": nfev[0],
         "events": events,
+        "event_retries": 0,  # scipy has no check for events inside a step
         "wall_time": _time.perf_counter() - wall0,
     }
     if status == "terminated":

@@ -6,6 +6,7 @@ import datetime
 import math
 import platform
 import time as _time
+from functools import lru_cache
 from importlib.metadata import version
 
 import numpy as np
@@ -68,6 +69,7 @@ def integrate(
             "rejected_steps": 0,
             "rhs_evaluations": 0,
             "events": 0,
+            "event_retries": 0,
             "wall_time": 0.0,
         }
         return RunResult(t_rec, Y, AUX, stats, "done")
@@ -86,7 +88,8 @@ def integrate(
     _compiled(k, mid, problem, rtol, atol_arr, max_step)
     wall0 = _time.perf_counter()
     code = k.start(problem.t0, y, problem.p, problem.ip, aux, work, f, g, stats)
-    if code != 0:
+    ctrl[k.CT_F_INSIDE] = 1.0 if code == k.EVENT_INSIDE_STEP else 0.0
+    if code != 0 and code != k.EVENT_INSIDE_STEP:
         raise SolverError(
             f"the model cannot start at t = {problem.t0:g} s: {problem.failure(code)}",
             time=problem.t0,
@@ -150,6 +153,7 @@ def integrate(
         "rejected_steps": int(stats[k.ST_REJECTED]),
         "rhs_evaluations": int(stats[k.ST_RHS]),
         "events": int(stats[k.ST_EVENTS]),
+        "event_retries": int(stats[k.ST_EVENT_RETRIES]),
         "wall_time": wall,
     }
     t_now = float(ctrl[k.CT_T])
@@ -306,7 +310,12 @@ def simulate(scene: Scene | str, *, progress: bool = False) -> xr.Dataset:
     finally:
         if bar is not None:
             bar.close()
-    return to_dataset(scene, model, problem, result, period, grid_attrs)
+    ds = to_dataset(scene, model, problem, result, period, grid_attrs)
+    if s["check"]:
+        from workbench._accuracy import check_error  # the accuracy layer builds on simulate
+
+        ds.attrs.update({f"solver_{k}": v for k, v in check_error(scene).items()})
+    return ds
 
 
 def to_dataset(scene, model, problem, result: RunResult, period, grid_attrs) -> xr.Dataset:
@@ -340,26 +349,30 @@ def to_dataset(scene, model, problem, result: RunResult, period, grid_attrs) -> 
 def provenance(scene: Scene) -> dict:
     """Global attributes every stored dataset carries (CF conventions, scene, versions)."""
     now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-    versions = []
-    for pkg in _PACKAGES:
-        try:
-            versions.append(f"{pkg}={version(pkg)}")
-        except Exception:
-            versions.append(f"{pkg}=unknown")
+    versions, source = _versions()
     return {
         "Conventions": "CF-1.11",
         "title": scene.title or f"workbench run of model {scene.model}",
         "history": f"{now} created by workbench.simulate",
-        "source": f"workbench {version('workbench') if _installed() else 'dev'} "
-        f"({platform.python_implementation()} {platform.python_version()})",
+        "source": source,
         "scene": scene.to_toml(),
-        "package_versions": "; ".join(versions),
+        "package_versions": versions,
     }
 
 
-def _installed() -> bool:
+@lru_cache(maxsize=1)
+def _versions() -> tuple[str, str]:
+    """Package versions and the source line; read once per process (metadata look-ups cost
+    milliseconds, more than a short run)."""
+    found = []
+    for pkg in _PACKAGES:
+        try:
+            found.append(f"{pkg}={version(pkg)}")
+        except Exception:
+            found.append(f"{pkg}=unknown")
     try:
-        version("workbench")
-        return True
+        own = version("workbench")
     except Exception:
-        return False
+        own = "dev"
+    source = f"workbench {own} ({platform.python_implementation()} {platform.python_version()})"
+    return "; ".join(found), source

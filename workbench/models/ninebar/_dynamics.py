@@ -26,11 +26,11 @@ import math
 import numpy as np
 from numba import njit
 
+from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.models.contact import contact_elastic_energy, lankarani_nikravesh
 from workbench.models.friction import coulomb_modified, lugre_force, lugre_rate
 from workbench.models.ninebar._geometry import GEOMETRY_FIELDS
 from workbench.models.ninebar._kinematics import (
-    KIN_SCRATCH,
     N_POINTS,
     PT_A,
     PT_AJ,
@@ -185,8 +185,7 @@ _O_MFF = _O_Q6 + 6
 _O_RF = _O_MFF + 36
 _O_QDD = _O_RF + 6
 _O_L = _O_QDD + 6
-_O_KIN = _O_L + 36
-WORK_SIZE = _O_KIN + KIN_SCRATCH
+WORK_SIZE = _O_L + 36
 
 
 @njit(cache=True)
@@ -218,7 +217,7 @@ def evaluate(t, y, p, ip, aux, work):
     Jp = work[_O_JP : _O_JP + 12 * N_POINTS].reshape((N_POINTS, 2, 6))
     gam = work[_O_GAM : _O_GAM + 24].reshape((8, 3))
     gamp = work[_O_GAMP : _O_GAMP + 2 * N_POINTS].reshape((N_POINTS, 2))
-    if kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, work[_O_KIN:]) != 0:
+    if kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp) != 0:
         return CODE_ASSEMBLY
     for i in range(N_W):
         ws[i] = 0.0
@@ -395,6 +394,9 @@ def rhs(t, y, p, ip, aux, work, dydt):
     if iw >= 0:
         dydt[iw] = ws[W_PDRIVE]
         dydt[iw + 1] = ws[W_PDISS]
+    for j in range(2):
+        if ip[IP_HAS + j] == 1 and aux[j] == 0.0 and ws[W_JOINT + j * N_WJ + WJ_DELTA] > 0.0:
+            return EVENT_INSIDE_STEP  # in contact, but its onset has not been located
     return 0
 
 

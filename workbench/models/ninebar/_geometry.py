@@ -12,7 +12,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-# order of the float64 geometry array passed to the compiled kinematics
+# order of the float64 geometry array passed to the compiled kinematics. The panel centroid is
+# the triangle centroid (C + P + D) / 3 (spec: Ls7 = 0.147 m from C), so it needs no field.
 GEOMETRY_FIELDS = (
     "L1",  # crank 1, O1A, m (R)
     "L2",  # link 2, AP, m (R)
@@ -44,7 +45,7 @@ DEFAULT_GEOMETRY: dict[str, float] = {
     "L6": 0.230,
     "L71": 0.330,
     "L72": 0.330,
-    "beta": math.radians(96.0),
+    "beta": math.radians(96.0),  # 96 deg
     "L8": 0.336,
     "O6x": -0.330,
     "O6y": 0.350,
@@ -57,6 +58,7 @@ DEFAULT_GEOMETRY: dict[str, float] = {
     "Ls8": 0.168,
 }
 
+# the eight moving bodies, in the row order of the kinematics' pos, J and gam
 BODY_NAMES = ("crank1", "link2", "link3", "crank4", "rocker6", "panel7", "link8", "slider9")
 # kg (R)
 MASSES = (0.148, 0.805, 0.603, 0.265, 0.581, 4.334, 0.827, 0.801)
@@ -66,7 +68,26 @@ INERTIAS = (2.4975e-5, 7.1293e-3, 1.2412e-2, 1.9930e-4, 2.5612e-3, 5.5182e-2, 7.
 
 
 def geometry_array(values: Mapping[str, float] | None = None) -> np.ndarray:
-    """The geometry array in GEOMETRY_FIELDS order: defaults overridden by ``values`` (m, rad)."""
+    """The float64 geometry array that the compiled kinematics take.
+
+    Parameters
+    ----------
+    values : mapping of str to float, optional
+        Overrides of DEFAULT_GEOMETRY by field name (m, rad).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64[len(GEOMETRY_FIELDS)] in GEOMETRY_FIELDS order.
+
+    Raises
+    ------
+    KeyError
+        For a name that is not in GEOMETRY_FIELDS.
+    """
     merged = dict(DEFAULT_GEOMETRY)
-    merged.update(values or {})
+    for name, value in (values or {}).items():
+        if name not in merged:
+            raise KeyError(f"unknown nine-bar geometry field {name!r}; known: {GEOMETRY_FIELDS}")
+        merged[name] = value
     return np.array([merged[f] for f in GEOMETRY_FIELDS], dtype=np.float64)

@@ -1,12 +1,36 @@
-"""Closed-form kinematics of the nine-bar mechanism with clearance vectors (modular dyads).
+"""Closed-form kinematics of the nine-bar mechanism with two revolute clearance joints.
 
-Coordinates q = (theta1, theta4, x1, y1, x2, y2) [rad, rad, m, m, m, m]. The mechanism is
-solved as a chain of Assur groups (Hartenberg & Denavit 1964; Nikravesh 1988, Sec. 3): driven
-cranks, the journal centres A' = A + (x1, y1) and B' = B + (x2, y2), the RRR dyad A'-P-B' (links
-2 and 3), the RRR dyad O6-C-P (rocker 6 and panel 7), the panel vertex D and the RRP dyad D-E
-(link 8 and the slider on the guide y = y_O6). Positions, Jacobians and bias accelerations are
-exact: each dyad's velocity and acceleration follow from the 2 x 2 linear system of its
-differentiated closure equation, solved for the 6 unit coordinate velocities at once.
+Coordinates q = (theta1, theta4, x1, y1, x2, y2) [rad, rad, m, m, m, m]: the crank angles and
+the clearance vectors (journal centre minus bearing centre) of the joints A (crank 1 / link 2)
+and B (crank 4 / link 3); q[2:] = 0 is the ideal mechanism. Frame, branches and symbols:
+``shared/spec/ninebar-parameters.md`` (Chen et al. 2019, Eq. 11).
+
+The mechanism is solved as a chain of Assur groups, each with its own position, velocity and
+acceleration routine (modular kinematics; references: Hartenberg & Denavit, *Kinematic
+Synthesis of Linkages*, 1964; Uicker, Pennock & Shigley, *Theory of Machines and Mechanisms*,
+position, velocity and acceleration analysis of the four-bar and slider-crank loops):
+
+1. driven cranks: A = L1 e(theta1), B = O4 + L4 e(theta4); journal centres A' = A + (x1, y1),
+   B' = B + (x2, y2);
+2. RRR dyad A'-P-B' (links 2 and 3), P left of A' -> B';
+3. RRR dyad O6-C-P (rocker 6 and side CP of panel 7), C right of O6 -> P; theta7 = angle(P - C);
+4. panel vertex D = C + L72 e(theta7 + beta);
+5. RRP dyad D-E (link 8 and slider 9 on the guide y = y_O6), E on the -X side of D;
+   S9 = S0 - (x_E - x_O6).
+
+Positions are exact (circle intersections). Velocities and accelerations are exact too: each
+dyad's rates solve the 2 x 2 linear system of its differentiated closure equation. The Jacobian
+is the velocity analysis run with the six unit coordinate rates, the bias acceleration the
+acceleration analysis at qdd = 0, so that the accelerations are ``J @ qdd + gam``.
+
+Array layouts (all float64, written into caller-provided arrays, nothing allocated per call):
+
+- ``pos[8, 3]``, ``gam[8, 3]``, ``J[8, 3, 6]``: per body (CRANK1 .. SLIDER9) the centroid x, y
+  (m) and the angle phi (rad) measured counter-clockwise from +X, their bias accelerations and
+  their derivatives with respect to q. The slider only translates (phi = 0). The crank angles
+  are q[0], q[1] as given; the other angles lie in (-pi, pi].
+- ``pts[N_POINTS, 2]``, ``gamp[N_POINTS, 2]``, ``Jp[N_POINTS, 2, 6]``: the moving points PT_A ..
+  PT_E, likewise. The frame points O1 = (0, 0), O4 = (L5, 0) and O6 are in ``geo``.
 """
 
 from __future__ import annotations
@@ -17,31 +41,30 @@ from numba import njit
 
 from workbench.models.ninebar._geometry import GEOMETRY_FIELDS
 
-# point indices (pts, Jp, gamp); O1, O4 and O6 are fixed and kept internally
+# -- points (rows of pts, Jp, gamp) --------------------------------------------------------------
 PT_A = 0  # bearing centre A on crank 1
 PT_AJ = 1  # journal centre A' on link 2
 PT_B = 2  # bearing centre B on crank 4
 PT_BJ = 3  # journal centre B' on link 3
-PT_P = 4  # compound joint of links 2, 3 and panel 7
-PT_C = 5  # rocker 6 / panel 7
-PT_D = 6  # panel 7 / link 8
-PT_E = 7  # link 8 / slider 9
+PT_P = 4  # joint of link 2, link 3 and panel 7
+PT_C = 5  # joint of rocker 6 and panel 7
+PT_D = 6  # joint of panel 7 and link 8
+PT_E = 7  # joint of link 8 and slider 9, on the guide
 N_POINTS = 8
-_O1, _O4, _O6 = 8, 9, 10
-_NPT = 11
+POINT_NAMES = ("A", "A'", "B", "B'", "P", "C", "D", "E")
 
-# angle indices
-A_TH1, A_TH4, A_TH2, A_TH3, A_TH6, A_TH7, A_TH8 = 0, 1, 2, 3, 4, 5, 6
-
-# body indices
+# -- bodies (rows of pos, J, gam; same order as _geometry.BODY_NAMES) ----------------------------
 CRANK1, LINK2, LINK3, CRANK4, ROCKER6, PANEL7, LINK8, SLIDER9 = range(8)
+N_BODIES = 8
 
-# failure codes of `kinematics`
+# -- return codes: which group fails to assemble -------------------------------------------------
 ASSEMBLED = 0
-FAIL_LINKS_23 = 1  # A'-P-B' does not close
-FAIL_ROCKER_PANEL = 2  # O6-C-P does not close
-FAIL_LINK8 = 3  # D-E cannot reach the slider guide
+FAIL_LINKS_23 = 1  # A'-P-B': |A'B'| outside [|L2 - L3|, L2 + L3]
+FAIL_ROCKER_PANEL = 2  # O6-C-P: |O6 P| outside [|L6 - L71|, L6 + L71]
+FAIL_LINK8 = 3  # D-E: D is L8 or farther from the slider guide
 
+
+# -- indices into geo ----------------------------------------------------------------------------
 _G = {name: i for i, name in enumerate(GEOMETRY_FIELDS)}
 G_L1, G_L2, G_L3, G_L4, G_L5 = _G["L1"], _G["L2"], _G["L3"], _G["L4"], _G["L5"]
 G_L6, G_L71, G_L72, G_BETA, G_L8 = _G["L6"], _G["L71"], _G["L72"], _G["beta"], _G["L8"]
@@ -49,236 +72,539 @@ G_O6X, G_O6Y, G_S0 = _G["O6x"], _G["O6y"], _G["S0"]
 G_LS1, G_LS2, G_LS3, G_LS4 = _G["Ls1"], _G["Ls2"], _G["Ls3"], _G["Ls4"]
 G_LS6, G_LS8 = _G["Ls6"], _G["Ls8"]
 
+# A configuration is carried between the passes as one flat tuple (no allocation): the unit
+# vectors (c, s) of theta1, theta4, theta2, theta3, theta6, theta7, theta7 + beta, theta8; the
+# dyads' rate factors f2, f3 (A'-P-B'), f6, f7 (O6-C-P), fw8, fs8 (D-E); the points A, A', B,
+# B', P, C, D, E.
+_N_STATE = 38
+_STATE_XE = _N_STATE - 2
+_NO_STATE = (0.0,) * _N_STATE
+# Pass results are 40-tuples: per body (x, y, phi) in body order, then per point (x, y).
+_V_SLIDER_X = 3 * SLIDER9  # x of the slider in a pass result
 
+
+# ================================================================================================
+# Assur groups
+# ================================================================================================
 @njit(cache=True)
-def _arm(P, JP, BP, out, base, L, k, cs, sn, Ja, ba, w):
-    """Point ``out`` = point ``base`` + L e(angle k), with its Jacobian and bias acceleration."""
-    c = cs[k]
-    s = sn[k]
-    P[out, 0] = P[base, 0] + L * c
-    P[out, 1] = P[base, 1] + L * s
-    for col in range(6):
-        JP[out, 0, col] = JP[base, 0, col] - L * s * Ja[k, col]
-        JP[out, 1, col] = JP[base, 1, col] + L * c * Ja[k, col]
-    BP[out, 0] = BP[base, 0] - L * s * ba[k] - L * c * w[k] * w[k]
-    BP[out, 1] = BP[base, 1] + L * c * ba[k] - L * s * w[k] * w[k]
+def rrr_position(x1, y1, x2, y2, l1, l2, side):
+    """RRR dyad, position: the joint X with |X - P1| = l1 and |X - P2| = l2.
 
-
-@njit(cache=True)
-def _rrr(P, JP, BP, i1, l1, i2, l2, side, k1, k2, ang, cs, sn, Ja, ba, w, qd):
-    """RRR dyad: links of lengths l1 from point i1 and l2 from point i2 meet at a joint X on
-    ``side`` (+1: left of i1 -> i2). Sets angles k1 = angle(X - P_i1), k2 = angle(X - P_i2) with
-    their Jacobians, rates and bias accelerations. Returns False if the dyad cannot close."""
-    dx = P[i2, 0] - P[i1, 0]
-    dy = P[i2, 1] - P[i1, 1]
-    d2 = dx * dx + dy * dy
-    if d2 == 0.0:
-        return False
-    d = math.sqrt(d2)
-    a = (l1 * l1 - l2 * l2 + d2) / (2.0 * d)
-    h2 = l1 * l1 - a * a
-    if h2 < 0.0:
-        return False
-    h = math.sqrt(h2)
-    ux = dx / d
-    uy = dy / d
-    xx = P[i1, 0] + a * ux - side * h * uy
-    xy = P[i1, 1] + a * uy + side * h * ux
-    ang[k1] = math.atan2(xy - P[i1, 1], xx - P[i1, 0])
-    ang[k2] = math.atan2(xy - P[i2, 1], xx - P[i2, 0])
-    c1, s1 = (xx - P[i1, 0]) / l1, (xy - P[i1, 1]) / l1
-    c2, s2 = (xx - P[i2, 0]) / l2, (xy - P[i2, 1]) / l2
-    cs[k1], sn[k1], cs[k2], sn[k2] = c1, s1, c2, s2
-    # l1 w1 (-s1, c1) - l2 w2 (-s2, c2) = v_i2 - v_i1
-    m00, m01, m10, m11 = -l1 * s1, l2 * s2, l1 * c1, -l2 * c2
-    det = m00 * m11 - m01 * m10
-    if det == 0.0:
-        return False
-    w1 = 0.0
-    w2 = 0.0
-    for col in range(6):
-        rx = JP[i2, 0, col] - JP[i1, 0, col]
-        ry = JP[i2, 1, col] - JP[i1, 1, col]
-        Ja[k1, col] = (rx * m11 - m01 * ry) / det
-        Ja[k2, col] = (m00 * ry - m10 * rx) / det
-        w1 += Ja[k1, col] * qd[col]
-        w2 += Ja[k2, col] * qd[col]
-    w[k1] = w1
-    w[k2] = w2
-    rx = BP[i2, 0] - BP[i1, 0] + l1 * w1 * w1 * c1 - l2 * w2 * w2 * c2
-    ry = BP[i2, 1] - BP[i1, 1] + l1 * w1 * w1 * s1 - l2 * w2 * w2 * s2
-    ba[k1] = (rx * m11 - m01 * ry) / det
-    ba[k2] = (m00 * ry - m10 * rx) / det
-    return True
-
-
-@njit(cache=True)
-def _body(pos, J, gam, b, P, JP, BP, pt, k, ang, Ja, ba):
-    """Body b: centroid = point pt, angle = angle k (k < 0: a translating body, angle 0)."""
-    for r in range(2):
-        pos[b, r] = P[pt, r]
-        gam[b, r] = BP[pt, r]
-        for col in range(6):
-            J[b, r, col] = JP[pt, r, col]
-    if k >= 0:
-        pos[b, 2] = ang[k]
-        gam[b, 2] = ba[k]
-        for col in range(6):
-            J[b, 2, col] = Ja[k, col]
-    else:
-        pos[b, 2] = 0.0
-        gam[b, 2] = 0.0
-        for col in range(6):
-            J[b, 2, col] = 0.0
-
-
-KIN_SCRATCH = _NPT * 2 + _NPT * 12 + _NPT * 2 + 7 + 42 + 7 + 7 + 14  # floats of scratch
-
-
-@njit(cache=True)
-def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, scratch):
-    """Positions, Jacobians and bias accelerations of the eight moving bodies and named points.
+    Intersection of two circles (the dyad of a four-bar loop; Hartenberg & Denavit 1964; Uicker,
+    Pennock & Shigley). Also returns the factors that solve the dyad's velocity and acceleration
+    equations, which depend on the position only.
 
     Parameters
     ----------
-    q, qd : float64[6]
-        Coordinates (theta1, theta4, x1, y1, x2, y2) [rad, rad, m, m, m, m] and their rates.
+    x1, y1, x2, y2 : float
+        Known joints P1, P2 (m).
+    l1, l2 : float
+        Link lengths from P1 and from P2 (m).
+    side : float
+        +1: X left of P1 -> P2 (cross(P2 - P1, X - P1) > 0); -1: right of it.
+
+    Returns
+    -------
+    (ok, c1, s1, c2, s2, f1, f2) : (bool, float, ...)
+        Unit vectors e1 = (c1, s1) = (X - P1) / l1 and e2 = (c2, s2) = (X - P2) / l2, and
+        f1 = 1 / (l1 sin(a2 - a1)), f2 = 1 / (l2 sin(a2 - a1)) (m-1) for the link angles a1, a2.
+        ok is False (the rest zero) where the circles do not meet in two points, or on NaN.
+    """
+    dx = x2 - x1
+    dy = y2 - y1
+    d2 = dx * dx + dy * dy
+    if not d2 > 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # X - P1 = a u + h perp(u), u = (P2 - P1) / d; with ta = a / d and th = h / d one division
+    # and one square root suffice
+    inv_d2 = 1.0 / d2
+    ta = 0.5 * (l1 * l1 - l2 * l2 + d2) * inv_d2
+    th2 = l1 * l1 * inv_d2 - ta * ta
+    if not th2 > 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    th = side * math.sqrt(th2)
+    rx = ta * dx - th * dy
+    ry = ta * dy + th * dx
+    inv_l1 = 1.0 / l1
+    inv_l2 = 1.0 / l2
+    g = inv_d2 / th  # 1 / (d h), as sin(a2 - a1) = cross(e1, e2) = d h / (l1 l2)
+    return True, rx * inv_l1, ry * inv_l1, (rx - dx) * inv_l2, (ry - dy) * inv_l2, l2 * g, l1 * g
+
+
+@njit(cache=True)
+def rrr_velocity(c1, s1, c2, s2, f1, f2, v1x, v1y, v2x, v2y):
+    """RRR dyad, velocity: the link angular velocities from the known joints' velocities.
+
+    Solves the differentiated closure P1 + l1 e1 = P2 + l2 e2,
+    l1 w1 perp(e1) - l2 w2 perp(e2) = v2 - v1 with perp(c, s) = (-s, c), by projecting it on
+    e2 and on e1.
+
+    Parameters
+    ----------
+    c1, s1, c2, s2, f1, f2 : float
+        From :func:`rrr_position`.
+    v1x, v1y, v2x, v2y : float
+        Velocities of P1 and P2 (m s-1).
+
+    Returns
+    -------
+    (w1, w2) : (float, float)
+        Angular velocities of the links P1-X and P2-X (rad s-1).
+    """
+    rx = v2x - v1x
+    ry = v2y - v1y
+    return f1 * (rx * c2 + ry * s2), f2 * (rx * c1 + ry * s1)
+
+
+@njit(cache=True)
+def rrr_acceleration(c1, s1, c2, s2, f1, f2, l1, l2, w1, w2, a1x, a1y, a2x, a2y):
+    """RRR dyad, acceleration: the link angular accelerations.
+
+    Solves the closure differentiated twice, l1 al1 perp(e1) - l2 al2 perp(e2) =
+    a2 - a1 + l1 w1^2 e1 - l2 w2^2 e2, as in :func:`rrr_velocity`.
+
+    Parameters
+    ----------
+    c1, s1, c2, s2, f1, f2 : float
+        From :func:`rrr_position`.
+    l1, l2 : float
+        Link lengths (m).
+    w1, w2 : float
+        Link angular velocities from :func:`rrr_velocity` (rad s-1).
+    a1x, a1y, a2x, a2y : float
+        Accelerations of P1 and P2 (m s-2).
+
+    Returns
+    -------
+    (al1, al2) : (float, float)
+        Angular accelerations of the links P1-X and P2-X (rad s-2).
+    """
+    l1w2 = l1 * w1 * w1
+    l2w2 = l2 * w2 * w2
+    return rrr_velocity(
+        c1, s1, c2, s2, f1, f2, 0.0, 0.0,
+        a2x - a1x + l1w2 * c1 - l2w2 * c2, a2y - a1y + l1w2 * s1 - l2w2 * s2,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def rrp_position(xd, yd, gx, gy, ux, uy, length, side):
+    """RRP dyad, position: a link from the joint D to a slider joint E on a fixed guide.
+
+    E = G + sE u with |E - D| = length: intersection of a circle and a line (the dyad of a
+    slider-crank loop; Hartenberg & Denavit 1964; Uicker, Pennock & Shigley). Also returns the
+    factors that solve the velocity and acceleration equations.
+
+    Parameters
+    ----------
+    xd, yd : float
+        Known joint D (m).
+    gx, gy, ux, uy : float
+        A point G of the guide line (m) and its unit direction u.
+    length : float
+        Link length DE (m).
+    side : float
+        +1: E ahead of the foot of D along u; -1: behind it.
+
+    Returns
+    -------
+    (ok, c, s, sE, fw, fs) : (bool, float, ...)
+        Link unit vector (c, s) = (E - D) / length, slider coordinate sE along the guide (m),
+        fw = 1 / (length e.u) (m-1) and fs = 1 / (e.u). ok is False (the rest zero) where D is
+        ``length`` or farther from the guide, or on NaN.
+    """
+    wx = xd - gx
+    wy = yd - gy
+    dist = ux * wy - uy * wx  # signed distance of D from the guide
+    h2 = (length - dist) * (length + dist)
+    if not h2 > 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0
+    h = side * math.sqrt(h2)  # sE - (D - G).u, and length e.u
+    se = wx * ux + wy * uy + h
+    fw = 1.0 / h
+    inv_l = 1.0 / length
+    return True, (se * ux - wx) * inv_l, (se * uy - wy) * inv_l, se, fw, length * fw
+
+
+@njit(cache=True)
+def rrp_velocity(c, s, fw, fs, ux, uy, vdx, vdy):
+    """RRP dyad, velocity: link angular velocity and slider velocity.
+
+    Solves the differentiated closure D + length e = G + sE u,
+    length w perp(e) - sE' u = -v_D, by projecting it on perp(u) and on e.
+
+    Parameters
+    ----------
+    c, s, fw, fs : float
+        From :func:`rrp_position`.
+    ux, uy : float
+        Guide direction (fixed guide).
+    vdx, vdy : float
+        Velocity of D (m s-1).
+
+    Returns
+    -------
+    (w, sdot) : (float, float)
+        Link angular velocity (rad s-1) and slider velocity along u (m s-1).
+    """
+    return fw * (uy * vdx - ux * vdy), fs * (vdx * c + vdy * s)
+
+
+@njit(cache=True)
+def rrp_acceleration(c, s, fw, fs, length, ux, uy, w, adx, ady):
+    """RRP dyad, acceleration: length al perp(e) - sE'' u = -a_D + length w^2 e.
+
+    Parameters
+    ----------
+    c, s, fw, fs : float
+        From :func:`rrp_position`.
+    length : float
+        Link length (m).
+    ux, uy : float
+        Guide direction (fixed guide).
+    w : float
+        Link angular velocity from :func:`rrp_velocity` (rad s-1).
+    adx, ady : float
+        Acceleration of D (m s-2).
+
+    Returns
+    -------
+    (al, sddot) : (float, float)
+        Link angular acceleration (rad s-2) and slider acceleration along u (m s-2).
+    """
+    lw2 = length * w * w
+    return rrp_velocity(c, s, fw, fs, ux, uy, adx - lw2 * c, ady - lw2 * s)
+
+
+@njit(cache=True)
+def _arm_velocity(vx, vy, length, w, c, s):
+    """Velocity of base + length e(angle) (m s-1)."""
+    return vx - length * w * s, vy + length * w * c
+
+
+@njit(cache=True)
+def _arm_acceleration(ax, ay, length, w, al, c, s):
+    """Acceleration of base + length e(angle) (m s-2)."""
+    lw2 = length * w * w
+    return ax - length * al * s - lw2 * c, ay + length * al * c - lw2 * s
+
+
+# ================================================================================================
+# the mechanism: configuration, then positions, velocities and bias accelerations of everything
+# ================================================================================================
+@njit(cache=True)
+def _configuration(q, geo):
+    """Assemble the mechanism at q: (code, state), state laid out as described at _N_STATE."""
+    c1 = math.cos(q[0])
+    s1 = math.sin(q[0])
+    c4 = math.cos(q[1])
+    s4 = math.sin(q[1])
+    xa = geo[G_L1] * c1
+    ya = geo[G_L1] * s1
+    xb = geo[G_L5] + geo[G_L4] * c4
+    yb = geo[G_L4] * s4
+    xaj = xa + q[2]
+    yaj = ya + q[3]
+    xbj = xb + q[4]
+    ybj = yb + q[5]
+    ok, c2, s2, c3, s3, f2, f3 = rrr_position(xaj, yaj, xbj, ybj, geo[G_L2], geo[G_L3], 1.0)
+    if not ok:
+        return FAIL_LINKS_23, _NO_STATE
+    xp = xaj + geo[G_L2] * c2
+    yp = yaj + geo[G_L2] * s2
+    o6x = geo[G_O6X]
+    o6y = geo[G_O6Y]
+    ok, c6, s6, ccp, scp, f6, f7 = rrr_position(o6x, o6y, xp, yp, geo[G_L6], geo[G_L71], -1.0)
+    if not ok:
+        return FAIL_ROCKER_PANEL, _NO_STATE
+    c7 = -ccp  # theta7 is the angle of P - C, the opposite of C - P
+    s7 = -scp
+    xc = o6x + geo[G_L6] * c6
+    yc = o6y + geo[G_L6] * s6
+    cb = math.cos(geo[G_BETA])
+    sb = math.sin(geo[G_BETA])
+    cd = c7 * cb - s7 * sb  # e(theta7 + beta)
+    sd = s7 * cb + c7 * sb
+    xd = xc + geo[G_L72] * cd
+    yd = yc + geo[G_L72] * sd
+    ok, c8, s8, se, fw8, fs8 = rrp_position(xd, yd, o6x, o6y, 1.0, 0.0, geo[G_L8], -1.0)
+    if not ok:
+        return FAIL_LINK8, _NO_STATE
+    state = (
+        c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
+        f2, f3, f6, f7, fw8, fs8,
+        xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, o6x + se, o6y,
+    )  # fmt: skip
+    return ASSEMBLED, state
+
+
+@njit(cache=True)
+def _placement(q, geo, state):
+    """Positions: body (x, y, phi) in body order, then the points (m, rad)."""
+    (
+        c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
+        f2, f3, f6, f7, fw8, fs8,
+        xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
+    ) = state  # fmt: skip
+    return (
+        geo[G_LS1] * c1, geo[G_LS1] * s1, q[0],
+        xaj + geo[G_LS2] * c2, yaj + geo[G_LS2] * s2, math.atan2(s2, c2),
+        xbj + geo[G_LS3] * c3, ybj + geo[G_LS3] * s3, math.atan2(s3, c3),
+        geo[G_L5] + geo[G_LS4] * c4, geo[G_LS4] * s4, q[1],
+        geo[G_O6X] + geo[G_LS6] * c6, geo[G_O6Y] + geo[G_LS6] * s6, math.atan2(s6, c6),
+        (xc + xp + xd) / 3.0, (yc + yp + yd) / 3.0, math.atan2(s7, c7),
+        xd + geo[G_LS8] * c8, yd + geo[G_LS8] * s8, math.atan2(s8, c8),
+        xe, ye, 0.0,
+        xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _velocities(geo, state, w1, w4, vx1, vy1, vx2, vy2):
+    """Velocity analysis for qd = (w1, w4, vx1, vy1, vx2, vy2): rates laid out as _placement."""
+    (
+        c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
+        f2, f3, f6, f7, fw8, fs8,
+        xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
+    ) = state  # fmt: skip
+    l2 = geo[G_L2]
+    vax, vay = _arm_velocity(0.0, 0.0, geo[G_L1], w1, c1, s1)
+    vbx, vby = _arm_velocity(0.0, 0.0, geo[G_L4], w4, c4, s4)
+    vajx = vax + vx1
+    vajy = vay + vy1
+    vbjx = vbx + vx2
+    vbjy = vby + vy2
+    w2, w3 = rrr_velocity(c2, s2, c3, s3, f2, f3, vajx, vajy, vbjx, vbjy)
+    vpx, vpy = _arm_velocity(vajx, vajy, l2, w2, c2, s2)
+    w6, w7 = rrr_velocity(c6, s6, -c7, -s7, f6, f7, 0.0, 0.0, vpx, vpy)
+    vcx, vcy = _arm_velocity(0.0, 0.0, geo[G_L6], w6, c6, s6)
+    vdx, vdy = _arm_velocity(vcx, vcy, geo[G_L72], w7, cd, sd)
+    w8, vex = rrp_velocity(c8, s8, fw8, fs8, 1.0, 0.0, vdx, vdy)
+    v1x, v1y = _arm_velocity(0.0, 0.0, geo[G_LS1], w1, c1, s1)
+    v2x, v2y = _arm_velocity(vajx, vajy, geo[G_LS2], w2, c2, s2)
+    v3x, v3y = _arm_velocity(vbjx, vbjy, geo[G_LS3], w3, c3, s3)
+    v4x, v4y = _arm_velocity(0.0, 0.0, geo[G_LS4], w4, c4, s4)
+    v6x, v6y = _arm_velocity(0.0, 0.0, geo[G_LS6], w6, c6, s6)
+    v8x, v8y = _arm_velocity(vdx, vdy, geo[G_LS8], w8, c8, s8)
+    return (
+        v1x, v1y, w1, v2x, v2y, w2, v3x, v3y, w3, v4x, v4y, w4, v6x, v6y, w6,
+        (vcx + vpx + vdx) / 3.0, (vcy + vpy + vdy) / 3.0, w7, v8x, v8y, w8, vex, 0.0, 0.0,
+        vax, vay, vajx, vajy, vbx, vby, vbjx, vbjy, vpx, vpy, vcx, vcy, vdx, vdy, vex, 0.0,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _bias(geo, state, rates):
+    """Acceleration analysis at qdd = 0 for the rates of _velocities: laid out as _placement."""
+    (
+        c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
+        f2, f3, f6, f7, fw8, fs8,
+        xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
+    ) = state  # fmt: skip
+    w1 = rates[3 * CRANK1 + 2]
+    w2 = rates[3 * LINK2 + 2]
+    w3 = rates[3 * LINK3 + 2]
+    w4 = rates[3 * CRANK4 + 2]
+    w6 = rates[3 * ROCKER6 + 2]
+    w7 = rates[3 * PANEL7 + 2]
+    w8 = rates[3 * LINK8 + 2]
+    l2 = geo[G_L2]
+    # the journal centres accelerate as the bearing centres when qdd = 0
+    aax, aay = _arm_acceleration(0.0, 0.0, geo[G_L1], w1, 0.0, c1, s1)
+    abx, aby = _arm_acceleration(0.0, 0.0, geo[G_L4], w4, 0.0, c4, s4)
+    al2, al3 = rrr_acceleration(c2, s2, c3, s3, f2, f3, l2, geo[G_L3], w2, w3, aax, aay, abx, aby)
+    apx, apy = _arm_acceleration(aax, aay, l2, w2, al2, c2, s2)
+    al6, al7 = rrr_acceleration(
+        c6, s6, -c7, -s7, f6, f7, geo[G_L6], geo[G_L71], w6, w7, 0.0, 0.0, apx, apy
+    )
+    acx, acy = _arm_acceleration(0.0, 0.0, geo[G_L6], w6, al6, c6, s6)
+    adx, ady = _arm_acceleration(acx, acy, geo[G_L72], w7, al7, cd, sd)
+    al8, aex = rrp_acceleration(c8, s8, fw8, fs8, geo[G_L8], 1.0, 0.0, w8, adx, ady)
+    a1x, a1y = _arm_acceleration(0.0, 0.0, geo[G_LS1], w1, 0.0, c1, s1)
+    a2x, a2y = _arm_acceleration(aax, aay, geo[G_LS2], w2, al2, c2, s2)
+    a3x, a3y = _arm_acceleration(abx, aby, geo[G_LS3], w3, al3, c3, s3)
+    a4x, a4y = _arm_acceleration(0.0, 0.0, geo[G_LS4], w4, 0.0, c4, s4)
+    a6x, a6y = _arm_acceleration(0.0, 0.0, geo[G_LS6], w6, al6, c6, s6)
+    a8x, a8y = _arm_acceleration(adx, ady, geo[G_LS8], w8, al8, c8, s8)
+    return (
+        a1x, a1y, 0.0, a2x, a2y, al2, a3x, a3y, al3, a4x, a4y, 0.0, a6x, a6y, al6,
+        (acx + apx + adx) / 3.0, (acy + apy + ady) / 3.0, al7, a8x, a8y, al8, aex, 0.0, 0.0,
+        aax, aay, aax, aay, abx, aby, abx, aby, apx, apy, acx, acy, adx, ady, aex, 0.0,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def _store(values, body, point):
+    """Write a pass result into body[8, 3] and point[N_POINTS, 2]."""
+    for b in range(N_BODIES):
+        for r in range(3):
+            body[b, r] = values[3 * b + r]
+    for i in range(N_POINTS):
+        for r in range(2):
+            point[i, r] = values[3 * N_BODIES + 2 * i + r]
+
+
+@njit(cache=True)
+def _store_column(values, J, Jp, k):
+    """Write a velocity pass into column k of J[8, 3, 6] and Jp[N_POINTS, 2, 6]."""
+    for b in range(N_BODIES):
+        for r in range(3):
+            J[b, r, k] = values[3 * b + r]
+    for i in range(N_POINTS):
+        for r in range(2):
+            Jp[i, r, k] = values[3 * N_BODIES + 2 * i + r]
+
+
+@njit(cache=True)
+def _store_jacobian(geo, state, J, Jp):
+    """J and Jp column by column: the velocity analysis for each unit coordinate rate."""
+    _store_column(_velocities(geo, state, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0), J, Jp, 0)
+    _store_column(_velocities(geo, state, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0), J, Jp, 1)
+    _store_column(_velocities(geo, state, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), J, Jp, 2)
+    _store_column(_velocities(geo, state, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0), J, Jp, 3)
+    _store_column(_velocities(geo, state, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0), J, Jp, 4)
+    _store_column(_velocities(geo, state, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0), J, Jp, 5)
+
+
+# ================================================================================================
+# public API
+# ================================================================================================
+@njit(cache=True)
+def positions(q, geo, pos, pts):
+    """Positions of the bodies and points.
+
+    Parameters
+    ----------
+    q : float64[6]
+        (theta1, theta4, x1, y1, x2, y2) [rad, rad, m, m, m, m].
     geo : float64[len(GEOMETRY_FIELDS)]
-        Geometry (m, rad), see :mod:`._geometry`.
+        Geometry (m, rad), see :func:`workbench.models.ninebar._geometry.geometry_array`.
     pos : float64[8, 3] (out)
-        Centroid x, y (m) and angle (rad) of each body (CRANK1 .. SLIDER9).
+        Centroid x, y (m) and angle phi (rad) per body.
     pts : float64[N_POINTS, 2] (out)
-        Named points PT_* (m).
-    J, Jp : float64[8, 3, 6], float64[N_POINTS, 2, 6] (out)
-        d(pos)/dq and d(pts)/dq.
-    gam, gamp : float64[8, 3], float64[N_POINTS, 2] (out)
-        Accelerations at qdd = 0 (m s-2, rad s-2), so that acc = J @ qdd + gam.
-    scratch : float64[KIN_SCRATCH]
-        Work space (overwritten), so that nothing is allocated per call.
+        Points PT_A .. PT_E (m).
 
     Returns
     -------
     int
-        ASSEMBLED (0) or the FAIL_* code of the group that cannot close.
+        ASSEMBLED (0), or the FAIL_* code of the group that does not close (outputs untouched).
     """
-    scratch[:] = 0.0
-    o = 0
-    P = scratch[o : o + _NPT * 2].reshape((_NPT, 2))
-    o += _NPT * 2
-    JP = scratch[o : o + _NPT * 12].reshape((_NPT, 2, 6))
-    o += _NPT * 12
-    BP = scratch[o : o + _NPT * 2].reshape((_NPT, 2))
-    o += _NPT * 2
-    ang = scratch[o : o + 7]
-    Ja = scratch[o + 7 : o + 49].reshape((7, 6))
-    ba = scratch[o + 49 : o + 56]
-    w = scratch[o + 56 : o + 63]
-    cs = scratch[o + 63 : o + 70]  # cos and sin of each angle, computed once
-    sn = scratch[o + 70 : o + 77]
-    P[_O4, 0] = geo[G_L5]
-    P[_O6, 0] = geo[G_O6X]
-    P[_O6, 1] = geo[G_O6Y]
-    ang[A_TH1] = q[0]
-    ang[A_TH4] = q[1]
-    cs[A_TH1], sn[A_TH1] = math.cos(q[0]), math.sin(q[0])
-    cs[A_TH4], sn[A_TH4] = math.cos(q[1]), math.sin(q[1])
-    Ja[A_TH1, 0] = 1.0
-    Ja[A_TH4, 1] = 1.0
-    w[A_TH1] = qd[0]
-    w[A_TH4] = qd[1]
-    _arm(P, JP, BP, PT_A, _O1, geo[G_L1], A_TH1, cs, sn, Ja, ba, w)
-    _arm(P, JP, BP, PT_B, _O4, geo[G_L4], A_TH4, cs, sn, Ja, ba, w)
-    for r in range(2):
-        P[PT_AJ, r] = P[PT_A, r] + q[2 + r]
-        P[PT_BJ, r] = P[PT_B, r] + q[4 + r]
-        BP[PT_AJ, r] = BP[PT_A, r]
-        BP[PT_BJ, r] = BP[PT_B, r]
-        for col in range(6):
-            JP[PT_AJ, r, col] = JP[PT_A, r, col]
-            JP[PT_BJ, r, col] = JP[PT_B, r, col]
-        JP[PT_AJ, r, 2 + r] += 1.0
-        JP[PT_BJ, r, 4 + r] += 1.0
-    if not _rrr(
-        P, JP, BP, PT_AJ, geo[G_L2], PT_BJ, geo[G_L3], 1.0, A_TH2, A_TH3, ang, cs, sn, Ja, ba, w, qd
-    ):
-        return FAIL_LINKS_23
-    _arm(P, JP, BP, PT_P, PT_AJ, geo[G_L2], A_TH2, cs, sn, Ja, ba, w)
-    if not _rrr(
-        P, JP, BP, _O6, geo[G_L6], PT_P, geo[G_L71], -1.0, A_TH6, A_TH7, ang, cs, sn, Ja, ba, w, qd
-    ):
-        return FAIL_ROCKER_PANEL
-    _arm(P, JP, BP, PT_C, _O6, geo[G_L6], A_TH6, cs, sn, Ja, ba, w)
-    # theta7 is the angle of P - C, i.e. that of C - P plus pi
-    ang[A_TH7] = math.atan2(-sn[A_TH7], -cs[A_TH7])
-    cs[A_TH7], sn[A_TH7] = -cs[A_TH7], -sn[A_TH7]
-    # D = C + L72 e(theta7 + beta): an arm on a shifted angle (slot A_TH8 used as scratch)
-    ang[A_TH8] = ang[A_TH7] + geo[G_BETA]
-    cb, sb = math.cos(geo[G_BETA]), math.sin(geo[G_BETA])
-    cs[A_TH8] = cs[A_TH7] * cb - sn[A_TH7] * sb
-    sn[A_TH8] = sn[A_TH7] * cb + cs[A_TH7] * sb
-    ba[A_TH8] = ba[A_TH7]
-    w[A_TH8] = w[A_TH7]
-    for col in range(6):
-        Ja[A_TH8, col] = Ja[A_TH7, col]
-    _arm(P, JP, BP, PT_D, PT_C, geo[G_L72], A_TH8, cs, sn, Ja, ba, w)
-    # RRP dyad: E = D + L8 e(theta8) on y = y_O6, E on the -X side of D
-    L8 = geo[G_L8]
-    dy = geo[G_O6Y] - P[PT_D, 1]
-    if abs(dy) >= L8:
-        return FAIL_LINK8
-    dx = -math.sqrt(L8 * L8 - dy * dy)
-    ang[A_TH8] = math.atan2(dy, dx)
-    c8, s8 = dx / L8, dy / L8
-    cs[A_TH8], sn[A_TH8] = c8, s8
-    w8 = 0.0
-    for col in range(6):
-        Ja[A_TH8, col] = -JP[PT_D, 1, col] / (L8 * c8)
-        w8 += Ja[A_TH8, col] * qd[col]
-    w[A_TH8] = w8
-    ba[A_TH8] = (L8 * w8 * w8 * s8 - BP[PT_D, 1]) / (L8 * c8)
-    _arm(P, JP, BP, PT_E, PT_D, L8, A_TH8, cs, sn, Ja, ba, w)
-    # body centroids
-    _body(pos, J, gam, SLIDER9, P, JP, BP, PT_E, -1, ang, Ja, ba)
-    for b, base, L, k in (
-        (CRANK1, _O1, geo[G_LS1], A_TH1),
-        (LINK2, PT_AJ, geo[G_LS2], A_TH2),
-        (LINK3, PT_BJ, geo[G_LS3], A_TH3),
-        (CRANK4, _O4, geo[G_LS4], A_TH4),
-        (ROCKER6, _O6, geo[G_LS6], A_TH6),
-        (LINK8, PT_D, geo[G_LS8], A_TH8),
-    ):
-        _centroid(pos, J, gam, b, P, JP, BP, base, L, k, ang, cs, sn, Ja, ba, w)
-    # panel 7: triangle centroid (C + P + D) / 3
-    for r in range(2):
-        pos[PANEL7, r] = (P[PT_C, r] + P[PT_P, r] + P[PT_D, r]) / 3.0
-        gam[PANEL7, r] = (BP[PT_C, r] + BP[PT_P, r] + BP[PT_D, r]) / 3.0
-        for col in range(6):
-            J[PANEL7, r, col] = (JP[PT_C, r, col] + JP[PT_P, r, col] + JP[PT_D, r, col]) / 3.0
-    pos[PANEL7, 2] = ang[A_TH7]
-    gam[PANEL7, 2] = ba[A_TH7]
-    for col in range(6):
-        J[PANEL7, 2, col] = Ja[A_TH7, col]
-    for i in range(N_POINTS):
-        for r in range(2):
-            pts[i, r] = P[i, r]
-            gamp[i, r] = BP[i, r]
-            for col in range(6):
-                Jp[i, r, col] = JP[i, r, col]
-    return ASSEMBLED
+    code, state = _configuration(q, geo)
+    if code == ASSEMBLED:
+        _store(_placement(q, geo, state), pos, pts)
+    return code
 
 
 @njit(cache=True)
-def _centroid(pos, J, gam, b, P, JP, BP, base, L, k, ang, cs, sn, Ja, ba, w):
-    """Body b with centroid at distance L from point ``base`` along angle k."""
-    c = cs[k]
-    s = sn[k]
-    pos[b, 0] = P[base, 0] + L * c
-    pos[b, 1] = P[base, 1] + L * s
-    pos[b, 2] = ang[k]
-    gam[b, 0] = BP[base, 0] - L * s * ba[k] - L * c * w[k] * w[k]
-    gam[b, 1] = BP[base, 1] + L * c * ba[k] - L * s * w[k] * w[k]
-    gam[b, 2] = ba[k]
-    for col in range(6):
-        J[b, 0, col] = JP[base, 0, col] - L * s * Ja[k, col]
-        J[b, 1, col] = JP[base, 1, col] + L * c * Ja[k, col]
-        J[b, 2, col] = Ja[k, col]
+def jacobian(q, geo, J, Jp):
+    """Exact Jacobians of the body coordinates and points with respect to q.
+
+    Parameters
+    ----------
+    q : float64[6]
+        Coordinates [rad, rad, m, m, m, m].
+    geo : float64[len(GEOMETRY_FIELDS)]
+        Geometry (m, rad).
+    J : float64[8, 3, 6] (out)
+        J[b, r, k] = d pos[b, r] / d q[k] (m rad-1, 1, rad m-1 as the units require).
+    Jp : float64[N_POINTS, 2, 6] (out)
+        Jp[i, r, k] = d pts[i, r] / d q[k].
+
+    Returns
+    -------
+    int
+        ASSEMBLED (0) or a FAIL_* code (outputs untouched).
+    """
+    code, state = _configuration(q, geo)
+    if code == ASSEMBLED:
+        _store_jacobian(geo, state, J, Jp)
+    return code
+
+
+@njit(cache=True)
+def bias_acceleration(q, qd, geo, gam, gamp):
+    """Accelerations of the body coordinates and points at qdd = 0.
+
+    Parameters
+    ----------
+    q, qd : float64[6]
+        Coordinates [rad, rad, m, m, m, m] and their rates [rad s-1, rad s-1, m s-1, ...].
+    geo : float64[len(GEOMETRY_FIELDS)]
+        Geometry (m, rad).
+    gam : float64[8, 3] (out)
+        Body accelerations (m s-2, m s-2, rad s-2) for qdd = 0: acc = J @ qdd + gam.
+    gamp : float64[N_POINTS, 2] (out)
+        Point accelerations (m s-2) for qdd = 0.
+
+    Returns
+    -------
+    int
+        ASSEMBLED (0) or a FAIL_* code (outputs untouched).
+    """
+    code, state = _configuration(q, geo)
+    if code == ASSEMBLED:
+        rates = _velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
+        _store(_bias(geo, state, rates), gam, gamp)
+    return code
+
+
+@njit(cache=True)
+def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp):
+    """Positions, Jacobians and bias accelerations in one pass (the dynamics' entry point).
+
+    Parameters
+    ----------
+    q, qd : float64[6]
+        Coordinates [rad, rad, m, m, m, m] and their rates.
+    geo : float64[len(GEOMETRY_FIELDS)]
+        Geometry (m, rad).
+    pos, pts : float64[8, 3], float64[N_POINTS, 2] (out)
+        As in :func:`positions`.
+    J, Jp : float64[8, 3, 6], float64[N_POINTS, 2, 6] (out)
+        As in :func:`jacobian`.
+    gam, gamp : float64[8, 3], float64[N_POINTS, 2] (out)
+        As in :func:`bias_acceleration`.
+
+    Returns
+    -------
+    int
+        ASSEMBLED (0) or a FAIL_* code (outputs untouched).
+    """
+    code, state = _configuration(q, geo)
+    if code == ASSEMBLED:
+        _store(_placement(q, geo, state), pos, pts)
+        _store_jacobian(geo, state, J, Jp)
+        rates = _velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
+        _store(_bias(geo, state, rates), gam, gamp)
+    return code
+
+
+@njit(cache=True)
+def slider(q, qd, qdd, geo):
+    """Slider displacement S9 = S0 - (x_E - x_O6) and its first two time derivatives.
+
+    Parameters
+    ----------
+    q, qd, qdd : float64[6]
+        Coordinates [rad, rad, m, m, m, m] and their first and second time derivatives.
+    geo : float64[len(GEOMETRY_FIELDS)]
+        Geometry (m, rad).
+
+    Returns
+    -------
+    (s, v, a) : (float, float, float)
+        S9 (m), dS9/dt (m s-1), d2S9/dt2 (m s-2).
+
+    Raises
+    ------
+    ValueError
+        Where the mechanism does not assemble at q.
+    """
+    code, state = _configuration(q, geo)
+    if code != ASSEMBLED:
+        raise ValueError("the nine-bar mechanism does not assemble at q")
+    rates = _velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
+    forced = _velocities(geo, state, qdd[0], qdd[1], qdd[2], qdd[3], qdd[4], qdd[5])
+    bias = _bias(geo, state, rates)
+    s = geo[G_S0] - (state[_STATE_XE] - geo[G_O6X])
+    return s, -rates[_V_SLIDER_X], -(forced[_V_SLIDER_X] + bias[_V_SLIDER_X])

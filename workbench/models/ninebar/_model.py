@@ -332,7 +332,7 @@ class NineBar(Model):
             elif q.units == "m s-1":
                 scale.append(c_min * params["omega"])
             else:
-                scale.append(1.0)
+                scale.append(1.0)  # the energy quadratures (driver work, dissipation), J
         codes = {
             dyn.CODE_ASSEMBLY: "the mechanism cannot be assembled at this configuration (a loop "
             "does not close); the clearance vector left its physical range",

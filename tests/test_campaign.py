@@ -1,0 +1,243 @@
+"""Campaigns: same numbers whatever the workers, resumable after a kill, failures as data."""
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import workbench
+from workbench.campaign import CampaignError, CampaignWarning, store_paths, summary
+from workbench.cli import main
+
+BASE = {
+    "model": {"name": "duffing"},
+    "run": {"cycles": 4, "transient_cycles": 2},
+    "record": {"samples_per_period": 4},
+}
+SWEEP = {"gamma": [0.3, 0.4, 0.5], "omega": [1.0, 1.1, 1.2, 1.3]}  # 12 points, two dims
+# Attributes that describe one execution (when, how it was split), not the numbers.
+_RUN_ATTRS = (
+    "history",
+    "computed_blocks",
+    "reused_blocks",
+    "campaign_wall_time",
+    "campaign_compute_wall_time",
+    "campaign_workers",
+    "campaign_chunk",
+    "campaign_blocks",
+    "campaign_id",
+)
+
+
+def numbers(ds: xr.Dataset) -> xr.Dataset:
+    """The dataset without wall times and the attributes of one execution."""
+    out = ds.drop_vars(["point_wall_time", "solver_wall_time"])
+    out.attrs = {k: v for k, v in ds.attrs.items() if k not in _RUN_ATTRS}
+    return out
+
+
+@pytest.fixture(scope="module")
+def scene():
+    s = workbench.load_scene({**BASE, "sweep": SWEEP})
+    # Fill the on-disk numba cache once, so that worker processes only load compiled code.
+    workbench.simulate(s.with_parameters(gamma=0.3, omega=1.0))
+    return s
+
+
+@pytest.fixture(scope="module")
+def one_worker(scene, tmp_path_factory):
+    return workbench.run_campaign(scene, tmp_path_factory.mktemp("one") / "c.nc", workers=1)
+
+
+def test_same_numbers_with_one_or_two_workers_and_as_single_runs(scene, one_worker, tmp_path):
+    two = workbench.run_campaign(scene, tmp_path / "c.nc", workers=2)
+    assert one_worker.attrs["campaign_chunk"] != two.attrs["campaign_chunk"]  # other blocks too
+    xr.testing.assert_identical(numbers(one_worker), numbers(two))
+    for g in SWEEP["gamma"]:
+        for w in SWEEP["omega"]:
+            ref = workbench.simulate(scene.with_parameters(gamma=g, omega=w))
+            pt = one_worker.sel(gamma=g, omega=w)
+            for name in ("x", "v"):
+                np.testing.assert_array_equal(pt[name].values, ref[name].values)
+                assert pt[name].attrs == ref[name].attrs
+            np.testing.assert_array_equal(pt.record_time.values, ref.time.values)
+            for stat in ("steps", "rejected_steps", "rhs_evaluations", "events"):
+                assert int(pt[f"solver_{stat}"]) == ref.attrs[f"solver_{stat}"]
+            assert int(pt.status) == 0 and str(pt.failure.values) == ""
+            assert float(pt.forcing_period) == ref.attrs["forcing_period"]
+
+
+def test_dims_units_and_archive(scene, one_worker):
+    ds = one_worker
+    assert ds.x.dims == ("gamma", "omega", "time")  # parameter dims first
+    assert ds.status.dims == ("gamma", "omega") and ds.status.dtype == np.int8
+    assert list(ds.status.attrs["flag_meanings"].split())[:2] == ["ok", "solver_failed"]
+    np.testing.assert_array_equal(ds.status.attrs["flag_values"], [0, 1, 2, 3])
+    model = workbench.models.get_model("duffing")
+    for d in ("gamma", "omega"):
+        p = model.parameter(d)
+        assert (ds[d].attrs["units"], ds[d].attrs["long_name"]) == (p.units, p.long_name)
+    for name, v in ds.variables.items():
+        assert "units" in v.attrs and "long_name" in v.attrs, name
+    assert ds.sizes["time"] == 4 * 4 + 1  # only what the scene records
+    assert workbench.load_scene(ds.attrs["scene"]) == scene
+    assert ds.attrs["campaign_dims"] == "gamma omega"
+    assert ds.attrs["Conventions"] == "CF-1.11" and "numba=" in ds.attrs["package_versions"]
+    paths = store_paths(ds.encoding["source"])
+    xr.testing.assert_identical(workbench.open_run(paths["archive"]), ds)
+    assert paths["manifest"].is_file()
+
+
+def test_distributed_client_gives_the_same_numbers(scene, one_worker, tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        ds = workbench.run_campaign(scene, tmp_path / "c.nc", client=client, progress=True)
+    xr.testing.assert_identical(numbers(ds), numbers(one_worker))
+    assert "pt" in capsys.readouterr().err  # the bar counts points
+
+
+def test_failing_points_are_data_and_a_changed_scene_is_refused(tmp_path):
+    spec = {
+        "model": {"name": "duffing"},
+        "solver": {"max_steps": 2000},  # enough for beta = 1, too few for the stiff beta = 1e6
+        "run": {"cycles": 3},
+        "record": {"samples_per_period": 4},
+        "sweep": {"beta": [1.0, 1e6], "gamma": [0.3, 0.5]},
+    }
+    scene = workbench.load_scene(spec)
+    store = tmp_path / "fail.nc"
+    with pytest.warns(CampaignWarning, match="2 of 4 campaign points failed"):
+        ds = workbench.run_campaign(scene, store, workers=1)
+    np.testing.assert_array_equal(ds.status.values, [[0, 0], [1, 1]])
+    assert ds.attrs["failed_points"] == 2
+    assert np.isnan(ds.x.sel(beta=1e6)).all() and np.isfinite(ds.x.sel(beta=1.0)).all()
+    assert all(str(m).startswith("max_steps: ") for m in ds.failure.sel(beta=1e6).values)
+    assert (ds.solver_steps.sel(beta=1e6) == -1).all()
+    text = summary(ds)
+    assert "2 ok; 2 solver_failed" in text and "failed beta=1e+06, gamma=0.3: max_steps" in text
+    # Same record times everywhere: a 1-D time coordinate, as from simulate
+    ref = workbench.simulate(scene.with_parameters(beta=1.0, gamma=0.5))
+    xr.testing.assert_identical(ds.x.sel(beta=1.0, gamma=0.5, drop=True), ref.x)
+    assert all("units" in v.attrs and "long_name" in v.attrs for v in ds.variables.values())
+
+    changed = workbench.load_scene({**spec, "solver": {"max_steps": 10**6}})
+    with pytest.raises(CampaignError, match=r"(?s)different scene.*solver\.max_steps: 2000 -> "):
+        workbench.run_campaign(changed, store)
+    with pytest.raises(CampaignError, match="started with chunk=1 points per block, got chunk=3"):
+        workbench.run_campaign(scene, store, chunk=3)
+    again = workbench.run_campaign(changed, store, restart=True, workers=1)
+    assert (again.status == 0).all() and np.isfinite(again.x).all()
+    assert again.attrs["computed_blocks"] == again.attrs["campaign_blocks"] == 4
+    assert again.attrs["reused_blocks"] == 0
+
+
+def test_scene_without_sweep_and_bad_arguments_are_refused(scene, tmp_path):
+    with pytest.raises(CampaignError, match=r"needs a \[sweep\]"):
+        workbench.run_campaign(scene.replace(sweep={}), tmp_path / "c.nc")
+    with pytest.raises(ValueError, match="workers must be a positive integer"):
+        workbench.run_campaign(scene, tmp_path / "c.nc", workers=0)
+    with pytest.raises(CampaignError, match="must be the path of a netCDF file"):
+        workbench.run_campaign(scene, tmp_path)
+    (tmp_path / "run.nc").write_bytes(b"")
+    with pytest.raises(CampaignError, match="restart=True"):
+        workbench.run_campaign(scene, tmp_path / "run.nc")
+
+
+KILL = {
+    "model": {"name": "duffing"},
+    "solver": {"rtol": 1e-12, "atol": 1e-12},  # about 0.15 s per point
+    "run": {"cycles": 6000},
+    "record": {"samples_per_period": 1, "variables": ["x"]},
+    "sweep": {"gamma": {"start": 0.2, "stop": 0.5, "num": 16}},
+}
+
+
+def test_killed_campaign_resumes_without_recomputing(tmp_path):
+    scene = workbench.load_scene(KILL)
+    store = tmp_path / "kill.nc"
+    blocks = store_paths(store)["blocks"]
+    code = (
+        "import workbench; workbench.run_campaign(workbench.load_scene("
+        f"{scene.to_toml()!r}), {str(store)!r}, workers=1, chunk=2)"
+    )
+    with open(tmp_path / "stderr.txt", "w") as err:
+        proc = subprocess.Popen(
+            [sys.executable, "-c", code],
+            stdout=subprocess.DEVNULL,
+            stderr=err,
+            start_new_session=True,
+        )
+        try:
+            deadline = time.monotonic() + 180
+            while len(list(blocks.glob("block-*.nc"))) < 2:
+                assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
+                assert time.monotonic() < deadline, "no block written in time"
+                time.sleep(0.01)
+        finally:
+            os.killpg(proc.pid, signal.SIGKILL)  # the process, its pool and its fork server
+            proc.wait()
+    before = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in blocks.glob("block-*.nc")}
+    assert 2 <= len(before) < 8, "the campaign was not interrupted mid-way"
+    assert not store.exists()  # nothing assembled, nothing half-written
+    (blocks / ".block-00007.nc.x1y2z3.tmp").write_bytes(b"half")  # as left by a killed write
+
+    resumed = workbench.run_campaign(scene, store, workers=2)
+    assert resumed.attrs["reused_blocks"] == len(before)
+    assert resumed.attrs["computed_blocks"] == 8 - len(before)
+    after = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in blocks.glob("block-*.nc")}
+    assert len(after) == 8 and all(after[k] == v for k, v in before.items())
+    assert not list(tmp_path.rglob("*.tmp"))
+    for p in [store, *blocks.glob("*.nc")]:
+        workbench.open_run(p)
+    whole = workbench.run_campaign(scene, tmp_path / "whole.nc", workers=2, chunk=5)
+    xr.testing.assert_identical(numbers(resumed), numbers(whole))
+
+
+SCENE_TOML = """
+title = "Duffing bifurcation test"
+[model]
+name = "duffing"
+[run]
+cycles = 20
+transient_cycles = 20
+[record]
+samples_per_period = 1
+[sweep]
+gamma = {start = 0.25, stop = 0.45, num = 6}
+"""
+
+
+def test_cli_campaign_and_bifurcation(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text(SCENE_TOML)
+    out = tmp_path / "c.nc"
+    assert main(["campaign", str(scene), "-o", str(out), "--workers", "1", "-q"]) == 0
+    text = capsys.readouterr().out
+    assert "6 points in" in text and "6 ok" in text and str(out) in text
+    ds = workbench.open_run(out)  # strobe samples only: one record per period, nothing dense
+    assert ds.sizes["time"] == 20 + 1 and {"x", "v"} <= set(ds.data_vars)
+    assert ds.x.dims == ("gamma", "time") and ds.time.attrs["units"] == "s"
+    assert main(["campaign", str(scene), "-o", str(out), "-q"]) == 0
+    assert "(0 computed, " in capsys.readouterr().out  # nothing missing: nothing recomputed
+    shutil.rmtree(store_paths(out)["blocks"])  # the archive alone is enough once complete
+    assert main(["campaign", str(scene), "-o", str(out), "-q"]) == 0
+    assert "6 points in 3 blocks (0 computed, 3 reused)" in capsys.readouterr().out
+    scene.write_text(SCENE_TOML.replace("cycles = 20\n", "cycles = 30\n", 1))
+    assert main(["campaign", str(scene), "-o", str(out), "-q"]) == 2
+    assert "run.cycles: 20 -> 30" in capsys.readouterr().err
+    png = tmp_path / "bif.png"
+    assert main(["bifurcation", str(out), "--var", "x", "-o", str(png)]) == 0
+    assert png.stat().st_size > 0
+    assert main(["bifurcation", str(out), "--var", "nope"]) == 2
+    assert "no variable 'nope' over time" in capsys.readouterr().err

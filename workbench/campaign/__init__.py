@@ -1,0 +1,72 @@
+"""Parameter campaigns: a scene's ``[sweep]`` grid run as dask tasks, resumable, one dataset.
+
+>>> import workbench
+>>> scene = workbench.load_scene({
+...     "model": {"name": "duffing"},
+...     "run": {"cycles": 3},
+...     "record": {"samples_per_period": 1},
+...     "sweep": {"gamma": [0.3, 0.5], "omega": [1.0, 1.2]},
+... })
+>>> from workbench.campaign import expand_grid
+>>> expand_grid(scene).shape
+(2, 2)
+
+:func:`run_campaign` expands the sweep into a grid over the named parameters (several at once),
+runs blocks of points as dask tasks (a local process pool by default, any
+``dask.distributed.Client`` when given) and returns one :class:`xarray.Dataset` with the
+parameter dims first, then ``time`` and the model's dims.
+
+Store layout
+------------
+``store`` is the path of the assembled archive; everything else lives in a sibling directory::
+
+    sweep.nc                 the assembled campaign (netCDF-4), written last, atomically
+    sweep.nc.blocks/
+        manifest.json        scene TOML, grid, chunk size, campaign id, package digest
+        block-00000.nc       points 0 .. chunk-1 (flat C-order index over the grid)
+        block-00001.nc       points chunk .. 2 chunk-1
+        ...
+
+* Each task owns one block file and writes it atomically (a temporary file beside it, then a
+  rename), so a block file exists only when complete; only the client writes the manifest and
+  the archive. Workers of a cluster must see the store's file system.
+* Resuming: running the same campaign again computes only the missing blocks (after Ctrl-C, a
+  killed worker or a crashed machine); left-over temporary files are removed; a block file that
+  does not open or belongs to another campaign is recomputed. Once ``sweep.nc`` is written the
+  blocks directory may be deleted: a re-run then returns the archive as is.
+* A different scene (any key, the sweep included) or chunk size against an existing store is
+  refused with the differences named; ``restart=True`` (CLI ``--restart``) discards the store.
+* One campaign process per store at a time.
+
+When every point has the same record times they are the 1-D coordinate ``time`` (as from
+:func:`workbench.simulate`); when they differ (a sweep over the forcing frequency: records at
+``k T / samples_per_period``), ``time`` is a dim without coordinate and ``record_time``
+(parameter dims, time; s) holds each point's times, NaN-padded if runs differ in length.
+
+The local pool is dask's multiprocessing scheduler on a fork server that imports workbench and
+loads the campaign's compiled kernel once; its workers (one thread each) start in milliseconds.
+
+The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: 0 ok,
+1 solver_failed, 2 terminated_early, 3 invalid_parameters), ``failure`` (the message), solver
+statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluations``,
+``solver_events``, ``solver_wall_time``) and ``point_wall_time``; and in its attributes the scene
+TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It
+stores only what the scene records: ``record.samples_per_period = 1`` keeps strobe samples only.
+
+Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--scheduler ADDRESS]
+[--chunk K] [--restart]`` and ``workbench bifurcation sweep.nc --var x [-o fig.png]``.
+"""
+
+from workbench.campaign._assemble import summary
+from workbench.campaign._run import run_campaign, store_paths
+from workbench.campaign._store import CampaignError, CampaignWarning, Grid, expand_grid
+
+__all__ = [
+    "CampaignError",
+    "CampaignWarning",
+    "Grid",
+    "expand_grid",
+    "run_campaign",
+    "store_paths",
+    "summary",
+]

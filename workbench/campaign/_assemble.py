@@ -1,0 +1,182 @@
+"""Assembly of a campaign's block files into one dataset over the parameter grid (client only)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import xarray as xr
+
+from workbench._archive import open_run
+from workbench._scene import Scene
+from workbench.campaign._block import (
+    FAILURE_ATTRS,
+    OK,
+    POINT_WALL_ATTRS,
+    STATS,
+    STATUS,
+    STATUS_ATTRS,
+    TERMINATED,
+    stat_attrs,
+)
+from workbench.campaign._store import Grid, Store, format_point, parameter_attrs
+from workbench.models import get_model
+from workbench.solver._grid import record_grid
+from workbench.solver._simulate import provenance
+
+__all__ = ["assemble", "summary"]
+
+_PER_POINT = ("status", "failure", *STATS, "point_wall_time")
+
+
+def _grid_attrs(scene: Scene, grid: Grid) -> tuple[dict, np.ndarray | None]:
+    """Attributes of the record grid shared by every point, and the per-point forcing period (s,
+    None for an autonomous model)."""
+    model = get_model(scene.model)
+    base = scene.resolved_parameters
+    periods = []
+    for flat in range(grid.size):
+        params = dict(base)
+        params.update(grid.point(flat))
+        periods.append(model.forcing_period(params))
+    if any(p is None for p in periods):
+        periods_arr = None
+        variants = [record_grid(scene, 0.0, None)[1]]
+    else:
+        periods_arr = np.array(periods, np.float64).reshape(grid.shape)
+        variants = [record_grid(scene, 0.0, p)[1] for p in sorted(set(periods))]
+    shared = {k: v for k, v in variants[0].items() if all(w.get(k) == v for w in variants)}
+    return shared, periods_arr
+
+
+def assemble(
+    scene: Scene, grid: Grid, store: Store, chunk: int, cid: str, run_attrs: dict
+) -> xr.Dataset:
+    """Read every block of the store and build the campaign dataset.
+
+    Dims: the parameter dims (scene ``[sweep]`` order), then ``time``, then the model's dims.
+    When every point has the same record times they are the 1-D coordinate ``time``; otherwise
+    (e.g. a sweep over the forcing frequency) ``time`` is a dim without coordinate and the
+    coordinate ``record_time`` (parameter dims, time) holds each point's times, NaN-padded.
+    """
+    blocks = [open_run(store.block_path(i)) for i in range(len(grid.blocks(chunk)))]
+    n, shape = grid.size, grid.shape
+    n_time = max(b.sizes["time"] for b in blocks)
+    first = blocks[0]
+
+    def gather(name: str, fill) -> np.ndarray:
+        v0 = first[name]
+        tail = tuple(n_time if d == "time" else v0.sizes[d] for d in v0.dims[1:])
+        dtype = object if v0.dtype.kind in "OUS" else v0.dtype
+        out = np.full((n,) + tail, fill, dtype=dtype)
+        for b in blocks:
+            v = b[name].values
+            idx = b["point"].values
+            if "time" in b[name].dims:
+                out[idx, : v.shape[1]] = v
+            else:
+                out[idx] = v
+        return out.reshape(shape + tail)
+
+    pdims = grid.dims
+    coords: dict = {}
+    for d, values in zip(pdims, grid.values, strict=True):
+        coords[d] = (d, np.array(values, np.float64), parameter_attrs(scene, d))
+    rt = gather("record_time", np.nan).reshape(n, n_time)
+    usable = rt[np.isfinite(rt).any(axis=1)]
+    shared = (
+        len(usable) > 0 and np.isfinite(usable[0]).all() and (usable == usable[0]).all(axis=None)
+    )
+    time_attrs = dict(first["record_time"].attrs)
+    if shared:
+        coords["time"] = ("time", usable[0], time_attrs)
+    else:
+        coords["record_time"] = (
+            pdims + ("time",),
+            rt.reshape(shape + (n_time,)),
+            dict(time_attrs, long_name="time of the record (NaN past the end of the run)"),
+        )
+        coords["record_time"][2].pop("standard_name", None)
+    model = get_model(scene.model)
+    for d, (values, attrs) in model.coords(scene.effects).items():
+        coords[d] = (d, list(values), dict(attrs))
+
+    data_vars: dict = {}
+    for name in scene.variables:
+        v0 = first[name]
+        data_vars[name] = (pdims + v0.dims[1:], gather(name, np.nan), dict(v0.attrs))
+    grid_attrs, periods = _grid_attrs(scene, grid)
+    if periods is not None:
+        data_vars["forcing_period"] = (
+            pdims,
+            periods,
+            {"units": "s", "long_name": "period of the external forcing"},
+        )
+    status = gather("status", -1).astype(np.int8)
+    data_vars["status"] = (pdims, status, STATUS_ATTRS)
+    failure = gather("failure", "").astype(str).astype(object)
+    data_vars["failure"] = (pdims, failure, FAILURE_ATTRS)
+    for name, (_, dtype, missing, _) in STATS.items():
+        data_vars[name] = (pdims, gather(name, missing).astype(dtype), stat_attrs(name))
+    data_vars["point_wall_time"] = (pdims, gather("point_wall_time", np.nan), POINT_WALL_ATTRS)
+
+    ds = xr.Dataset(data_vars, coords=coords)
+    prov = provenance(scene)
+    prov["history"] = prov["history"].replace("workbench.simulate", "workbench.run_campaign")
+    if not scene.title:
+        prov["title"] = f"workbench campaign of model {scene.model} over {', '.join(pdims)}"
+    ds.attrs.update(prov)
+    s = scene.solver
+    failed = int(((status != OK) & (status != TERMINATED)).sum())
+    ds.attrs.update(
+        model=scene.model,
+        campaign_id=cid,
+        campaign_dims=" ".join(pdims),
+        campaign_grid=json.dumps(grid.as_dict()),
+        campaign_points=n,
+        campaign_chunk=chunk,
+        campaign_blocks=len(blocks),
+        failed_points=failed,
+        solver_method=s["method"],
+        solver_rtol=s["rtol"],
+        solver_atol=s["atol"],
+        solver_max_step=s["max_step"],
+        solver_max_steps=s["max_steps"],
+    )
+    ds.attrs.update(grid_attrs)
+    ds.attrs.update(run_attrs)
+    return ds
+
+
+def summary(ds: xr.Dataset, *, limit: int = 20) -> str:
+    """A few lines on a campaign dataset: points, blocks, time, and every failed point's cause.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        As returned by :func:`workbench.run_campaign` (or read with :func:`workbench.open_run`).
+    limit : int
+        Show at most this many failed points.
+    """
+    a = ds.attrs
+    dims = a["campaign_dims"].split()
+    status = ds["status"]
+    counts = {name: int((status == code).sum()) for code, name in STATUS.items()}
+    head = (
+        f"campaign of {a['model']} over {' x '.join(f'{d} ({ds.sizes[d]})' for d in dims)}: "
+        f"{a['campaign_points']} points in {a['campaign_blocks']} blocks "
+        f"({a.get('computed_blocks', '?')} computed, {a.get('reused_blocks', '?')} reused)"
+    )
+    if "campaign_wall_time" in a:
+        head += f", {a['campaign_wall_time']:.3g} s wall"
+    lines = [head, "; ".join(f"{v} {k}" for k, v in counts.items() if v or k == "ok")]
+    flags = status.transpose(*dims).values.reshape(-1)
+    failure = ds["failure"].transpose(*dims).values.reshape(-1)
+    failed = np.flatnonzero((flags != OK) & (flags != TERMINATED))
+    for i in failed[:limit]:
+        idx = np.unravel_index(i, tuple(ds.sizes[d] for d in dims))
+        point = {d: float(ds[d].values[j]) for d, j in zip(dims, idx, strict=True)}
+        lines.append(f"  failed {format_point(point)}: {failure[i]}")
+    if len(failed) > limit:
+        lines.append(f"  ... and {len(failed) - limit} more failed points (see 'failure')")
+    return "\n".join(lines)

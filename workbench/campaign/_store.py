@@ -1,0 +1,308 @@
+"""The grid of a campaign and its store on disk: manifest, block files, scene comparison.
+
+Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
+
+    omega.nc                  assembled archive, written last (atomically)
+    omega.nc.blocks/
+        manifest.json         scene TOML, grid, chunk, campaign id (written first, atomically)
+        block-00000.nc        points 0 .. chunk-1 (one file per task, written atomically)
+        block-00001.nc        ...
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+import tempfile
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from workbench._cache import package_digest
+from workbench._errors import SceneError
+from workbench._scene import Scene, load_scene
+from workbench.models import get_model
+
+__all__ = ["CampaignError", "CampaignWarning", "Grid", "Store", "expand_grid", "scene_diff"]
+
+FORMAT = "workbench-campaign 1"
+_BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
+_TMP_RE = re.compile(r"^\.(block-\d{5,}\.nc|manifest\.json)\..*\.tmp$")
+
+
+class CampaignError(ValueError):
+    """A campaign cannot run as asked (e.g. its store holds a different campaign); the message
+    says what differs and how to proceed."""
+
+
+class CampaignWarning(UserWarning):
+    """Something about a campaign deserves attention (failed points, a changed package)."""
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The points of a campaign: the outer product of the swept values, in C order.
+
+    Attributes
+    ----------
+    dims : tuple[str, ...]
+        Swept parameter names, in the scene's ``[sweep]`` order (the dataset's leading dims).
+    values : tuple[tuple[float, ...], ...]
+        The values of each dim (SI units of the parameter).
+    """
+
+    dims: tuple[str, ...]
+    values: tuple[tuple[float, ...], ...]
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.values)
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    def point(self, flat: int) -> dict[str, float]:
+        """Parameter values of the point with flat (C-order) index ``flat``."""
+        idx = np.unravel_index(flat, self.shape)
+        return {
+            d: self.values[k][int(i)] for k, (d, i) in enumerate(zip(self.dims, idx, strict=True))
+        }
+
+    def blocks(self, chunk: int) -> list[range]:
+        """Flat point indices of each block of ``chunk`` points (the last may be shorter)."""
+        return [range(s, min(s + chunk, self.size)) for s in range(0, self.size, chunk)]
+
+    def as_dict(self) -> dict[str, list[float]]:
+        return {d: list(v) for d, v in zip(self.dims, self.values, strict=True)}
+
+
+def expand_grid(scene: Scene) -> Grid:
+    """The grid of a scene's ``[sweep]`` (CampaignError if it has none)."""
+    if not scene.sweep:
+        raise CampaignError(
+            "a campaign needs a [sweep] table naming at least one parameter, e.g. "
+            "[sweep] gamma = {start = 0.2, stop = 0.5, num = 40}; this scene has none "
+            "(run a single scene with workbench.simulate)"
+        )
+    dims = tuple(scene.sweep)
+    return Grid(dims, tuple(tuple(float(x) for x in scene.sweep[d]) for d in dims))
+
+
+def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
+    """``units`` and ``long_name`` of a model parameter (from its declaration)."""
+    p = get_model(scene.model).parameter(name)
+    return {"units": p.units, "long_name": p.long_name}
+
+
+def format_point(point: Mapping[str, float]) -> str:
+    return ", ".join(f"{k}={v:.6g}" for k, v in point.items())
+
+
+def campaign_id(scene: Scene, chunk: int) -> str:
+    """Digest of what fixes the content of every block: the scene and the chunk size."""
+    h = hashlib.sha256(scene.to_toml().encode())
+    h.update(f"\nchunk={chunk}".encode())
+    return h.hexdigest()[:16]
+
+
+# -- comparing scenes ------------------------------------------------------------------------------
+def _short(v: Any) -> str:
+    if isinstance(v, list | tuple) and len(v) > 4:
+        return f"[{len(v)} values from {v[0]!r} to {v[-1]!r}]"
+    return repr(v)
+
+
+def scene_diff(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
+    """Lines ``key: old -> new`` for every dotted key whose value differs."""
+    out = []
+    for k in list(old) + [k for k in new if k not in old]:
+        key = f"{prefix}{k}"
+        a, b = old.get(k, "<absent>"), new.get(k, "<absent>")
+        if isinstance(a, Mapping) and isinstance(b, Mapping):
+            out += scene_diff(a, b, key + ".")
+        elif a != b:
+            out.append(f"{key}: {_short(a)} -> {_short(b)}")
+    return out
+
+
+# -- the store -------------------------------------------------------------------------------------
+def _write_text_atomic(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+class Store:
+    """Paths and bookkeeping of one campaign store (see the module docstring)."""
+
+    def __init__(self, archive: str | os.PathLike) -> None:
+        self.archive = Path(archive).expanduser().resolve()
+        if self.archive.is_dir():
+            raise CampaignError(
+                f"the campaign store must be the path of a netCDF file (e.g. 'sweep.nc'), got the "
+                f"directory {str(self.archive)!r}; its blocks go to the sibling directory "
+                "'sweep.nc.blocks/'"
+            )
+        self.blocks_dir = self.archive.with_name(self.archive.name + ".blocks")
+        self.manifest_path = self.blocks_dir / "manifest.json"
+
+    def block_path(self, index: int) -> Path:
+        return self.blocks_dir / f"block-{index:05d}.nc"
+
+    # manifest
+    def read_manifest(self) -> dict | None:
+        if not self.manifest_path.is_file():
+            if self.blocks_dir.is_dir() and any(
+                _BLOCK_RE.match(p.name) for p in self.blocks_dir.iterdir()
+            ):
+                raise CampaignError(
+                    f"{str(self.blocks_dir)!r} holds block files but no manifest.json, so what "
+                    "they were computed from is unknown; pass restart=True (CLI --restart) to "
+                    "discard them, or choose another output path"
+                )
+            return None
+        try:
+            data = json.loads(self.manifest_path.read_text())
+        except (OSError, ValueError) as exc:
+            raise CampaignError(
+                f"{str(self.manifest_path)!r} cannot be read ({exc}); pass restart=True (CLI "
+                "--restart) to start the campaign afresh"
+            ) from None
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            data = data if isinstance(data, dict) else {}
+            raise CampaignError(
+                f"{str(self.manifest_path)!r} has format {data.get('format')!r}, expected "
+                f"{FORMAT!r}; pass restart=True (CLI --restart) to start the campaign afresh"
+            )
+        return data
+
+    def write_manifest(self, scene: Scene, grid: Grid, chunk: int, cid: str) -> dict:
+        data = {
+            "format": FORMAT,
+            "campaign_id": cid,
+            "scene": scene.to_toml(),
+            "dims": list(grid.dims),
+            "grid": grid.as_dict(),
+            "chunk": chunk,
+            "points": grid.size,
+            "blocks": len(grid.blocks(chunk)),
+            "package_digest": package_digest(),
+        }
+        self.blocks_dir.mkdir(parents=True, exist_ok=True)
+        _write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
+        return data
+
+    def check_scene(self, stored_toml: str, scene: Scene, where: str) -> None:
+        """CampaignError naming the differences if ``stored_toml`` is not ``scene``."""
+        try:
+            stored = load_scene(stored_toml)
+        except SceneError as exc:
+            raise CampaignError(
+                f"{where} holds a campaign whose scene no longer loads ({exc}); pass "
+                "restart=True (CLI --restart) to start afresh, or choose another output path"
+            ) from None
+        if stored == scene:
+            return
+        lines = scene_diff(stored.to_dict(), scene.to_dict()) or ["(formatting only)"]
+        shown = "\n  ".join(lines[:12]) + ("\n  ..." if len(lines) > 12 else "")
+        raise CampaignError(
+            f"{where} holds a campaign of a different scene; the scene may not change within a "
+            f"campaign, so that old and new points never mix. Differences (stored -> given):\n"
+            f"  {shown}\n"
+            "Pass restart=True (CLI --restart) to discard the stored campaign and start afresh, "
+            "or choose another output path."
+        )
+
+    def check_manifest(self, manifest: dict, scene: Scene, chunk: int | None) -> int:
+        """Refuse a manifest of another scene or chunk size; return the stored chunk size."""
+        self.check_scene(manifest["scene"], scene, repr(str(self.blocks_dir)))
+        stored = int(manifest["chunk"])
+        if chunk is not None and chunk != stored:
+            raise CampaignError(
+                f"{str(self.blocks_dir)!r} was started with chunk={stored!r} points per block, "
+                f"got chunk={chunk!r}; the blocks of a campaign all have one size. Pass "
+                f"chunk=None (or {stored}) to resume, or restart=True (CLI --restart) to start "
+                "afresh with the new size."
+            )
+        if manifest.get("package_digest") != package_digest():
+            warnings.warn(
+                CampaignWarning(
+                    "the workbench package changed since this campaign started (source digest "
+                    f"{manifest.get('package_digest')!r} -> {package_digest()!r}); blocks "
+                    "computed before and after the change are combined. Pass restart=True for a "
+                    "campaign computed by one version throughout."
+                ),
+                stacklevel=3,
+            )
+        return stored
+
+    def clear(self) -> None:
+        """Remove this store's files (archive, manifest, blocks, temporaries) and nothing else."""
+        self.archive.unlink(missing_ok=True)
+        if self.blocks_dir.is_dir():
+            for p in self.blocks_dir.iterdir():
+                if p.name == "manifest.json" or _BLOCK_RE.match(p.name) or _TMP_RE.match(p.name):
+                    p.unlink(missing_ok=True)
+            try:
+                self.blocks_dir.rmdir()
+            except OSError:  # something else lives there: leave it
+                pass
+
+    def remove_temporaries(self) -> list[Path]:
+        """Delete the temporary files of writes that were interrupted (a killed process)."""
+        removed = []
+        if self.blocks_dir.is_dir():
+            for p in self.blocks_dir.iterdir():
+                if _TMP_RE.match(p.name):
+                    p.unlink(missing_ok=True)
+                    removed.append(p)
+        for p in self.archive.parent.glob(f".{self.archive.name}.*.tmp"):
+            p.unlink(missing_ok=True)
+            removed.append(p)
+        return removed
+
+    def finished_blocks(self, cid: str, blocks: list[range]) -> set[int]:
+        """Indices of the blocks whose file exists, opens and belongs to this campaign."""
+        done = set()
+        for i, rng in enumerate(blocks):
+            path = self.block_path(i)
+            if not path.is_file():
+                continue
+            try:
+                with xr.open_dataset(path, engine="netcdf4") as b:
+                    ok = (
+                        b.attrs.get("campaign_id") == cid
+                        and int(b.attrs.get("block", -1)) == i
+                        and b.sizes.get("point") == len(rng)
+                        and int(b["point"][0]) == rng.start
+                    )
+            except Exception as exc:  # unreadable (e.g. a crash before the disk flushed it)
+                warnings.warn(
+                    CampaignWarning(f"block file {str(path)!r} is unreadable ({exc}); recomputing"),
+                    stacklevel=3,
+                )
+                continue
+            if ok:
+                done.add(i)
+            else:
+                warnings.warn(
+                    CampaignWarning(
+                        f"block file {str(path)!r} belongs to another campaign; recomputing it"
+                    ),
+                    stacklevel=3,
+                )
+        return done

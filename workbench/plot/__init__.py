@@ -1,0 +1,10 @@
+"""Figures (PNG, labelled axes with units) of runs, campaigns, studies and analyses.
+
+Every function returns a :class:`matplotlib.figure.Figure` (or writes PNG files and returns their
+paths); nothing is shown on screen.
+"""
+
+from workbench.plot._accuracy import work_precision_figure
+from workbench.plot._runs import register_overview, run_figures
+
+__all__ = ["register_overview", "run_figures", "work_precision_figure"]
