@@ -28,8 +28,15 @@ format: $(STAMP)
 test: lint
 	$(PY) -m pytest -q --timeout=900
 
+# Every study of the paper (archives and figures in $(OUT)/studies), then studies/REPORT.md.
+studies: $(STAMP)
+	$(VENV)/bin/workbench study all -o $(OUT)/studies
+
 benchmarks: $(STAMP)
 	$(PY) benchmarks/solver_reference.py
+	$(PY) benchmarks/ninebar_speed.py
+	$(PY) benchmarks/work_precision.py
+	$(PY) benchmarks/campaign.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache

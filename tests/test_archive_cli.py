@@ -79,3 +79,17 @@ def test_nolds_imports():
     import nolds
 
     assert callable(nolds.lyap_r)
+
+
+def test_saved_archive_has_ordinary_permissions(tmp_path):
+    """An atomic write must not leave mkstemp's owner-only mode on a file meant for sharing."""
+    import os
+    import stat
+
+    import workbench
+
+    ds = workbench.simulate({"model": {"name": "lorenz"}, "run": {"duration": 0.1}})
+    path = workbench.save_run(ds, tmp_path / "run.nc")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~umask

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-__all__ = ["save_run", "open_run"]
+__all__ = ["atomic_path", "open_run", "save_run", "write_text_atomic"]
 
 
 def _encodable(ds: xr.Dataset) -> xr.Dataset:
@@ -24,6 +26,33 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Context manager for an atomic write: yields a temporary path beside ``path``; on success
+    the file gets the usual permissions (0666 less the umask, not mkstemp's 0600) and is renamed
+    onto ``path``, on failure it is removed and ``path`` is left as it was."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    return Path(path)
+
+
 def save_run(ds: xr.Dataset, path: str | os.PathLike, *, compress: bool = True) -> Path:
     """Write a dataset to netCDF-4 atomically: a temporary file beside ``path``, then a rename.
 
@@ -33,20 +62,13 @@ def save_run(ds: xr.Dataset, path: str | os.PathLike, *, compress: bool = True) 
     Returns the path written.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     encoding = {}
     if compress:
         for name, var in ds.data_vars.items():
             if var.dtype.kind in "fiu" and var.ndim > 0:
                 encoding[name] = {"zlib": True, "complevel": 4}
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         _encodable(ds).to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return path
 
 

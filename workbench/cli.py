@@ -73,7 +73,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 # Modules that add their own subcommands: each defines ``register_cli(subparsers)``.
-_COMMAND_MODULES: tuple[str, ...] = ("workbench._accuracy_cli", "workbench.campaign._cli")
+_COMMAND_MODULES: tuple[str, ...] = (
+    "workbench._accuracy_cli",
+    "workbench.campaign._cli",
+    "workbench.study._cli",
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -16,7 +16,6 @@ import json
 import math
 import os
 import re
-import tempfile
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -26,6 +25,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from workbench._archive import write_text_atomic
 from workbench._cache import package_digest
 from workbench._errors import SceneError
 from workbench._scene import Scene, load_scene
@@ -135,17 +135,6 @@ def scene_diff(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
 
 
 # -- the store -------------------------------------------------------------------------------------
-def _write_text_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 class Store:
     """Paths and bookkeeping of one campaign store (see the module docstring)."""
 
@@ -203,7 +192,7 @@ class Store:
             "package_digest": package_digest(),
         }
         self.blocks_dir.mkdir(parents=True, exist_ok=True)
-        _write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
+        write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
         return data
 
     def check_scene(self, stored_toml: str, scene: Scene, where: str) -> None:

@@ -1,0 +1,15 @@
+"""The paper's studies (Chen et al.): scenes under ``studies/``, run, measured, compared.
+
+>>> from workbench.study import available_studies
+>>> "friction_models" in available_studies()
+True
+
+``workbench study NAME`` (or ``all``) runs a study; ``workbench study report`` writes
+``studies/REPORT.md`` from the stored summaries; ``make studies`` does both for every study.
+"""
+
+from workbench.study._report import write_report
+from workbench.study._run import run_study
+from workbench.study._spec import Study, available_studies, load_study, quick_scene
+
+__all__ = ["Study", "available_studies", "load_study", "quick_scene", "run_study", "write_report"]

@@ -1,0 +1,55 @@
+"""``workbench study``: run the paper's studies and write the comparison report."""
+
+from __future__ import annotations
+
+import argparse
+import time as _time
+
+
+def _cmd_study(args: argparse.Namespace) -> int:
+    from workbench.study import available_studies, run_study, write_report
+
+    if args.name == "report":
+        print(f"report: {write_report(args.output)}")
+        return 0
+    if args.name == "list":
+        for name in available_studies():
+            print(name)
+        return 0
+    names = available_studies() if args.name == "all" else [args.name]
+    for name in names:
+        t0 = _time.perf_counter()
+        s = run_study(
+            name,
+            out=args.output,
+            quick=args.quick,
+            workers=args.workers,
+            progress=not args.no_progress,
+        )
+        done = sum(c["reproduced"] is True for c in s["claims"])
+        print(
+            f"{name}: {len(s['cases'])} case(s), {len(s['figures'])} figure(s), claims "
+            f"reproduced {done}/{len(s['claims'])}, {_time.perf_counter() - t0:.1f} s "
+            f"-> {args.output}/{name}/"
+        )
+    if args.name == "all":
+        print(f"report: {write_report(args.output)}")
+    return 0
+
+
+def register_cli(sub) -> None:
+    """Add the ``study`` subcommand."""
+    p = sub.add_parser(
+        "study",
+        help="run a study of the paper (or 'all'; 'report' writes studies/REPORT.md)",
+        description="Run one of the paper's studies (scenes under studies/NAME/): archives, "
+        "figures named for the paper's figures, and a summary of paper values and claims. "
+        "NAME 'all' runs every study and writes the report; 'report' only writes "
+        "studies/REPORT.md from stored summaries; 'list' lists the studies.",
+    )
+    p.add_argument("name", help="study name, 'all', 'report' or 'list'")
+    p.add_argument("-o", "--output", default="out/studies", help="directory (default out/studies)")
+    p.add_argument("--quick", action="store_true", help="much shorter runs (smoke test only)")
+    p.add_argument("--workers", type=int, help="processes for campaign cases (default: all)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cmd_study)
