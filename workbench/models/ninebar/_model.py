@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from workbench._errors import SceneError
+from workbench._errors import SceneError, SolverError
 from workbench.models import register
 from workbench.models._base import Effect, Model, Parameter, Problem, Quantity
 from workbench.models.contact import hertz_internal_stiffness
@@ -398,8 +398,14 @@ def _workspaces(problem: Problem, t, Y, AUX) -> np.ndarray:
     codes = dyn.evaluate_many(t, Y, problem.p, problem.ip, AUX, ws)
     if codes.any():
         bad = int(np.flatnonzero(codes)[0])
-        raise RuntimeError(
-            f"model evaluation failed at record t = {t[bad]!r} s: "
-            f"{problem.failure(int(codes[bad]))}"
+        # the integrator accepted states (or interpolated records between them) that the
+        # mechanism cannot take: a loose tolerance or a solver without the model's guards
+        raise SolverError(
+            f"the record at t = {float(t[bad]):.9g} s is outside the model's domain: "
+            f"{problem.failure(int(codes[bad]))}; the solver's tolerance is too loose for this "
+            "scene (tighten solver.rtol/atol)",
+            time=float(t[bad]),
+            state={q.name: float(v) for q, v in zip(problem.states, Y[bad], strict=True)},
+            cause=f"model_{int(codes[bad])}",
         )
     return ws
