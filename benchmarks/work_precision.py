@@ -72,23 +72,23 @@ def report(wp: xr.Dataset, friction: str) -> None:
     )
     has_scipy = "scipy:DOP853" in wp.solver_method.values
     for m in wp.solver_method.values:
-        for tol in wp.tolerance.values:
-            pt = wp.sel(solver_method=m, tolerance=tol)
+        for tol in wp.rtol.values:
+            pt = wp.sel(solver_method=m, rtol=tol)
             if not np.isfinite(float(pt.wall_time)):
                 continue
             ratio = ""
             if has_scipy:
-                ref = float(wp.wall_time.sel(solver_method="scipy:DOP853", tolerance=tol))
+                ref = float(wp.wall_time.sel(solver_method="scipy:DOP853", rtol=tol))
                 if np.isfinite(ref):
                     ratio = f"{ref / float(pt.wall_time):8.1f}"
             print(
                 f"{m:>14} {tol:7.0e} {float(pt.wall_time):8.3f} {int(pt.steps):8d} "
                 f"{float(pt.short_error):10.2e} {float(pt.peak_error):9.2e} {ratio:>8}"
             )
-    d = wp.sel(solver_method="dop853").dropna("tolerance", subset=["wall_time"])
+    d = wp.sel(solver_method="dop853").dropna("rtol", subset=["wall_time"])
     err = d.short_error.values[::-1]  # tightening tolerance
     falls = int(np.sum(np.diff(np.log10(err)) < 0.3))  # within noise: no rise above 2x
-    tol = d.tolerance.values[::-1]
+    tol = d.rtol.values[::-1]
     slope = np.polyfit(np.log10(1 / tol), np.log10(d.wall_time.values[::-1]), 1)[0]
     print(
         f"dop853: error non-increasing (within 2x) in {falls} of {len(err) - 1} tightenings "

@@ -155,7 +155,7 @@ def accuracy(
     -------
     xarray.Dataset
         Dims ``solver_method`` (not ``method``, a keyword of ``Dataset.sel``) and
-        ``tolerance``; variables ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
+        ``rtol`` (= atol; not ``tolerance``, a keyword of ``Dataset.sel`` too); variables ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
         the errors (dimensionless, see the module docstring) and ``status`` (0 ok, 1 failed);
         the reference in the attributes.
 
@@ -163,7 +163,7 @@ def accuracy(
     --------
     >>> wp = accuracy({"model": {"name": "duffing"}, "run": {"cycles": 5}},
     ...               methods=["dop853"], tolerances=[1e-4, 1e-8])
-    >>> bool(wp.short_error.sel(tolerance=1e-8) < wp.short_error.sel(tolerance=1e-4))
+    >>> bool(wp.short_error.sel(rtol=1e-8) < wp.short_error.sel(rtol=1e-4))
     True
     """
     scene = scene if isinstance(scene, Scene) else load_scene(scene)
@@ -212,7 +212,7 @@ def accuracy(
         "statistic_error": "error of mean and spread of the stroboscopic samples, relative to "
         "the reference spread",
     }
-    dims = ("solver_method", "tolerance")
+    dims = ("solver_method", "rtol")
     data = {
         k: (dims, v, {"units": units.get(k, "1"), "long_name": long_names[k]})
         for k, v in out.items()
@@ -236,8 +236,8 @@ def accuracy(
                 list(methods),
                 {"long_name": "solver method", "units": "1"},
             ),
-            "tolerance": (
-                "tolerance",
+            "rtol": (
+                "rtol",
                 np.asarray(tolerances, float),
                 {"long_name": "rtol = atol", "units": "1"},
             ),
@@ -279,10 +279,10 @@ def recommend(
         )
     cost = wp.wall_time.where(ok)
     idx = np.unravel_index(int(np.nanargmin(cost.values)), cost.shape)
-    pick = wp.isel(solver_method=idx[0], tolerance=idx[1])
+    pick = wp.isel(solver_method=idx[0], rtol=idx[1])
     return {
         "method": str(pick.solver_method.values),
-        "tolerance": float(pick.tolerance),
+        "tolerance": float(pick.rtol),
         "wall_time": float(pick.wall_time),
         **{e: float(pick[e]) for e in errors},
     }

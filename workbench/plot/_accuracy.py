@@ -17,7 +17,7 @@ def work_precision_figure(wp: xr.Dataset, error: str = "short_error") -> plt.Fig
         ok &= sel[error].values > 0
         x, y = sel.wall_time.values[ok], sel[error].values[ok]
         ax.loglog(x, y, "o-", label=str(method))
-        for xi, yi, tol in zip(x, y, sel.tolerance.values[ok], strict=True):
+        for xi, yi, tol in zip(x, y, sel.rtol.values[ok], strict=True):
             ax.annotate(
                 f"{tol:.0e}",
                 (xi, yi),
