@@ -77,6 +77,7 @@ _COMMAND_MODULES: tuple[str, ...] = (
     "workbench._accuracy_cli",
     "workbench.campaign._cli",
     "workbench.study._cli",
+    "workbench.analysis._cli",
 )
 
 

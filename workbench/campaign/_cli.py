@@ -7,10 +7,9 @@ import sys
 import warnings
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
-__all__ = ["register_cli", "strobe_samples", "bifurcation_figure"]
+__all__ = ["register_cli"]
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
@@ -51,77 +50,6 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     print(summary(ds))
     print(f"-> {Path(args.output)}")
     return 0
-
-
-def strobe_samples(ds: xr.Dataset, var: str) -> xr.DataArray:
-    """The stroboscopic (Poincaré) samples of ``var``: one per forcing period.
-
-    A forced scene recorded with ``record.samples_per_period = K`` stores records at
-    ``t0 + k T / K`` from the end of the transient on, so every K-th record (starting with the
-    first) is a strobe sample. Returns ``var`` with ``time`` replaced by ``strobe`` (sample
-    index). Raises ValueError if the dataset has no per-period record grid.
-    """
-    if var not in ds.data_vars:
-        names = ", ".join(v for v in ds.data_vars if "time" in ds[v].dims)
-        raise ValueError(f"no variable {var!r} in the campaign; variables over time: {names}")
-    spp = ds.attrs.get("samples_per_period")
-    if spp is None or "cycles" not in ds.attrs:
-        raise ValueError(
-            "a bifurcation diagram needs strobe samples: a forced model run for a number of "
-            "cycles with record.samples_per_period set (e.g. 1); this campaign has "
-            f"samples_per_period={spp!r} and cycles={ds.attrs.get('cycles')!r}"
-        )
-    da = ds[var].isel(time=slice(None, None, int(spp)))
-    return da.rename(time="strobe").drop_vars(
-        [c for c in da.coords if "time" in da[c].dims], errors="ignore"
-    )
-
-
-def _diagram_points(ds: xr.Dataset, var: str, param: str) -> tuple[np.ndarray, np.ndarray]:
-    """(x, y): parameter value and strobe sample of every point, NaNs dropped."""
-    samples = None
-    try:  # the analysis layer's version, when it exists
-        from workbench.analysis import bifurcation_diagram  # type: ignore[attr-defined]
-    except ImportError:
-        bifurcation_diagram = None
-    if bifurcation_diagram is not None:
-        try:
-            out = bifurcation_diagram(ds, var)
-            if isinstance(out, xr.DataArray) and param in out.dims:
-                samples = out
-        except Exception:  # another shape of result or a failure: select the samples here
-            samples = None
-    if samples is None:
-        samples = strobe_samples(ds, var)
-    other = [d for d in samples.dims if d != param]
-    samples = samples.transpose(param, *other)
-    x = np.broadcast_to(samples[param].values.reshape((-1,) + (1,) * len(other)), samples.shape)
-    y = samples.values
-    keep = np.isfinite(y)
-    return x[keep], y[keep]
-
-
-def bifurcation_figure(ds: xr.Dataset, var: str, param: str):
-    """Scatter of the strobe samples of ``var`` against the parameter ``param``.
-
-    ``ds`` must have ``param`` as its only dim of size > 1 besides ``time``.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from workbench.plot._runs import axis_label
-
-    x, y = _diagram_points(ds, var, param)
-    fig, ax = plt.subplots(figsize=(8, 5))
-    ax.scatter(x, y, s=1.0, c="k", marker=".", linewidths=0)
-    ax.set_xlabel(axis_label(ds[param]))
-    ax.set_ylabel(axis_label(ds[var]) + ", strobe samples")
-    ax.set_title(ds.attrs.get("title", ""), fontsize=10)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
 
 
 def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple[xr.Dataset, str]:
@@ -169,8 +97,11 @@ def _cmd_bifurcation(args: argparse.Namespace) -> int:
         )
         return 2
     try:
+        from workbench.analysis import bifurcation_diagram
+        from workbench.plot import bifurcation_figure
+
         ds, param = _select(ds, args.var, args.param, args.at or [])
-        fig = bifurcation_figure(ds, args.var, param)
+        fig = bifurcation_figure(bifurcation_diagram(ds, args.var, param))
     except ValueError as exc:
         print(f"workbench bifurcation: error: {exc}", file=sys.stderr)
         return 2

@@ -5,6 +5,24 @@ paths); nothing is shown on screen.
 """
 
 from workbench.plot._accuracy import work_precision_figure
+from workbench.plot._analysis import (
+    bifurcation_figure,
+    embedding_figure,
+    lle_figure,
+    phase_figure,
+    poincare_figure,
+    zero_one_figure,
+)
 from workbench.plot._runs import register_overview, run_figures
 
-__all__ = ["register_overview", "run_figures", "work_precision_figure"]
+__all__ = [
+    "bifurcation_figure",
+    "embedding_figure",
+    "lle_figure",
+    "phase_figure",
+    "poincare_figure",
+    "register_overview",
+    "run_figures",
+    "work_precision_figure",
+    "zero_one_figure",
+]

@@ -50,15 +50,12 @@ def peak(da: xr.DataArray, periods: float | None = None, ds: xr.Dataset | None =
 
 
 def strobe(ds: xr.Dataset, da: xr.DataArray) -> xr.DataArray:
-    """Stroboscopic samples of ``da``: one per forcing period (every ``samples_per_period``-th
-    record from the start of the record)."""
-    spp = int(ds.attrs.get("samples_per_period", 0) or 0)
-    if spp < 1:
-        raise ValueError(
-            "stroboscopic samples need a run recorded with record.samples_per_period; this run "
-            f"has samples_per_period={ds.attrs.get('samples_per_period')!r}"
-        )
-    return da.isel(time=slice(None, None, spp))
+    """Stroboscopic samples of ``da`` (a variable of the run ``ds``, possibly with labels
+    selected): :func:`workbench.analysis.poincare_section` on it."""
+    from workbench.analysis import poincare_section
+
+    name = da.name or "value"
+    return poincare_section(xr.Dataset({name: da}, attrs=ds.attrs), name)
 
 
 def clearance_of(scene: Scene, joint: str) -> float:

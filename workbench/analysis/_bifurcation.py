@@ -1,0 +1,38 @@
+"""Bifurcation diagrams from campaigns: stroboscopic samples against a swept parameter."""
+
+from __future__ import annotations
+
+import xarray as xr
+
+from workbench.analysis._sections import poincare_section
+
+__all__ = ["bifurcation_diagram"]
+
+
+def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) -> xr.DataArray:
+    """Stroboscopic samples of ``var`` over the parameter ``param`` of a campaign.
+
+    ``runs`` is a campaign dataset (from :func:`workbench.run_campaign`) whose records are per
+    forcing period after the transient; ``param`` defaults to its only parameter dim. Returns a
+    DataArray with dims ``(param, strobe, ...)`` (NaN where a point failed), storable as netCDF
+    and drawn by :func:`workbench.plot.bifurcation_figure`.
+
+    Raises ValueError if ``param`` is not a swept dim or the run has no strobe grid.
+    """
+    swept = [d for d in runs.dims if d in runs.coords and d not in ("time", "joint", "crank")]
+    if param is None:
+        if len(swept) != 1:
+            raise ValueError(
+                f"the campaign varies {swept!r}; name the parameter of the diagram (param=...) "
+                "and select one value of the others first"
+            )
+        param = swept[0]
+    if param not in runs.dims:
+        raise ValueError(f"{param!r} is not a parameter dim of the campaign; dims: {swept!r}")
+    if var not in runs:
+        raise ValueError(f"no variable {var!r}; variables: {sorted(runs.data_vars)}")
+    samples = poincare_section(runs, var)
+    others = [d for d in samples.dims if d not in (param, "strobe")]
+    samples = samples.transpose(param, "strobe", *others)
+    samples.attrs.update(runs[var].attrs, diagram_parameter=param)
+    return samples

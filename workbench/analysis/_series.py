@@ -1,0 +1,67 @@
+"""Scalar time series from numpy arrays or xarray objects, with their sampling step and units."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["Series", "as_series"]
+
+
+@dataclass(frozen=True)
+class Series:
+    """A uniformly sampled scalar series: values, step ``dt`` (in ``time_units``: "s", or
+    "sample" for a plain array given without ``dt``), name, units, forcing period (s) if known."""
+
+    values: np.ndarray
+    dt: float
+    name: str
+    units: str
+    period: float | None
+    time_units: str
+
+
+def as_series(x, dt: float | None = None) -> Series:
+    """A :class:`Series` from a 1-D array or a DataArray with a ``time`` coordinate (s).
+
+    The DataArray gives ``dt`` itself (its records must be uniform to 1e-6 relative) and its
+    ``units``; a forcing period is read from ``forcing_period`` in its attributes. Raises
+    ValueError for non-1-D input, non-finite values or a non-uniform time axis.
+    """
+    name, units, period = "x", "1", None
+    if isinstance(x, xr.DataArray):
+        name = str(x.name or "x")
+        units = str(x.attrs.get("units", "1"))
+        period = x.attrs.get("forcing_period")
+        if x.ndim != 1:
+            raise ValueError(
+                f"a series must be 1-D; {name!r} has dims {x.dims!r}: select one element of "
+                "the other dims first, e.g. da.sel(joint='A')"
+            )
+        if dt is None and "time" in x.coords:
+            t = np.asarray(x["time"].values, dtype=float)
+            steps = np.diff(t)
+            if steps.size and not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
+                raise ValueError(
+                    f"{name!r} is not uniformly sampled (steps {steps.min():g} .. "
+                    f"{steps.max():g} s); analyses need a uniform record (record.dt or "
+                    "record.samples_per_period)"
+                )
+            dt = float(steps[0]) if steps.size else None
+        x = x.values
+    values = np.asarray(x, dtype=float)
+    if values.ndim != 1:
+        raise ValueError(f"a series must be 1-D, got shape {values.shape!r}")
+    if not np.isfinite(values).all():
+        bad = int(np.flatnonzero(~np.isfinite(values))[0])
+        raise ValueError(f"the series has a non-finite value at index {bad} ({values[bad]!r})")
+    return Series(
+        values,
+        float(dt) if dt is not None else 1.0,
+        name,
+        units,
+        float(period) if period else None,
+        "s" if dt is not None else "sample",
+    )

@@ -1,0 +1,131 @@
+"""Figures of analyses: phase portraits, Poincaré maps, delay/dimension evidence, LLE
+convergence, 0-1 test and bifurcation diagrams. Axis labels carry the units."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from workbench.plot._runs import axis_label, plt
+
+__all__ = [
+    "phase_figure",
+    "poincare_figure",
+    "embedding_figure",
+    "lle_figure",
+    "zero_one_figure",
+    "bifurcation_figure",
+]
+
+
+def phase_figure(portrait: xr.Dataset, section: xr.Dataset | None = None) -> plt.Figure:
+    """Phase portrait (from :func:`workbench.analysis.phase_portrait`), with the stroboscopic
+    points of ``section`` (a Dataset with the same two variables) on top when given."""
+    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    ax.plot(portrait.value, portrait.rate, lw=0.3, color="0.4", label="trajectory")
+    if section is not None:
+        ax.plot(section["value"], section["rate"], "r.", ms=3, label="Poincaré section")
+        ax.legend(fontsize=8)
+    ax.set_xlabel(axis_label(portrait.value))
+    ax.set_ylabel(axis_label(portrait.rate))
+    ax.set_title(f"phase portrait of {portrait.attrs.get('variable', '')}", fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def poincare_figure(value: xr.DataArray, rate: xr.DataArray) -> plt.Figure:
+    """Stroboscopic Poincaré map: one point per forcing period."""
+    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    ax.plot(value, rate, ".", ms=3)
+    ax.set_xlabel(axis_label(value))
+    ax.set_ylabel(axis_label(rate))
+    ax.set_title(
+        f"stroboscopic Poincaré map ({value.sizes.get('strobe', value.size)} periods)", fontsize=9
+    )
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def embedding_figure(ami: xr.Dataset, fnn: xr.Dataset, cao: xr.Dataset | None = None):
+    """The evidence behind the embedding: AMI over lag (chosen delay marked), the fraction of
+    false nearest neighbours and Cao's E1, E2 over the dimension (chosen dimension marked)."""
+    n = 3 if cao is not None else 2
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8))
+    axes[0].plot(ami.lag, ami.ami)
+    axes[0].axvline(int(ami.delay), color="r", ls="--", label=f"delay {int(ami.delay)}")
+    axes[0].set_xlabel(axis_label(ami.lag))
+    axes[0].set_ylabel(axis_label(ami.ami))
+    axes[0].set_title("average mutual information (Fraser & Swinney 1986)", fontsize=8)
+    axes[1].plot(fnn.dimension, fnn.fnn_fraction, "o-")
+    axes[1].axvline(int(fnn.dim), color="r", ls="--", label=f"dim {int(fnn.dim)}")
+    axes[1].set_xlabel(axis_label(fnn.dimension))
+    axes[1].set_ylabel(axis_label(fnn.fnn_fraction))
+    axes[1].set_title("false nearest neighbours (Kennel et al. 1992)", fontsize=8)
+    if cao is not None:
+        axes[2].plot(cao.dimension, cao.E1, "o-", label="E1")
+        axes[2].plot(cao.dimension, cao.E2, "s--", label="E2")
+        axes[2].axvline(int(cao.dim), color="r", ls="--", label=f"dim {int(cao.dim)}")
+        axes[2].set_xlabel(axis_label(cao.dimension))
+        axes[2].set_ylabel("E1, E2 [1]")
+        axes[2].set_title("Cao (1997)", fontsize=8)
+    for ax in axes:
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def lle_figure(wolf: xr.Dataset, reference: float | None = None, label: str = "") -> plt.Figure:
+    """Running Wolf estimate of the LLE over the time followed, with a reference line (e.g. the
+    LLE from the equations) when given."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(wolf.elapsed, wolf.running, lw=0.8, label=f"Wolf: {float(wolf.lle):.4g}")
+    if reference is not None:
+        ax.axhline(reference, color="k", ls="--", lw=0.8, label=f"reference: {reference:.4g}")
+    ax.set_xlabel(axis_label(wolf.elapsed))
+    ax.set_ylabel(axis_label(wolf.running))
+    ax.set_title(
+        f"largest Lyapunov exponent {label} (Wolf et al. 1985; dim {int(wolf.dim)}, delay "
+        f"{int(wolf.delay)}, {int(wolf.replacements)} replacements)",
+        fontsize=8,
+    )
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def zero_one_figure(result: xr.Dataset) -> plt.Figure:
+    """K_c over c of the 0-1 test, with the median K."""
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    ax.plot(result.c, result.K_c, ".")
+    ax.axhline(float(result.K), color="r", ls="--", label=f"K = {float(result.K):.3f}")
+    ax.set_ylim(-0.1, 1.1)
+    ax.set_xlabel(axis_label(result.c))
+    ax.set_ylabel(axis_label(result.K_c))
+    ax.set_title("0-1 test for chaos (Gottwald & Melbourne 2004)", fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def bifurcation_figure(samples: xr.DataArray, *, scale: float = 1.0, xlabel: str | None = None):
+    """The familiar scatter of a bifurcation diagram (from
+    :func:`workbench.analysis.bifurcation_diagram`): strobe samples over the parameter."""
+    param = samples.attrs.get("diagram_parameter", samples.dims[0])
+    other = [d for d in samples.dims if d != param]
+    da = samples.transpose(param, *other)
+    x = np.broadcast_to(da[param].values.reshape((-1,) + (1,) * len(other)), da.shape)
+    y = da.values
+    keep = np.isfinite(y)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(x[keep] * scale, y[keep], ".", ms=1.5, color="k", alpha=0.6)
+    ax.set_xlabel(xlabel or axis_label(da[param]))
+    ax.set_ylabel(axis_label(da))
+    ax.set_title(f"bifurcation diagram of {da.name} over {param}", fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
