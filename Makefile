@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test lint format studies benchmarks clean
+.PHONY: demo test lint format studies data benchmarks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,11 +32,16 @@ test: lint
 studies: $(STAMP)
 	$(VENV)/bin/workbench study all -o $(OUT)/studies
 
+# The small archives the notebooks open.
+data: $(STAMP)
+	$(PY) data/regenerate.py
+
 benchmarks: $(STAMP)
 	$(PY) benchmarks/solver_reference.py
 	$(PY) benchmarks/ninebar_speed.py
 	$(PY) benchmarks/work_precision.py
 	$(PY) benchmarks/campaign.py
+	$(PY) benchmarks/lle.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache

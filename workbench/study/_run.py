@@ -151,7 +151,7 @@ def _chaos_measures(ds: xr.Dataset, scene) -> dict:
         da = select(ds, var, where)
         if not np.isfinite(da.values).any():
             continue
-        w = analysis.wolf_lle(da)
+        w = analysis.wolf_lle(da, period=ds.attrs.get("forcing_period"))
         out["wolf_lle"][label] = float(w["lle"])
         if "lle_per_period" in w:
             out["wolf_lle_per_period"][label] = float(w["lle_per_period"])
@@ -160,7 +160,7 @@ def _chaos_measures(ds: xr.Dataset, scene) -> dict:
         }
         z = analysis.zero_one_test(strobe(ds, da))
         out["zero_one_K"][label] = float(z["K"])
-    horizon = min(50, int(scene.run["cycles"]))
+    horizon = min(10, int(scene.run["cycles"]))
     bench = analysis.lle_from_equations(scene, cycles=horizon)
     out["lle_from_equations"] = float(bench["lle"])
     out["lle_from_equations_cycles"] = horizon
