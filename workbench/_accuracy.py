@@ -155,7 +155,8 @@ def accuracy(
     -------
     xarray.Dataset
         Dims ``solver_method`` (not ``method``, a keyword of ``Dataset.sel``) and
-        ``rtol`` (= atol; not ``tolerance``, a keyword of ``Dataset.sel`` too); variables ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
+        ``rtol`` (= atol; not ``tolerance``, a keyword of ``Dataset.sel`` too); variables
+        ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
         the errors (dimensionless, see the module docstring) and ``status`` (0 ok, 1 failed);
         the reference in the attributes.
 
