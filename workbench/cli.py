@@ -78,6 +78,7 @@ _COMMAND_MODULES: tuple[str, ...] = (
     "workbench.campaign._cli",
     "workbench.study._cli",
     "workbench.analysis._cli",
+    "workbench.verify._cli",
 )
 
 

@@ -14,6 +14,7 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._runs import register_overview, run_figures
+from workbench.plot._verify import verification_figure
 
 __all__ = [
     "bifurcation_figure",
@@ -23,6 +24,7 @@ __all__ = [
     "poincare_figure",
     "register_overview",
     "run_figures",
+    "verification_figure",
     "work_precision_figure",
     "zero_one_figure",
 ]

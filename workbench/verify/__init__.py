@@ -1,0 +1,10 @@
+"""Independent verification against the exudyn multibody engine (optional extra ``verify``).
+
+>>> from workbench.verify import verify                                 # doctest: +SKIP
+>>> ds = verify("studies/ninebar.toml", horizon=0.02, steps=(2e-6,))    # doctest: +SKIP
+"""
+
+from workbench.verify._compare import STATISTICS, verify
+from workbench.verify._ninebar_exudyn import run_ninebar_exudyn
+
+__all__ = ["STATISTICS", "run_ninebar_exudyn", "verify"]
