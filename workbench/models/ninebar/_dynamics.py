@@ -27,15 +27,18 @@ import numpy as np
 from numba import njit
 
 from workbench.models._base import EVENT_INSIDE_STEP
-from workbench.models.contact import contact_elastic_energy, lankarani_nikravesh
-from workbench.models.friction import coulomb_modified, lugre_force, lugre_rate
+from workbench.models._reduced import (
+    FRICTION_LUGRE,
+    N_FP,
+    assemble,
+    cholesky_solve,
+    clearance_joint,
+)
 from workbench.models.ninebar._geometry import GEOMETRY_FIELDS
 from workbench.models.ninebar._kinematics import (
     N_POINTS,
     PT_A,
-    PT_AJ,
     PT_B,
-    PT_BJ,
     kinematics,
 )
 
@@ -81,9 +84,6 @@ IP_Z = 9  # IP_Z + j: index of joint j's bristle state in y, -1 if none
 IP_W = 11  # index of the driver-work quadrature in y, -1 if none
 N_IP = 12
 
-FRICTION_NONE = 0
-FRICTION_COULOMB = 1
-FRICTION_LUGRE = 2
 
 # --- workspace layout of `evaluate` ---------------------------------------------------------------
 W_QDD = 0  # 6: full qdd (driven entries 0)
@@ -118,55 +118,6 @@ CODE_NONFINITE = 4  # non-finite force or acceleration
 
 BEARING_BODY = (0, 3)  # crank 1 carries bearing A, crank 4 bearing B
 JOURNAL_BODY = (1, 2)  # link 2 carries journal A, link 3 journal B
-
-
-@njit(cache=True)
-def _cholesky_solve(M, b, n, L):
-    """Solve M x = b in place in b for a small symmetric positive definite M (n <= 6), with L a
-    6 x 6 scratch array for the factor. Returns False if M is not positive definite."""
-    for i in range(n):
-        for j in range(i + 1):
-            s = M[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            if i == j:
-                if s <= 0.0:
-                    return False
-                L[i, i] = math.sqrt(s)
-            else:
-                L[i, j] = s / L[j, j]
-    for i in range(n):
-        s = b[i]
-        for k in range(i):
-            s -= L[i, k] * b[k]
-        b[i] = s / L[i, i]
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for k in range(i + 1, n):
-            s -= L[k, i] * b[k]
-        b[i] = s / L[i, i]
-    return True
-
-
-@njit(cache=True)
-def _generalised_force(Q, J, pos, b, px, py, fx, fy):
-    """Add the generalised force of force (fx, fy) N acting at point (px, py) m of body b."""
-    arm = (px - pos[b, 0]) * fy - (py - pos[b, 1]) * fx
-    for k in range(6):
-        Q[k] += J[b, 0, k] * fx + J[b, 1, k] * fy + J[b, 2, k] * arm
-
-
-@njit(cache=True)
-def _point_velocity(J, pos, b, px, py, qd):
-    """Velocity (m s-1) of the material point (px, py) of body b."""
-    vx = 0.0
-    vy = 0.0
-    w = 0.0
-    for k in range(6):
-        vx += J[b, 0, k] * qd[k]
-        vy += J[b, 1, k] * qd[k]
-        w += J[b, 2, k] * qd[k]
-    return vx - w * (py - pos[b, 1]), vy + w * (px - pos[b, 0])
 
 
 # --- scratch layout of the hooks' work array (after the workspace W_*) ----------------------------
@@ -226,35 +177,10 @@ def evaluate(t, y, p, ip, aux, work):
     M = work[_O_M : _O_M + 36].reshape((6, 6))
     h = work[_O_H : _O_H + 6]
     Q = work[_O_Q6 : _O_Q6 + 6]
-    M[:, :] = 0.0
-    h[:] = 0.0
-    Q[:] = 0.0
-    gx = p[P_GX]
-    gy = p[P_GY]
-    ke = 0.0
-    pe = 0.0
-    for b in range(8):
-        m = p[P_MASS + b]
-        inertia = p[P_INERTIA + b]
-        vx = 0.0
-        vy = 0.0
-        w = 0.0
-        for k in range(6):
-            vx += J[b, 0, k] * qd[k]
-            vy += J[b, 1, k] * qd[k]
-            w += J[b, 2, k] * qd[k]
-        ke += 0.5 * (m * (vx * vx + vy * vy) + inertia * w * w)
-        pe -= m * (gx * pos[b, 0] + gy * pos[b, 1])
-        for k in range(6):
-            h[k] += m * (J[b, 0, k] * gam[b, 0] + J[b, 1, k] * gam[b, 1])
-            h[k] += inertia * J[b, 2, k] * gam[b, 2]
-            Q[k] += m * (J[b, 0, k] * gx + J[b, 1, k] * gy)
-            for l in range(k, 6):
-                v = m * (J[b, 0, k] * J[b, 0, l] + J[b, 1, k] * J[b, 1, l])
-                M[k, l] += v + inertia * J[b, 2, k] * J[b, 2, l]
-    for k in range(6):
-        for l in range(k):
-            M[k, l] = M[l, k]
+    ke, pe = assemble(
+        J, gam, pos, qd, p[P_MASS : P_MASS + 8], p[P_INERTIA : P_INERTIA + 8], p[P_GX], p[P_GY],
+        M, h, Q,
+    )  # fmt: skip
 
     # contact and friction at each clearance joint
     friction = ip[IP_FRICTION]
@@ -269,56 +195,23 @@ def evaluate(t, y, p, ip, aux, work):
         yv = q[ix + 1]
         vx = qd[ix]
         vy = qd[ix + 1]
-        e = math.sqrt(x * x + yv * yv)
-        delta = e - p[base + PJ_C]
+        bearing = PT_A if j == 0 else PT_B
+        z = y[ip[IP_Z + j]] if friction == FRICTION_LUGRE else 0.0
+        e, delta, ddot, fn, ft, vt, zdot, pd, eel = clearance_joint(
+            Q, J, pos, qd, JOURNAL_BODY[j], BEARING_BODY[j], pts[bearing, 0], pts[bearing, 1],
+            x, yv, vx, vy, aux[j], p[base + PJ_R1], p[base + PJ_R2], p[base + PJ_C],
+            p[base + PJ_K], p[base + PJ_N], p[base + PJ_CE], p[P_VFLOOR], friction,
+            p[P_CF : P_CF + N_FP], z,
+        )  # fmt: skip
         ws[wb + WJ_X] = x
         ws[wb + WJ_Y] = yv
         ws[wb + WJ_VX] = vx
         ws[wb + WJ_VY] = vy
         ws[wb + WJ_E] = e
         ws[wb + WJ_DELTA] = delta
-        if delta <= 0.0 or e == 0.0:
-            continue
         if delta > p[base + PJ_DMAX]:
             return CODE_PENETRATION
-        nx = x / e
-        ny = yv / e
-        ddot = nx * vx + ny * vy
-        onset = aux[j] if aux[j] > 0.0 else ddot  # onset not located yet: this trial's rate
-        fn, fdamp = lankarani_nikravesh(
-            delta, ddot, onset, p[base + PJ_K], p[base + PJ_N], p[base + PJ_CE], p[P_VFLOOR]
-        )
-        # material contact points: journal surface and bearing surface along n
-        pa = PT_A if j == 0 else PT_B
-        pj = PT_AJ if j == 0 else PT_BJ
-        bj = JOURNAL_BODY[j]
-        bb = BEARING_BODY[j]
-        jx = pts[pj, 0] + p[base + PJ_R2] * nx
-        jy = pts[pj, 1] + p[base + PJ_R2] * ny
-        bx = pts[pa, 0] + p[base + PJ_R1] * nx
-        by = pts[pa, 1] + p[base + PJ_R1] * ny
-        vjx, vjy = _point_velocity(J, pos, bj, jx, jy, qd)
-        vbx, vby = _point_velocity(J, pos, bb, bx, by, qd)
-        tx = -ny
-        ty = nx
-        vt = (vjx - vbx) * tx + (vjy - vby) * ty
-        ft = 0.0
-        zdot = 0.0
-        if friction == FRICTION_COULOMB:
-            ft = coulomb_modified(vt, fn, p[P_CF], p[P_V0], p[P_V1])
-        elif friction == FRICTION_LUGRE:
-            z = y[ip[IP_Z + j]]
-            zdot = lugre_rate(vt, z, p[P_S0], p[P_MUK], p[P_MUS], p[P_VS], p[P_GAM])
-            ft = lugre_force(vt, z, zdot, fn, p[P_S0], p[P_S1], p[P_S2])
-        # force on the journal: normal pushes it back towards the bearing centre
-        fx = -fn * nx + ft * tx
-        fy = -fn * ny + ft * ty
-        _generalised_force(Q, J, pos, bj, jx, jy, fx, fy)
-        _generalised_force(Q, J, pos, bb, bx, by, -fx, -fy)
-        # power lost: normal damping + friction (relative sliding); elastic energy is stored
-        pd = fdamp * ddot - ft * vt
         p_diss += pd
-        eel = contact_elastic_energy(delta, p[base + PJ_K], p[base + PJ_N])
         pe += eel
         ws[wb + WJ_DDOT] = ddot
         ws[wb + WJ_FN] = fn
@@ -337,7 +230,7 @@ def evaluate(t, y, p, ip, aux, work):
         for c in range(nf):
             Mff[a, c] = M[free[a], free[c]]
     L = work[_O_L : _O_L + 36].reshape((6, 6))
-    if nf > 0 and not _cholesky_solve(Mff, rhs_f, nf, L):
+    if nf > 0 and not cholesky_solve(Mff, rhs_f, nf, L):
         return CODE_SINGULAR
     qdd = work[_O_QDD : _O_QDD + 6]
     qdd[:] = 0.0
