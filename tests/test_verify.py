@@ -70,3 +70,24 @@ def test_chaos_robust_statistics_agree_over_a_cycle():
     np.testing.assert_allclose(other.mean_eccentricity, ours.mean_eccentricity, rtol=0.06)
     np.testing.assert_allclose(other.force_p95, ours.force_p95, rtol=0.5)
     np.testing.assert_allclose(other.peak_force, ours.peak_force, rtol=0.5)
+
+
+SLIDER_CRANK = "studies/verification/slider_crank.toml"
+
+
+def test_slider_crank_ideal_and_first_impact_agree():
+    # the community benchmark (Flores et al. 2006): ideal torques record by record, then the
+    # first impact of the journal in the slider's bearing (at 0.23 ms, ~46 kN)
+    scene = workbench.load_scene(SLIDER_CRANK)
+    ideal = scene.replace(effects={**scene.effects, "clearance": []}, record={"dt": 1e-5})
+    ds = verify(ideal, steps=(5e-6, 2e-6), record_dt=1e-5)
+    assert float(ds.max_relative_error.sel(run="exudyn h=2e-06", series="torque")) < 1e-3
+    assert (
+        float(ds.max_relative_error.sel(run="exudyn h=2e-06", series="slider_acceleration")) < 1e-4
+    )
+    ds = verify(scene, horizon=1e-3, steps=(1e-6, 5e-7), record_dt=1e-6)
+    ours = ds.sel(run="workbench", joint="B")
+    finest = ds.sel(run="exudyn h=5e-07", joint="B")
+    assert 1e-4 < float(ours.first_impact_time) < 1e-3
+    np.testing.assert_allclose(finest.first_impact_time, ours.first_impact_time, rtol=0.01)
+    np.testing.assert_allclose(finest.first_impact_force, ours.first_impact_force, rtol=0.05)

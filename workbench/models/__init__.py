@@ -41,4 +41,11 @@ def get_model(name: str) -> Model:
 
 
 def _load_builtin() -> None:
-    from workbench.models import bouncing_ball, duffing, free_journal, lorenz, ninebar  # noqa: F401
+    from workbench.models import (  # noqa: F401
+        bouncing_ball,
+        duffing,
+        free_journal,
+        lorenz,
+        ninebar,
+        slider_crank,
+    )

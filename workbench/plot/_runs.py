@@ -67,6 +67,8 @@ def run_figures(ds: xr.Dataset, directory: Path) -> list[Path]:
     model = ds.attrs.get("model")
     if model == "ninebar":
         import workbench.plot._ninebar  # noqa: F401  (registers the overview)
+    elif model == "slider_crank":
+        import workbench.plot._slider_crank  # noqa: F401  (registers the overview)
     if model in _OVERVIEWS:
         figures["overview"] = _OVERVIEWS[model](ds)
     for name, fig in figures.items():

@@ -5,6 +5,6 @@
 """
 
 from workbench.verify._compare import STATISTICS, verify
-from workbench.verify._ninebar_exudyn import run_ninebar_exudyn
+from workbench.verify._exudyn import MECHANISMS, run_exudyn
 
-__all__ = ["STATISTICS", "run_ninebar_exudyn", "verify"]
+__all__ = ["MECHANISMS", "STATISTICS", "run_exudyn", "verify"]

@@ -35,12 +35,12 @@ def register_cli(sub) -> None:
     p = sub.add_parser(
         "verify",
         help="compare a scene with the exudyn multibody engine (extra 'verify')",
-        description="Run a nine-bar scene in the workbench and in exudyn (fixed-step "
-        "generalised-alpha at several steps) and compare torques, slider kinematics, first "
-        "impacts and chaos-robust statistics; write the comparison as netCDF and an overlay "
-        "figure beside it.",
+        description="Run a mechanism scene (ninebar, slider_crank) in the workbench and in "
+        "exudyn (fixed-step generalised-alpha at several steps) and compare torques, slider "
+        "kinematics, first impacts and chaos-robust statistics; write the comparison as netCDF "
+        "and an overlay figure beside it.",
     )
-    p.add_argument("scene", help="scene file (TOML), model 'ninebar'")
+    p.add_argument("scene", help="scene file (TOML), model 'ninebar' or 'slider_crank'")
     p.add_argument("-o", "--output", required=True, help="netCDF file (the figure goes beside it)")
     p.add_argument("--horizon", type=float, help="simulated time from t = 0, s (default 1 cycle)")
     p.add_argument(

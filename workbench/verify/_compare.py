@@ -24,7 +24,7 @@ import xarray as xr
 
 from workbench._scene import Scene, load_scene
 from workbench.solver import simulate
-from workbench.verify._ninebar_exudyn import run_ninebar_exudyn
+from workbench.verify._exudyn import run_exudyn
 
 _SERIES = (
     "torque",
@@ -89,13 +89,13 @@ def verify(
     rtol: float = 1e-10,
     spectral_radius: float = 0.6,
 ) -> xr.Dataset:
-    """Compare a nine-bar scene between the workbench and exudyn.
+    """Compare a mechanism scene between the workbench and exudyn.
 
     Parameters
     ----------
     scene : Scene or path
-        A ``ninebar`` scene with friction "none" or "coulomb" (see
-        :mod:`workbench.verify._ninebar_exudyn` for what each side models).
+        A ``ninebar`` or ``slider_crank`` scene with friction "none" or "coulomb" (see
+        :mod:`workbench.verify._exudyn` for what each side models).
     horizon : float, optional
         Simulated time from t = 0, s (default: one crank period).
     steps : sequence of float
@@ -106,7 +106,7 @@ def verify(
     rtol : float
         The workbench's tolerance (rtol = atol, scaled as in the scene).
     spectral_radius : float
-        Numerical damping of exudyn's generalised-alpha (see :func:`run_ninebar_exudyn`).
+        Numerical damping of exudyn's generalised-alpha (see :func:`run_exudyn`).
 
     Returns
     -------
@@ -153,7 +153,7 @@ def verify(
     ours = simulate(ours_scene)
     runs = [ours[variables].assign_attrs(wall_time=ours.attrs["solver_wall_time"])]
     for h in steps:
-        ex = run_ninebar_exudyn(
+        ex = run_exudyn(
             scene, t_end=horizon, step=h, record_dt=record_dt, spectral_radius=spectral_radius
         )
         n = min(ex.sizes["time"], ours.sizes["time"])

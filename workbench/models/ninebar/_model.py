@@ -6,10 +6,20 @@ import math
 
 import numpy as np
 
-from workbench._errors import SceneError, SolverError
+from workbench._errors import SolverError
 from workbench.models import register
 from workbench.models._base import Effect, Model, Parameter, Problem, Quantity
-from workbench.models.contact import hertz_internal_stiffness
+from workbench.models._clearance import (
+    FRICTION_CODES,
+    FRICTION_EFFECT,
+    contact_parameters,
+    energy_outputs,
+    friction_block,
+    joint_outputs,
+    validate_joint,
+)
+from workbench.models._clearance import stiffness as joint_stiffness
+from workbench.models._reduced import N_FP
 from workbench.models.ninebar import _dynamics as dyn
 from workbench.models.ninebar._geometry import (
     BODY_NAMES,
@@ -82,61 +92,9 @@ def _parameters() -> tuple[Parameter, ...]:
             "rad",
             "direction of gravity, counter-clockwise from +X (pi: along -X, Eq. 17)",
         ),
-        Parameter("clearance", 0.5e-3, "m", "radial clearance c of both joints", **pos),
         Parameter("clearance_A", 0.0, "m", "clearance of joint A (0: use clearance)", lower=0.0),
         Parameter("clearance_B", 0.0, "m", "clearance of joint B (0: use clearance)", lower=0.0),
-        Parameter("bearing_radius", 10.0e-3, "m", "bearing radius R1", **pos),
-        Parameter("youngs_modulus", 207e9, "Pa", "Young's modulus of journal and bearing", **pos),
-        Parameter(
-            "poisson_ratio",
-            0.3,
-            "1",
-            "Poisson's ratio of journal and bearing",
-            lower=0.0,
-            upper=0.5,
-            upper_open=True,
-        ),
-        Parameter(
-            "contact_stiffness",
-            0.0,
-            "N m-1.5",
-            "contact stiffness K (0: from Eq. 4 for each joint)",
-            lower=0.0,
-        ),
-        Parameter("contact_exponent", 1.5, "1", "exponent n of the contact law", **pos),
-        Parameter(
-            "restitution",
-            0.9,
-            "1",
-            "coefficient of restitution c_e",
-            lower=0.0,
-            upper=1.0,
-            lower_open=True,
-        ),
-        Parameter(
-            "impact_velocity_floor",
-            1e-4,
-            "m s-1",
-            "floor of the onset velocity in the LN damping (grazing contact)",
-            **pos,
-        ),
-        Parameter(
-            "max_penetration",
-            1e-4,
-            "m",
-            "penetration beyond which a run fails (Hertz contact is invalid)",
-            **pos,
-        ),
-        Parameter("friction_coefficient", 0.05, "1", "Coulomb friction coefficient c_f", lower=0.0),
-        Parameter("coulomb_v0", 1e-4, "m s-1", "sliding speed below which c_d = 0", lower=0.0),
-        Parameter("coulomb_v1", 1e-3, "m s-1", "sliding speed above which c_d = 1", **pos),
-        Parameter("lugre_mu_k", 0.05, "1", "LuGre kinetic friction coefficient", lower=0.0),
-        Parameter("lugre_mu_s", 0.15, "1", "LuGre static friction coefficient", lower=0.0),
-        Parameter("lugre_sigma0", 1e5, "m-1", "LuGre bristle stiffness (normalised)", **pos),
-        Parameter("lugre_sigma1", 316.2, "s m-1", "LuGre bristle damping (normalised)", lower=0.0),
-        Parameter("lugre_sigma2", 0.4, "s m-1", "LuGre viscous friction (normalised)", lower=0.0),
-        Parameter("lugre_stribeck_velocity", 1e-3, "m s-1", "LuGre Stribeck velocity v_s", **pos),
-        Parameter("lugre_stribeck_exponent", 2.0, "1", "LuGre Stribeck exponent", **pos),
+        *contact_parameters(clearance=0.5e-3, friction_coefficient=0.05),
     ]
     return tuple(out)
 
@@ -157,13 +115,7 @@ class NineBar(Model):
     parameters = _parameters()
     effects = (
         Effect("clearance", ("A", "B"), "subset", "joints with a radial clearance", JOINTS),
-        Effect(
-            "friction",
-            "coulomb",
-            "choice",
-            "friction law in the clearance joints",
-            ("none", "coulomb", "lugre"),
-        ),
+        FRICTION_EFFECT,
         Effect("gravity", True, "bool", "apply gravity"),
     )
 
@@ -189,21 +141,7 @@ class NineBar(Model):
 
     def outputs(self, effects):
         joints = bool(effects["clearance"])
-        jd = ("joint",)
-        out = []
-        if joints:
-            out += [
-                Quantity("clearance_x", "m", "journal centre relative to bearing centre, x", jd),
-                Quantity("clearance_y", "m", "journal centre relative to bearing centre, y", jd),
-                Quantity("clearance_vx", "m s-1", "rate of the clearance vector, x", jd),
-                Quantity("clearance_vy", "m s-1", "rate of the clearance vector, y", jd),
-                Quantity("eccentricity", "m", "eccentricity of the journal", jd),
-                Quantity("penetration", "m", "penetration depth max(e - c, 0)", jd),
-                Quantity("contact_force", "N", "normal contact force", jd),
-                Quantity("friction_force", "N", "friction force on the journal along t", jd),
-            ]
-            if effects["friction"] == "lugre":
-                out.append(Quantity("lugre_z", "m", "LuGre bristle deflection", jd))
+        out = joint_outputs(effects) if joints else []
         out += [
             Quantity("torque", "N m", "driving torque", ("crank",)),
             Quantity("slider_position", "m", "slider displacement S9"),
@@ -213,14 +151,7 @@ class NineBar(Model):
             Quantity("potential_energy", "J", "gravity and contact elastic potential energy"),
         ]
         if joints:
-            out += [
-                Quantity("driver_work", "J", "work of the driving torques since record start"),
-                Quantity(
-                    "dissipated_energy",
-                    "J",
-                    "energy dissipated by contact damping and friction since record start",
-                ),
-            ]
+            out += energy_outputs()
         return tuple(out)
 
     def variables(self, effects):
@@ -244,18 +175,7 @@ class NineBar(Model):
             key = (
                 f"parameters.clearance_{j}" if params[f"clearance_{j}"] else "parameters.clearance"
             )
-            if not c < params["bearing_radius"]:
-                raise SceneError(
-                    key,
-                    f"got {c!r} m; a clearance must be smaller than the "
-                    f"bearing radius {params['bearing_radius']!r} m",
-                )
-        if params["coulomb_v1"] <= params["coulomb_v0"]:
-            raise SceneError(
-                "parameters.coulomb_v1",
-                f"got {params['coulomb_v1']!r}; must "
-                f"exceed coulomb_v0 = {params['coulomb_v0']!r} m s-1",
-            )
+            validate_joint(params, c, key)
 
     # -- building ------------------------------------------------------------------------------
     def problem(self, params, effects, initial, requested):
@@ -286,9 +206,7 @@ class NineBar(Model):
         for j, (name, c) in enumerate(self.clearances(params).items()):
             base = dyn.P_JOINT + j * dyn.N_PJ
             r1 = params["bearing_radius"]
-            k = params["contact_stiffness"] or hertz_internal_stiffness(
-                r1, c, params["youngs_modulus"], params["poisson_ratio"]
-            )
+            k = joint_stiffness(params, c)
             stiffness[name] = k
             p[base + dyn.PJ_R1] = r1
             p[base + dyn.PJ_R2] = r1 - c
@@ -297,23 +215,14 @@ class NineBar(Model):
             p[base + dyn.PJ_N] = params["contact_exponent"]
             p[base + dyn.PJ_CE] = params["restitution"]
             p[base + dyn.PJ_DMAX] = params["max_penetration"]
-        p[dyn.P_CF] = params["friction_coefficient"]
-        p[dyn.P_V0] = params["coulomb_v0"]
-        p[dyn.P_V1] = params["coulomb_v1"]
-        p[dyn.P_MUK] = params["lugre_mu_k"]
-        p[dyn.P_MUS] = params["lugre_mu_s"]
-        p[dyn.P_S0] = params["lugre_sigma0"]
-        p[dyn.P_S1] = params["lugre_sigma1"]
-        p[dyn.P_S2] = params["lugre_sigma2"]
-        p[dyn.P_VS] = params["lugre_stribeck_velocity"]
-        p[dyn.P_GAM] = params["lugre_stribeck_exponent"]
+        p[dyn.P_CF : dyn.P_CF + N_FP] = friction_block(params)
         p[dyn.P_VFLOOR] = params["impact_velocity_floor"]
 
         nf = 2 * len(joints)
         ip = np.full(dyn.N_IP, -1, np.int64)
         ip[dyn.IP_HAS] = int("A" in joints)
         ip[dyn.IP_HAS + 1] = int("B" in joints)
-        ip[dyn.IP_FRICTION] = {"none": 0, "coulomb": 1, "lugre": 2}[effects["friction"]]
+        ip[dyn.IP_FRICTION] = FRICTION_CODES[effects["friction"]]
         ip[dyn.IP_ENERGY] = int(energy)
         ip[dyn.IP_NF] = nf
         for i, j in enumerate(joints):

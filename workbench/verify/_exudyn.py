@@ -1,6 +1,6 @@
-"""The nine-bar mechanism rebuilt in exudyn (Gerstmayr 2023), an independent multibody engine.
+"""A workbench mechanism rebuilt in exudyn (Gerstmayr 2023), an independent multibody engine.
 
-Exudyn formulates the mechanism its own way: eight planar rigid bodies in absolute coordinates
+Exudyn formulates the mechanism its own way: planar rigid bodies in absolute coordinates
 (x, y, phi of each centroid), ideal revolute and prismatic joints as algebraic constraints, the
 cranks driven by rheonomic coordinate constraints whose Lagrange multipliers are the driving
 torques, and the clearance joints as its C++ journal-in-hole contact
@@ -18,48 +18,63 @@ both sides integrate the same force law. ``minimumImpactVelocity`` is the workbe
 
 Friction. Exudyn's contact friction is a Coulomb law regularised linearly below
 ``frictionProportionalZone`` (m/s); the workbench's modified Coulomb law (Ambrosio 2002) has no
-friction below v0 and a cubic ramp up to v1. With ``friction = "coulomb"`` the comparison sets the
+friction below v0 and a linear ramp up to v1. With ``friction = "coulomb"`` the comparison sets the
 regularisation zone to v1: the two laws agree outside (0, v1) only, which matters in stick-slip
 but hardly at impacts. LuGre has no exudyn counterpart and is refused.
+
+Each model describes itself as a :class:`Mechanism` (bodies with their initial placement,
+joints, drives, clearance joints, the slider); :func:`run_exudyn` builds and runs any of them.
 """
 
 from __future__ import annotations
 
 import math
 import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from workbench._scene import Scene
-from workbench.models.contact import hertz_internal_stiffness
-from workbench.models.ninebar._dynamics import N_GEO
-from workbench.models.ninebar._geometry import BODY_NAMES
-from workbench.models.ninebar._kinematics import (
-    CRANK1,
-    CRANK4,
-    G_L5,
-    G_O6X,
-    G_O6Y,
-    G_S0,
-    LINK2,
-    LINK3,
-    LINK8,
-    N_POINTS,
-    PANEL7,
-    PT_A,
-    PT_B,
-    PT_C,
-    PT_D,
-    PT_E,
-    PT_P,
-    ROCKER6,
-    SLIDER9,
-    jacobian,
-    positions,
-)
-from workbench.models.ninebar._model import JOINTS, NineBar
+from workbench.models import get_model
+from workbench.models._clearance import stiffness as joint_stiffness
+
+Point = tuple[float, float]
+
+
+@dataclass
+class Body:
+    """A planar rigid body: mass (kg), centroidal inertia (kg m2), initial centroid placement
+    (x, y, phi) (m, m, rad) and its rates (m s-1, m s-1, rad s-1)."""
+
+    name: str
+    mass: float
+    inertia: float
+    placement: tuple[float, float, float]
+    rates: tuple[float, float, float]
+
+
+@dataclass
+class Mechanism:
+    """A mechanism as exudyn sees it. Bodies are indices into ``bodies``; None is the ground.
+
+    ``revolutes``: ideal pins (body0, body1, point); ``clearances``: joint name -> (bearing
+    body, journal body, point, clearance m), ideal pins when the scene has no clearance there;
+    ``drives``: (body, angular rate rad s-1) per driven crank, in the order of the ``crank``
+    coordinate; ``slider``: the body on the guide (the x axis of its initial placement) and the
+    map x_body -> slider position (m).
+    """
+
+    bodies: list[Body]
+    revolutes: list[tuple[int | None, int, Point]]
+    clearances: dict[str, tuple[int, int, Point, float]]
+    drives: list[tuple[int, float]]
+    slider: int
+    slider_position: Callable[[np.ndarray], np.ndarray]
+    slider_sign: float
+    cranks: list[str] = field(default_factory=lambda: ["1"])
 
 
 def _import_exudyn():
@@ -79,7 +94,125 @@ def _rotate(phi: float, x: float, y: float) -> tuple[float, float]:
     return c * x - s * y, s * x + c * y
 
 
-def run_ninebar_exudyn(
+def ninebar_mechanism(scene: Scene) -> Mechanism:
+    """The nine-bar mechanism at t = 0 (placement from the workbench's position analysis)."""
+    from workbench.models.ninebar._dynamics import N_GEO
+    from workbench.models.ninebar._geometry import BODY_NAMES
+    from workbench.models.ninebar._kinematics import (
+        CRANK1,
+        CRANK4,
+        G_L5,
+        G_O6X,
+        G_O6Y,
+        G_S0,
+        LINK2,
+        LINK3,
+        LINK8,
+        N_POINTS,
+        PANEL7,
+        PT_A,
+        PT_B,
+        PT_C,
+        PT_D,
+        PT_E,
+        PT_P,
+        ROCKER6,
+        SLIDER9,
+        jacobian,
+        positions,
+    )
+
+    params = scene.resolved_parameters
+    model = get_model("ninebar")
+    geo = model.problem(params, scene.effects, {}, ("torque",)).p[:N_GEO]
+    omega = params["omega"]
+    q = np.array([params["theta10"], params["theta40"], 0.0, 0.0, 0.0, 0.0])
+    qd = np.array([-omega, omega, 0.0, 0.0, 0.0, 0.0])
+    pos = np.empty((8, 3))
+    pts = np.empty((N_POINTS, 2))
+    J = np.empty((8, 3, 6))
+    Jp = np.empty((N_POINTS, 2, 6))
+    if positions(q, geo, pos, pts) or jacobian(q, geo, J, Jp):
+        raise ValueError("the nine-bar mechanism does not assemble at its initial angles")
+    vel = J @ qd
+    bodies = [
+        Body(
+            name,
+            params[f"mass_{name}"],
+            params.get(f"inertia_{name}", 0.0) or 1e-6,  # the slider's rotation is locked
+            tuple(pos[b]),
+            tuple(vel[b]),
+        )
+        for b, name in enumerate(BODY_NAMES)
+    ]
+    A, B, P, C, D, E = (tuple(pts[i]) for i in (PT_A, PT_B, PT_P, PT_C, PT_D, PT_E))
+    o6 = (float(geo[G_O6X]), float(geo[G_O6Y]))
+    clearances = model.clearances(params)
+    s0 = float(geo[G_S0])
+    return Mechanism(
+        bodies=bodies,
+        revolutes=[
+            (None, CRANK1, (0.0, 0.0)),
+            (None, CRANK4, (float(geo[G_L5]), 0.0)),
+            (LINK2, LINK3, P),
+            (LINK2, PANEL7, P),
+            (None, ROCKER6, o6),
+            (ROCKER6, PANEL7, C),
+            (PANEL7, LINK8, D),
+            (LINK8, SLIDER9, E),
+        ],
+        clearances={
+            "A": (CRANK1, LINK2, A, clearances["A"]),
+            "B": (CRANK4, LINK3, B, clearances["B"]),
+        },
+        drives=[(CRANK1, -omega), (CRANK4, omega)],
+        slider=SLIDER9,
+        slider_position=lambda x: s0 - (x - o6[0]),  # S9 = S0 - (x_E - x_O6)
+        slider_sign=-1.0,
+        cranks=["1", "4"],
+    )
+
+
+def slider_crank_mechanism(scene: Scene) -> Mechanism:
+    """The slider-crank at t = 0: crank at theta10, rod on the +x branch, journal centred."""
+    params = scene.resolved_parameters
+    l1, l2 = params["crank_length"], params["rod_length"]
+    lc1, lc2 = params["crank_centroid"], params["rod_centroid"]
+    th1, w1 = params["theta10"], params["omega"]
+    c1, s1 = math.cos(th1), math.sin(th1)
+    s2 = -l1 * s1 / l2
+    c2 = math.sqrt(1.0 - s2 * s2)
+    w2 = -l1 * c1 * w1 / (l2 * c2)
+    a = (l1 * c1, l1 * s1)
+    va = (-l1 * s1 * w1, l1 * c1 * w1)
+    b = (a[0] + l2 * c2, 0.0)
+    vb = va[0] - l2 * s2 * w2
+    bodies = [
+        Body("crank", params["mass_crank"], params["inertia_crank"], (lc1 * c1, lc1 * s1, th1),
+             (-lc1 * s1 * w1, lc1 * c1 * w1, w1)),
+        Body("rod", params["mass_rod"], params["inertia_rod"],
+             (a[0] + lc2 * c2, a[1] + lc2 * s2, math.atan2(s2, c2)),
+             (va[0] - lc2 * s2 * w2, va[1] + lc2 * c2 * w2, w2)),
+        Body("slider", params["mass_slider"], 1e-6, (b[0], 0.0, 0.0), (vb, 0.0, 0.0)),
+    ]  # fmt: skip
+    return Mechanism(
+        bodies=bodies,
+        revolutes=[(None, 0, (0.0, 0.0)), (0, 1, a)],
+        clearances={"B": (2, 1, b, params["clearance"])},
+        drives=[(0, w1)],
+        slider=2,
+        slider_position=lambda x: x,
+        slider_sign=1.0,
+    )
+
+
+MECHANISMS: dict[str, Callable[[Scene], Mechanism]] = {
+    "ninebar": ninebar_mechanism,
+    "slider_crank": slider_crank_mechanism,
+}
+
+
+def run_exudyn(
     scene: Scene,
     *,
     t_end: float,
@@ -88,21 +221,22 @@ def run_ninebar_exudyn(
     spectral_radius: float = 0.6,
     newton: dict | None = None,
 ) -> xr.Dataset:
-    """Simulate a nine-bar scene in exudyn from t = 0 to ``t_end``.
+    """Simulate a scene of a mechanism model in exudyn from t = 0 to ``t_end``.
 
     Parameters
     ----------
     scene : Scene
-        A ``ninebar`` scene: its parameters, clearance joints, gravity and friction ("none" or
-        "coulomb") are rebuilt in exudyn; the run and record tables are not used.
+        A scene of a model in :data:`MECHANISMS` (``ninebar``, ``slider_crank``): its
+        parameters, clearance joints, gravity and friction ("none" or "coulomb") are rebuilt in
+        exudyn; the run and record tables are not used.
     t_end : float
         End time, s.
     step : float
         Fixed time step of the generalised-alpha integrator, s.
     record_dt : float
-        Output interval, s (a multiple of ``step``).
+        Output interval, s (a whole multiple of ``step``).
     spectral_radius : float
-        Numerical damping of generalised-alpha (1 = none, unstable for this index-3 system;
+        Numerical damping of generalised-alpha (1 = none, unstable for these index-3 systems;
         smaller values damp the start-up transient of the multipliers faster).
     newton : dict, optional
         Overrides of exudyn's ``timeIntegration.newton`` settings.
@@ -113,15 +247,19 @@ def run_ninebar_exudyn(
         Dim ``time`` (s) and, as the workbench names them, ``torque`` (N m, dims time, crank),
         ``slider_position``, ``slider_velocity``, ``slider_acceleration``, and with clearances
         ``clearance_x``, ``clearance_y`` (m), ``contact_force``, ``friction_force`` (N) (dims
-        time, joint). Attributes: ``engine``, ``step``, ``wall_time``, ``constraint_residual``.
+        time, joint). Attributes: ``engine``, ``step``, ``wall_time``, ``drive_angle_error``.
 
     Raises
     ------
     ValueError
-        For a scene of another model or with LuGre friction.
+        For a model without a :class:`Mechanism` description or with LuGre friction.
+    RuntimeError
+        Where exudyn's Newton iteration fails at this step.
     """
-    if scene.model != "ninebar":
-        raise ValueError(f"run_ninebar_exudyn needs a 'ninebar' scene; got {scene.model!r}")
+    if scene.model not in MECHANISMS:
+        raise ValueError(
+            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}"
+        )
     friction = scene.effects["friction"]
     if friction == "lugre":
         raise ValueError(
@@ -130,23 +268,8 @@ def run_ninebar_exudyn(
         )
     exu, it = _import_exudyn()
     params = scene.resolved_parameters
-    model = NineBar()
-    problem = model.problem(params, scene.effects, {}, ("torque",))
-    geo = problem.p[:N_GEO]  # the geometry heads the parameter array
+    mech = MECHANISMS[scene.model](scene)
     joints = tuple(scene.effects["clearance"])
-    omega = params["omega"]
-    th10, th40 = params["theta10"], params["theta40"]
-
-    # initial placement and body velocities (journals centred, zero relative velocity)
-    q = np.array([th10, th40, 0.0, 0.0, 0.0, 0.0])
-    qd = np.array([-omega, omega, 0.0, 0.0, 0.0, 0.0])
-    pos = np.empty((8, 3))
-    pts = np.empty((N_POINTS, 2))
-    J = np.empty((8, 3, 6))
-    Jp = np.empty((N_POINTS, 2, 6))
-    if positions(q, geo, pos, pts) or jacobian(q, geo, J, Jp):
-        raise ValueError("the nine-bar mechanism does not assemble at its initial angles")
-    vel = J @ qd
 
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
@@ -155,79 +278,58 @@ def run_ninebar_exudyn(
     gvec = [g * math.cos(params["gravity_angle"]), g * math.sin(params["gravity_angle"]), 0.0]
 
     nodes, bodies = [], []
-    for b, name in enumerate(BODY_NAMES):
-        inertia = params.get(f"inertia_{name}", 0.0) or 1e-6  # the slider's rotation is locked
+    for body in mech.bodies:
         n = mbs.AddNode(
             it.NodeRigidBody2D(
-                referenceCoordinates=[pos[b, 0], pos[b, 1], pos[b, 2]],
-                initialVelocities=[vel[b, 0], vel[b, 1], vel[b, 2]],
+                referenceCoordinates=list(body.placement), initialVelocities=list(body.rates)
             )
-        )
-        body = mbs.AddObject(
-            it.ObjectRigidBody2D(mass=params[f"mass_{name}"], inertia=inertia, nodeNumber=n)
         )
         nodes.append(n)
-        bodies.append(body)
+        bodies.append(
+            mbs.AddObject(it.ObjectRigidBody2D(mass=body.mass, inertia=body.inertia, nodeNumber=n))
+        )
         if g:
-            mass_marker = mbs.AddMarker(it.MarkerBodyMass(bodyNumber=body))
+            mass_marker = mbs.AddMarker(it.MarkerBodyMass(bodyNumber=bodies[-1]))
             mbs.AddLoad(it.LoadMassProportional(markerNumber=mass_marker, loadVector=gvec))
 
-    def local(b: int, point: tuple[float, float]) -> list[float]:
-        lx, ly = _rotate(-pos[b, 2], point[0] - pos[b, 0], point[1] - pos[b, 1])
+    def local(b: int, point: Point) -> list[float]:
+        x, y, phi = mech.bodies[b].placement
+        lx, ly = _rotate(-phi, point[0] - x, point[1] - y)
         return [lx, ly, 0.0]
 
-    def marker(b: int | None, point, rigid: bool = False) -> int:
-        if b is None:
-            return mbs.AddMarker(
-                it.MarkerBodyRigid(bodyNumber=ground, localPosition=[point[0], point[1], 0.0])
-                if rigid
-                else it.MarkerBodyPosition(
-                    bodyNumber=ground, localPosition=[point[0], point[1], 0.0]
-                )
-            )
+    def marker(b: int | None, point: Point, rigid: bool = False) -> int:
         cls = it.MarkerBodyRigid if rigid else it.MarkerBodyPosition
+        if b is None:
+            return mbs.AddMarker(cls(bodyNumber=ground, localPosition=[point[0], point[1], 0.0]))
         return mbs.AddMarker(cls(bodyNumber=bodies[b], localPosition=local(b, point)))
 
-    def revolute(b0: int | None, b1: int, point) -> None:
+    def revolute(b0: int | None, b1: int, point: Point) -> None:
         mbs.AddObject(
             it.ObjectJointRevolute2D(markerNumbers=[marker(b0, point), marker(b1, point)])
         )
 
-    O1 = (0.0, 0.0)
-    O4 = (float(geo[G_L5]), 0.0)
-    O6 = (float(geo[G_O6X]), float(geo[G_O6Y]))
-    A, B, P, C, D, E = (tuple(pts[i]) for i in (PT_A, PT_B, PT_P, PT_C, PT_D, PT_E))
-    revolute(None, CRANK1, O1)
-    revolute(None, CRANK4, O4)
-    revolute(LINK2, LINK3, P)
-    revolute(LINK2, PANEL7, P)
-    revolute(None, ROCKER6, O6)
-    revolute(ROCKER6, PANEL7, C)
-    revolute(PANEL7, LINK8, D)
-    revolute(LINK8, SLIDER9, E)
+    for b0, b1, point in mech.revolutes:
+        revolute(b0, b1, point)
+    slider_point = mech.bodies[mech.slider].placement[:2]
     mbs.AddObject(
         it.ObjectJointPrismatic2D(
-            markerNumbers=[marker(None, E, rigid=True), marker(SLIDER9, E, rigid=True)],
+            markerNumbers=[
+                marker(None, slider_point, rigid=True),
+                marker(mech.slider, slider_point, rigid=True),
+            ],
             axisMarker0=[1.0, 0.0, 0.0],
             normalMarker1=[0.0, 1.0, 0.0],
             constrainRotation=True,
         )
     )
 
-    # clearance joints: journal (link 2 / link 3) in the bearing (crank 1 / crank 4)
+    # clearance joints: journal in the bearing; ideal pins where the scene has no clearance
     contacts = {}
-    pairs = {"A": (CRANK1, LINK2, A), "B": (CRANK4, LINK3, B)}
-    clearances = model.clearances(params)
-    for j in JOINTS:
-        bearing, journal, point = pairs[j]
+    for j, (bearing, journal, point, c) in mech.clearances.items():
         if j not in joints:
             revolute(bearing, journal, point)
             continue
-        c = clearances[j]
         r1 = params["bearing_radius"]
-        k = params["contact_stiffness"] or hertz_internal_stiffness(
-            r1, c, params["youngs_modulus"], params["poisson_ratio"]
-        )
         data = mbs.AddNode(
             it.NodeGenericData(numberOfDataCoordinates=4, initialCoordinates=[0.0] * 4)
         )
@@ -241,7 +343,7 @@ def run_ninebar_exudyn(
                     nodeNumber=data,
                     spheresRadii=[r1 - c, r1],
                     isHollowSphere1=True,
-                    contactStiffness=k,
+                    contactStiffness=joint_stiffness(params, c),
                     contactStiffnessExponent=params["contact_exponent"],
                     restitutionCoefficient=(1.0 + params["restitution"] ** 2) / 2.0,
                     impactModel=1,
@@ -260,7 +362,7 @@ def run_ninebar_exudyn(
     ground_node = mbs.AddNode(it.NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
     m_ground = mbs.AddMarker(it.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
     drives = []
-    for b, rate in ((CRANK1, -omega), (CRANK4, omega)):
+    for b, rate in mech.drives:
         m_angle = mbs.AddMarker(it.MarkerNodeCoordinate(nodeNumber=nodes[b], coordinate=2))
 
         def offset(mbs_, t, item, l_offset, rate=rate):
@@ -289,21 +391,23 @@ def run_ninebar_exudyn(
                     nodeNumber=nodes[b], outputVariableType=out.Coordinates, storeInternal=True
                 )
             )
-            for b in (CRANK1, CRANK4)
+            for b, _ in mech.drives
         ],
         "slider_x": mbs.AddSensor(
             it.SensorNode(
-                nodeNumber=nodes[SLIDER9], outputVariableType=out.Position, storeInternal=True
+                nodeNumber=nodes[mech.slider], outputVariableType=out.Position, storeInternal=True
             )
         ),
         "slider_v": mbs.AddSensor(
             it.SensorNode(
-                nodeNumber=nodes[SLIDER9], outputVariableType=out.Velocity, storeInternal=True
+                nodeNumber=nodes[mech.slider], outputVariableType=out.Velocity, storeInternal=True
             )
         ),
         "slider_a": mbs.AddSensor(
             it.SensorNode(
-                nodeNumber=nodes[SLIDER9], outputVariableType=out.Acceleration, storeInternal=True
+                nodeNumber=nodes[mech.slider],
+                outputVariableType=out.Acceleration,
+                storeInternal=True,
             )
         ),
     }
@@ -380,10 +484,10 @@ def run_ninebar_exudyn(
     def data(key):  # noqa: F811 - the records on the grid
         return mbs.GetSensorStoredData(key)[keep]
 
-    rates = (-omega, omega)
+    rates = [rate for _, rate in mech.drives]
     # the drive multiplier acts on the crank's angle coordinate; the torque the motor applies
     # to the crank (counter-clockwise positive) is its negative (the workbench's torques, which
-    # pass the energy balance of tests/test_ninebar*.py, agree with it record by record)
+    # pass their energy-balance tests, agree with it record by record)
     torque = np.stack([-data(s)[:, 1] for s in sensors["drive"]], axis=1)
     angle_error = max(
         float(np.max(np.abs(data(s)[:, 3] - r * t)))
@@ -394,23 +498,23 @@ def run_ninebar_exudyn(
         "torque": (("time", "crank"), torque, {"units": "N m", "long_name": "driving torque"}),
         "slider_position": (
             ("time",),
-            geo[G_S0] - (x_e - O6[0]),
-            {"units": "m", "long_name": "slider displacement S9"},
+            mech.slider_position(x_e),
+            {"units": "m", "long_name": "slider position"},
         ),
         "slider_velocity": (
             ("time",),
-            -data(sensors["slider_v"])[:, 1],
+            mech.slider_sign * data(sensors["slider_v"])[:, 1],
             {"units": "m s-1", "long_name": "slider velocity"},
         ),
         "slider_acceleration": (
             ("time",),
-            -data(sensors["slider_a"])[:, 1],
+            mech.slider_sign * data(sensors["slider_a"])[:, 1],
             {"units": "m s-2", "long_name": "slider acceleration"},
         ),
     }
     coords: dict[str, Any] = {
         "time": ("time", t, {"units": "s", "long_name": "time"}),
-        "crank": ("crank", ["1", "4"], {"units": "1", "long_name": "driven crank"}),
+        "crank": ("crank", mech.cranks, {"units": "1", "long_name": "driven crank"}),
     }
     if contacts:
         cx, cy, fn, ft = [], [], [], []

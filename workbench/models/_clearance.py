@@ -1,0 +1,174 @@
+"""Declarations shared by every mechanism with revolute clearance joints (Python side).
+
+The parameters of the contact law (Lankarani & Nikravesh 1990, stiffness from Hertz, Eq. 4 of
+Chen et al. 2019) and of the friction laws (modified Coulomb, Ambrosio 2003; LuGre, Canudas de
+Wit et al. 1995), the friction effect, the per-joint output variables, the cross-field checks and
+the packing of the compiled parameter blocks of :mod:`workbench.models._reduced`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from workbench._errors import SceneError
+from workbench.models._base import Effect, Parameter, Quantity
+from workbench.models._reduced import (
+    FP_CF,
+    FP_GAM,
+    FP_MUK,
+    FP_MUS,
+    FP_S0,
+    FP_S1,
+    FP_S2,
+    FP_V0,
+    FP_V1,
+    FP_VS,
+    N_FP,
+)
+from workbench.models.contact import hertz_internal_stiffness
+
+_POS = {"lower": 0.0, "lower_open": True}
+
+FRICTION_CODES = {"none": 0, "coulomb": 1, "lugre": 2}
+
+FRICTION_EFFECT = Effect(
+    "friction", "coulomb", "choice", "friction law in the clearance joints", tuple(FRICTION_CODES)
+)
+
+
+def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[Parameter, ...]:
+    """Parameters of the contact and friction laws, with the model's default clearance (m) and
+    Coulomb coefficient."""
+    return (
+        Parameter("clearance", clearance, "m", "radial clearance c of the joints", **_POS),
+        Parameter("bearing_radius", 10.0e-3, "m", "bearing radius R1", **_POS),
+        Parameter("youngs_modulus", 207e9, "Pa", "Young's modulus of journal and bearing", **_POS),
+        Parameter(
+            "poisson_ratio",
+            0.3,
+            "1",
+            "Poisson's ratio of journal and bearing",
+            lower=0.0,
+            upper=0.5,
+            upper_open=True,
+        ),
+        Parameter(
+            "contact_stiffness",
+            0.0,
+            "N m-1.5",
+            "contact stiffness K (0: from Eq. 4 for each joint)",
+            lower=0.0,
+        ),
+        Parameter("contact_exponent", 1.5, "1", "exponent n of the contact law", **_POS),
+        Parameter(
+            "restitution",
+            0.9,
+            "1",
+            "coefficient of restitution c_e",
+            lower=0.0,
+            upper=1.0,
+            lower_open=True,
+        ),
+        Parameter(
+            "impact_velocity_floor",
+            1e-4,
+            "m s-1",
+            "floor of the onset velocity in the LN damping (grazing contact)",
+            **_POS,
+        ),
+        Parameter(
+            "max_penetration",
+            1e-4,
+            "m",
+            "penetration beyond which a run fails (Hertz contact is invalid)",
+            **_POS,
+        ),
+        Parameter(
+            "friction_coefficient",
+            friction_coefficient,
+            "1",
+            "Coulomb friction coefficient c_f",
+            lower=0.0,
+        ),
+        Parameter("coulomb_v0", 1e-4, "m s-1", "sliding speed below which c_d = 0", lower=0.0),
+        Parameter("coulomb_v1", 1e-3, "m s-1", "sliding speed above which c_d = 1", **_POS),
+        Parameter("lugre_mu_k", 0.05, "1", "LuGre kinetic friction coefficient", lower=0.0),
+        Parameter("lugre_mu_s", 0.15, "1", "LuGre static friction coefficient", lower=0.0),
+        Parameter("lugre_sigma0", 1e5, "m-1", "LuGre bristle stiffness (normalised)", **_POS),
+        Parameter("lugre_sigma1", 316.2, "s m-1", "LuGre bristle damping (normalised)", lower=0.0),
+        Parameter("lugre_sigma2", 0.4, "s m-1", "LuGre viscous friction (normalised)", lower=0.0),
+        Parameter("lugre_stribeck_velocity", 1e-3, "m s-1", "LuGre Stribeck velocity v_s", **_POS),
+        Parameter("lugre_stribeck_exponent", 2.0, "1", "LuGre Stribeck exponent", **_POS),
+    )
+
+
+def joint_outputs(effects: Mapping[str, Any]) -> list[Quantity]:
+    """The per-joint output variables (dim ``joint``) of a mechanism with clearances."""
+    jd = ("joint",)
+    out = [
+        Quantity("clearance_x", "m", "journal centre relative to bearing centre, x", jd),
+        Quantity("clearance_y", "m", "journal centre relative to bearing centre, y", jd),
+        Quantity("clearance_vx", "m s-1", "rate of the clearance vector, x", jd),
+        Quantity("clearance_vy", "m s-1", "rate of the clearance vector, y", jd),
+        Quantity("eccentricity", "m", "eccentricity of the journal", jd),
+        Quantity("penetration", "m", "penetration depth max(e - c, 0)", jd),
+        Quantity("contact_force", "N", "normal contact force", jd),
+        Quantity("friction_force", "N", "friction force on the journal along t", jd),
+    ]
+    if effects["friction"] == "lugre":
+        out.append(Quantity("lugre_z", "m", "LuGre bristle deflection", jd))
+    return out
+
+
+def energy_outputs() -> list[Quantity]:
+    """Cumulative driver work and dissipation (J, since the record start)."""
+    return [
+        Quantity("driver_work", "J", "work of the driving torques since record start"),
+        Quantity(
+            "dissipated_energy",
+            "J",
+            "energy dissipated by contact damping and friction since record start",
+        ),
+    ]
+
+
+def validate_joint(params: Mapping[str, float], clearance: float, key: str) -> None:
+    """Cross-field checks of one joint's clearance (m) and of the friction parameters."""
+    if not clearance < params["bearing_radius"]:
+        raise SceneError(
+            key,
+            f"got {clearance!r} m; a clearance must be smaller than the "
+            f"bearing radius {params['bearing_radius']!r} m",
+        )
+    if params["coulomb_v1"] <= params["coulomb_v0"]:
+        raise SceneError(
+            "parameters.coulomb_v1",
+            f"got {params['coulomb_v1']!r}; must "
+            f"exceed coulomb_v0 = {params['coulomb_v0']!r} m s-1",
+        )
+
+
+def stiffness(params: Mapping[str, float], clearance: float) -> float:
+    """Contact stiffness K of a joint with this clearance (m): the scene's, or Hertz's, N m^-n."""
+    return params["contact_stiffness"] or hertz_internal_stiffness(
+        params["bearing_radius"], clearance, params["youngs_modulus"], params["poisson_ratio"]
+    )
+
+
+def friction_block(params: Mapping[str, float]) -> np.ndarray:
+    """The friction parameters in the FP_* layout of :mod:`workbench.models._reduced`."""
+    fp = np.zeros(N_FP)
+    fp[FP_CF] = params["friction_coefficient"]
+    fp[FP_V0] = params["coulomb_v0"]
+    fp[FP_V1] = params["coulomb_v1"]
+    fp[FP_MUK] = params["lugre_mu_k"]
+    fp[FP_MUS] = params["lugre_mu_s"]
+    fp[FP_S0] = params["lugre_sigma0"]
+    fp[FP_S1] = params["lugre_sigma1"]
+    fp[FP_S2] = params["lugre_sigma2"]
+    fp[FP_VS] = params["lugre_stribeck_velocity"]
+    fp[FP_GAM] = params["lugre_stribeck_exponent"]
+    return fp

@@ -1,0 +1,53 @@
+"""Overview figure of a slider-crank run, drawn as Flores et al. (2006) draw theirs: slider
+acceleration and crank moment against the crank angle, and the journal orbit in units of c."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import xarray as xr
+
+from workbench.plot._runs import axis_label, plt, register_overview
+
+
+def crank_angle_deg(ds: xr.Dataset) -> np.ndarray:
+    """Crank angle (deg) at the records: theta10 + omega t, from the run's stored scene."""
+    from workbench.models import get_model
+
+    params = get_model("slider_crank").default_parameters()
+    params.update(tomllib.loads(ds.attrs["scene"]).get("parameters", {}))
+    return np.degrees(params["theta10"] + params["omega"] * ds.time.values)
+
+
+@register_overview("slider_crank")
+def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
+    """Slider acceleration and crank moment against crank angle; the journal orbit (x/c, y/c)."""
+    angle = crank_angle_deg(ds)
+    has_joint = "clearance_x" in ds
+    fig, axes = plt.subplots(1, 3 if has_joint else 2, figsize=(15 if has_joint else 10, 4.2))
+    axes[0].plot(angle, ds.slider_acceleration, lw=0.7)
+    axes[0].set_ylabel(axis_label(ds.slider_acceleration))
+    axes[1].plot(angle, ds.torque.sel(crank="1"), lw=0.7)
+    axes[1].set_ylabel("crank moment [N m]")
+    for ax in axes[:2]:
+        ax.set_xlabel("crank angle [deg]")
+        ax.grid(alpha=0.3)
+    if has_joint:
+        from workbench.models import get_model
+
+        params = get_model("slider_crank").default_parameters()
+        params.update(tomllib.loads(ds.attrs["scene"]).get("parameters", {}))
+        c = params["clearance"]
+        theta = np.linspace(0, 2 * np.pi, 200)
+        ax = axes[2]
+        ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.8, label="e = c")
+        ax.plot(ds.clearance_x.sel(joint="B") / c, ds.clearance_y.sel(joint="B") / c, lw=0.5)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x / c [1]")
+        ax.set_ylabel("y / c [1]")
+        ax.set_title(f"journal centre in the slider's bearing (c = {c * 1e3:g} mm)", fontsize=9)
+        ax.legend(fontsize=7, loc="upper right")
+    fig.suptitle(ds.attrs.get("title", "slider-crank run"), fontsize=10)
+    fig.tight_layout()
+    return fig
