@@ -85,7 +85,7 @@ def write_report(
             continue
         s = json.loads(f.read_text())
         lines += [
-            f"## Sec. {s['section']}, Figs. {s['paper_figures']}: {s['title']}",
+            f"## Sec. {s['section']}, {_figures_label(s['paper_figures'])}: {s['title']}",
             "",
         ]
         if s.get("quick"):
@@ -146,3 +146,8 @@ def write_report(
         _CAUSES,
     ]
     return write_text_atomic(path, "\n".join(lines))
+
+
+def _figures_label(figures: str) -> str:
+    """'Fig. 31' for one figure, 'Figs. 4-9' for several."""
+    return f"Figs. {figures}" if any(ch in str(figures) for ch in "-,") else f"Fig. {figures}"
