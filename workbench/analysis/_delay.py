@@ -12,13 +12,30 @@ __all__ = ["delay_ami", "delay_acf", "mutual_information"]
 
 
 def mutual_information(x: np.ndarray, lag: int, bins: int) -> float:
-    """Average mutual information (nats) between x(t) and x(t + lag) from a 2-D histogram."""
-    a, b = x[:-lag] if lag else x, x[lag:]
-    joint, _, _ = np.histogram2d(a, b, bins=bins)
-    pxy = joint / joint.sum()
-    px, py = pxy.sum(axis=1), pxy.sum(axis=0)
-    nz = pxy > 0
-    return float(np.sum(pxy[nz] * np.log(pxy[nz] / np.outer(px, py)[nz])))
+    """Average mutual information (nats) between x(t) and x(t + lag) from a 2-D histogram of
+    ``bins`` equal cells over the range of x (one partition for both, Fraser & Swinney 1986)."""
+    return float(_ami_curve(_cells(x, bins), np.array([lag]), bins)[0])
+
+
+def _cells(x: np.ndarray, bins: int) -> np.ndarray:
+    """Index (0..bins-1) of the equal-width cell over [min x, max x] of every sample."""
+    lo, hi = float(np.min(x)), float(np.max(x))
+    width = (hi - lo) / bins or 1.0
+    return np.minimum(((x - lo) / width).astype(np.int64), bins - 1)
+
+
+def _ami_curve(cells: np.ndarray, lags: np.ndarray, bins: int) -> np.ndarray:
+    """AMI (nats) at each lag from the samples' cell indices (joint counts by bincount)."""
+    out = np.empty(lags.size)
+    for i, lag in enumerate(lags):
+        a = cells[: cells.size - lag]
+        b = cells[lag:]
+        joint = np.bincount(a * bins + b, minlength=bins * bins).reshape(bins, bins)
+        pxy = joint / a.size
+        px, py = pxy.sum(axis=1), pxy.sum(axis=0)
+        nz = pxy > 0
+        out[i] = np.sum(pxy[nz] * np.log(pxy[nz] / np.outer(px, py)[nz]))
+    return out
 
 
 def delay_ami(x, *, dt: float | None = None, max_lag: int | None = None, bins: int | None = None):
@@ -57,7 +74,7 @@ def delay_ami(x, *, dt: float | None = None, max_lag: int | None = None, bins: i
     max_lag = max_lag or max(n // 10, 2)
     bins = bins or int(np.clip(np.sqrt(n / 5), 16, 128))
     lags = np.arange(max_lag + 1)
-    ami = np.array([mutual_information(s.values, int(k), bins) for k in lags])
+    ami = _ami_curve(_cells(s.values, bins), lags, bins)
     minima = np.flatnonzero((ami[1:-1] < ami[:-2]) & (ami[1:-1] <= ami[2:])) + 1
     found = minima.size > 0
     if found:

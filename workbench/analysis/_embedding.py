@@ -36,7 +36,7 @@ def nearest_neighbours(Y: np.ndarray, theiler: int, p: float = 2) -> tuple[np.nd
     todo = np.arange(n)
     while todo.size:
         kk = min(k, n)
-        d, j = tree.query(Y[todo], k=kk, p=p)
+        d, j = tree.query(Y[todo], k=kk, p=p, workers=-1)
         ok = np.abs(j - todo[:, None]) > theiler
         ok &= d > 0
         has = ok.any(axis=1)

@@ -138,7 +138,7 @@ def wolf_lle(
         chosen.append("delay")
     # Cao's E2 stays near 1 at every dimension for a stochastic series (Cao 1997): such a
     # series gets a positive "LLE" from any estimator, which is no evidence of chaos
-    e2 = embedding_cao(v[: min(v.size, 20000)], delay=delay, max_dim=6).E2.values
+    e2 = embedding_cao(v[: min(v.size, 20000)], delay=delay, max_dim=4).E2.values
     stochastic = bool(np.all(np.abs(e2 - 1.0) < 0.1))
     if dim is None:
         dim = int(embedding_fnn(v, delay=delay).dim)
@@ -291,7 +291,7 @@ def wolf_lle(
             "stochastic": (
                 (),
                 int(stochastic),
-                {"units": "1", "long_name": "Cao's E2 within 0.1 of 1 for d = 1..6 (noise)"},
+                {"units": "1", "long_name": "Cao's E2 within 0.1 of 1 for d = 1..4 (noise)"},
             ),
             "delay": ((), delay, {"units": "1", "long_name": "delay (samples)"}),
             "evolve": ((), evolve, {"units": "1", "long_name": "evolution time (samples)"}),
