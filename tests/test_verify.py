@@ -91,3 +91,22 @@ def test_slider_crank_ideal_and_first_impact_agree():
     assert 1e-4 < float(ours.first_impact_time) < 1e-3
     np.testing.assert_allclose(finest.first_impact_time, ours.first_impact_time, rtol=0.01)
     np.testing.assert_allclose(finest.first_impact_force, ours.first_impact_force, rtol=0.05)
+
+
+def test_refusals_name_the_problem(tmp_path):
+    from workbench.verify import run_exudyn
+
+    lugre = _scene(friction="lugre")
+    with pytest.raises(ValueError, match="effects.friction = 'lugre'"):
+        run_exudyn(lugre, t_end=1e-3, step=1e-4, record_dt=1e-4)
+    duffing = workbench.load_scene({"model": {"name": "duffing"}})
+    with pytest.raises(ValueError, match="knows the models"):
+        run_exudyn(duffing, t_end=1e-3, step=1e-4, record_dt=1e-4)
+    with pytest.raises(ValueError, match="whole multiple"):
+        verify(_scene(), horizon=1e-3, steps=(3e-6,), record_dt=1e-5)
+    # the command line prints the rule instead of a traceback
+    path = tmp_path / "lugre.toml"
+    path.write_text(lugre.to_toml())
+    from workbench.cli import main
+
+    assert main(["verify", str(path), "-o", str(tmp_path / "v.nc")]) == 2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -13,7 +14,11 @@ def _cmd_verify(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     steps = [float(h) for h in args.steps.split(",")]
-    ds = verify(scene, horizon=args.horizon, steps=steps, record_dt=args.record_dt)
+    try:
+        ds = verify(scene, horizon=args.horizon, steps=steps, record_dt=args.record_dt)
+    except (ValueError, RuntimeError, ImportError) as exc:
+        print(f"workbench verify: error: {exc}", file=sys.stderr)
+        return 2
     out = save_run(ds, args.output)
     print(f"verification -> {out}")
     figure = Path(args.output).with_suffix(".png")

@@ -24,7 +24,7 @@ import xarray as xr
 
 from workbench._scene import Scene, load_scene
 from workbench.solver import simulate
-from workbench.verify._exudyn import run_exudyn
+from workbench.verify._exudyn import check_scene, run_exudyn
 
 _SERIES = (
     "torque",
@@ -129,6 +129,7 @@ def verify(
         scene = load_scene(scene)
     if scene.sweep:
         raise ValueError("verify runs one scene; drop its [sweep] (scene.replace(sweep={}))")
+    check_scene(scene)  # before the workbench's own (possibly long) run
     steps = sorted((float(h) for h in steps), reverse=True)
     if not steps or min(steps) <= 0:
         raise ValueError(f"steps must be positive time steps in s; got {steps!r}")

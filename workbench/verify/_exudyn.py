@@ -212,6 +212,19 @@ MECHANISMS: dict[str, Callable[[Scene], Mechanism]] = {
 }
 
 
+def check_scene(scene: Scene) -> None:
+    """Raise ValueError unless exudyn can rebuild this scene (model and friction law)."""
+    if scene.model not in MECHANISMS:
+        raise ValueError(
+            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}"
+        )
+    if scene.effects["friction"] == "lugre":
+        raise ValueError(
+            "effects.friction = 'lugre' has no counterpart in exudyn's contact; verify a scene "
+            "with friction 'none' or 'coulomb'"
+        )
+
+
 def run_exudyn(
     scene: Scene,
     *,
@@ -256,16 +269,8 @@ def run_exudyn(
     RuntimeError
         Where exudyn's Newton iteration fails at this step.
     """
-    if scene.model not in MECHANISMS:
-        raise ValueError(
-            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}"
-        )
+    check_scene(scene)
     friction = scene.effects["friction"]
-    if friction == "lugre":
-        raise ValueError(
-            "effects.friction = 'lugre' has no counterpart in exudyn's contact; verify a scene "
-            "with friction 'none' or 'coulomb'"
-        )
     exu, it = _import_exudyn()
     params = scene.resolved_parameters
     mech = MECHANISMS[scene.model](scene)
