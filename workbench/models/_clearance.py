@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from workbench._errors import SceneError
+from workbench._errors import SceneError, SolverError
 from workbench.models._base import Effect, Parameter, Quantity
 from workbench.models._reduced import (
     FP_CF,
@@ -172,3 +172,70 @@ def friction_block(params: Mapping[str, float]) -> np.ndarray:
     fp[FP_VS] = params["lugre_stribeck_velocity"]
     fp[FP_GAM] = params["lugre_stribeck_exponent"]
     return fp
+
+
+def clearance_states(joints, friction: str) -> list[Quantity]:
+    """The integrated state of the clearance joints: every clearance vector (m), then every
+    rate (m s-1), then the LuGre bristle deflections (m) when friction is "lugre"."""
+    out = []
+    for j in joints:
+        out += [
+            Quantity(f"x_{j}", "m", f"clearance vector x at joint {j}"),
+            Quantity(f"y_{j}", "m", f"clearance vector y at joint {j}"),
+        ]
+    for j in joints:
+        out += [
+            Quantity(f"vx_{j}", "m s-1", f"clearance velocity x at joint {j}"),
+            Quantity(f"vy_{j}", "m s-1", f"clearance velocity y at joint {j}"),
+        ]
+    if friction == "lugre":
+        out += [Quantity(f"z_{j}", "m", f"LuGre bristle deflection at joint {j}") for j in joints]
+    return out
+
+
+# internal quadratures appended to the state when driver_work or dissipated_energy is requested
+ENERGY_STATES = (
+    Quantity("_driver_work", "J", "driver work since t0"),
+    Quantity("_dissipated", "J", "dissipated energy since t0"),
+)
+
+
+def mechanism_outputs(effects: Mapping[str, Any], slider: str) -> tuple[Quantity, ...]:
+    """Output variables of a crank-driven mechanism with a slider (``slider``: the long name
+    of its position) and clearance joints."""
+    joints = bool(effects["clearance"])
+    out = joint_outputs(effects) if joints else []
+    out += [
+        Quantity("torque", "N m", "driving torque", ("crank",)),
+        Quantity("slider_position", "m", slider),
+        Quantity("slider_velocity", "m s-1", "slider velocity"),
+        Quantity("slider_acceleration", "m s-2", "slider acceleration"),
+        Quantity("kinetic_energy", "J", "kinetic energy of the mechanism"),
+        Quantity("potential_energy", "J", "gravity and contact elastic potential energy"),
+    ]
+    if joints:
+        out += energy_outputs()
+    return tuple(out)
+
+
+def state_scales(states, clearance: float, omega: float) -> np.ndarray:
+    """Characteristic size of each state for the solver's atol: the clearance c (m) for
+    lengths, c omega (m s-1) for rates, 1 J for the energy quadratures."""
+    size = {"m": clearance, "m s-1": clearance * omega}
+    return np.array([size.get(q.units, 1.0) for q in states])
+
+
+def check_records(problem, t: np.ndarray, Y: np.ndarray, codes: np.ndarray) -> None:
+    """Raise SolverError at the first record whose model evaluation failed (``codes`` != 0):
+    the integrator accepted (or interpolated) a state the mechanism cannot take."""
+    if not codes.any():
+        return
+    bad = int(np.flatnonzero(codes)[0])
+    raise SolverError(
+        f"the record at t = {float(t[bad]):.9g} s is outside the model's domain: "
+        f"{problem.failure(int(codes[bad]))}; the solver's tolerance is too loose for this "
+        "scene (tighten solver.rtol/atol)",
+        time=float(t[bad]),
+        state={q.name: float(v) for q, v in zip(problem.states, Y[bad], strict=True)},
+        cause=f"model_{int(codes[bad])}",
+    )

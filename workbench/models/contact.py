@@ -28,7 +28,12 @@ import math
 
 from numba import njit
 
-__all__ = ["hertz_internal_stiffness", "lankarani_nikravesh", "contact_elastic_energy"]
+__all__ = [
+    "contact_elastic_energy",
+    "hertz_internal_stiffness",
+    "lankarani_nikravesh",
+    "onset_velocity",
+]
 
 
 def hertz_internal_stiffness(
@@ -86,3 +91,11 @@ def contact_elastic_energy(delta, K, n):
     if delta <= 0.0:
         return 0.0
     return K * delta ** (n + 1.0) / (n + 1.0)
+
+
+@njit(cache=True)
+def onset_velocity(x, y, vx, vy):
+    """Normal velocity (m s-1) held through a contact from its onset, for the clearance vector
+    (x, y) (m) and its rate (m s-1): at least 1e-300, so that "in contact" (aux > 0) holds even
+    for a grazing onset, where the impact-velocity floor of the LN damping then applies."""
+    return max((x * vx + y * vy) / math.sqrt(x * x + y * y), 1e-300)

@@ -16,7 +16,11 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import EVENT_INSIDE_STEP, Model, Parameter, Problem, Quantity
-from workbench.models.contact import hertz_internal_stiffness, lankarani_nikravesh
+from workbench.models.contact import (
+    hertz_internal_stiffness,
+    lankarani_nikravesh,
+    onset_velocity,
+)
 
 # p: mass, clearance, K, n, c_e, v_floor
 
@@ -53,8 +57,7 @@ def event_values(t, y, p, ip, aux, work, g):
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):
     if k == 0:
-        e = math.sqrt(y[0] * y[0] + y[1] * y[1])
-        aux[0] = max((y[0] * y[2] + y[1] * y[3]) / e, 1e-300)
+        aux[0] = onset_velocity(y[0], y[1], y[2], y[3])
         aux[1] = aux[0]
     else:
         aux[0] = 0.0

@@ -23,16 +23,19 @@ import math
 import numpy as np
 from numba import njit
 
-from workbench._errors import SceneError, SolverError
+from workbench._errors import SceneError
 from workbench.models import register
-from workbench.models._base import EVENT_INSIDE_STEP, Effect, Model, Parameter, Problem, Quantity
+from workbench.models._base import EVENT_INSIDE_STEP, Effect, Model, Parameter, Problem
 from workbench.models._clearance import (
+    ENERGY_STATES,
     FRICTION_CODES,
     FRICTION_EFFECT,
+    check_records,
+    clearance_states,
     contact_parameters,
-    energy_outputs,
     friction_block,
-    joint_outputs,
+    mechanism_outputs,
+    state_scales,
     validate_joint,
 )
 from workbench.models._clearance import stiffness as joint_stiffness
@@ -42,6 +45,7 @@ from workbench.models._reduced import (
     assemble,
     clearance_joint,
 )
+from workbench.models.contact import onset_velocity
 
 # -- float parameters p ------------------------------------------------------------------------
 P_L1, P_L2, P_LC1, P_LC2 = 0, 1, 2, 3  # crank, rod lengths; their centroid distances, m
@@ -222,8 +226,7 @@ def event_values(t, y, p, ip, aux, work, g):
 def apply_event(k, t, y, p, ip, aux, work):
     """Contact onset: hold the normal velocity (and reset the LuGre bristles); end: clear it."""
     if k == 0:
-        e = math.sqrt(y[0] * y[0] + y[1] * y[1])
-        aux[0] = max((y[0] * y[2] + y[1] * y[3]) / e, 1e-300)
+        aux[0] = onset_velocity(y[0], y[1], y[2], y[3])
         if ip[IP_FRICTION] == FRICTION_LUGRE:
             y[4] = 0.0
     else:
@@ -294,32 +297,10 @@ class SliderCrank(Model):
     )
 
     def states(self, effects):
-        if not effects["clearance"]:
-            return ()
-        out = [
-            Quantity("x_B", "m", "clearance vector x at joint B"),
-            Quantity("y_B", "m", "clearance vector y at joint B"),
-            Quantity("vx_B", "m s-1", "clearance velocity x at joint B"),
-            Quantity("vy_B", "m s-1", "clearance velocity y at joint B"),
-        ]
-        if effects["friction"] == "lugre":
-            out.append(Quantity("z_B", "m", "LuGre bristle deflection at joint B"))
-        return tuple(out)
+        return tuple(clearance_states(effects["clearance"], effects["friction"]))
 
     def outputs(self, effects):
-        joints = bool(effects["clearance"])
-        out = joint_outputs(effects) if joints else []
-        out += [
-            Quantity("torque", "N m", "driving torque", ("crank",)),
-            Quantity("slider_position", "m", "slider position s (pin B on the x axis)"),
-            Quantity("slider_velocity", "m s-1", "slider velocity"),
-            Quantity("slider_acceleration", "m s-2", "slider acceleration"),
-            Quantity("kinetic_energy", "J", "kinetic energy of the mechanism"),
-            Quantity("potential_energy", "J", "gravity and contact elastic potential energy"),
-        ]
-        if joints:
-            out += energy_outputs()
-        return tuple(out)
+        return mechanism_outputs(effects, "slider position s (pin B on the x axis)")
 
     def coords(self, effects):
         return {
@@ -345,15 +326,11 @@ class SliderCrank(Model):
 
     def problem(self, params, effects, initial, requested):
         has = bool(effects["clearance"])
-        lugre = effects["friction"] == "lugre"
         energy = has and ("driver_work" in requested or "dissipated_energy" in requested)
         states = list(self.states(effects))
         y0 = [float(initial.get(q.name, 0.0)) for q in states]
         if energy:
-            states += [
-                Quantity("_driver_work", "J", "driver work since t0"),
-                Quantity("_dissipated", "J", "dissipated energy since t0"),
-            ]
+            states += ENERGY_STATES
             y0 += [0.0, 0.0]
         c = params["clearance"]
         g = params["gravity"] if effects["gravity"] else 0.0
@@ -371,9 +348,6 @@ class SliderCrank(Model):
         p[P_DMAX], p[P_VFLOOR] = params["max_penetration"], params["impact_velocity_floor"]
         p[P_FRICTION : P_FRICTION + N_FP] = friction_block(params)
         ip = np.array([int(has), FRICTION_CODES[effects["friction"]], int(energy)], dtype=np.int64)
-        scale = [c, c, c * params["omega"], c * params["omega"]][: 4 if has else 0]
-        scale += [c] if lugre else []
-        scale += [1.0, 1.0] if energy else []  # the energy quadratures, J
         return Problem(
             hooks=__name__,
             states=tuple(states),
@@ -382,7 +356,7 @@ class SliderCrank(Model):
             ip=ip,
             aux0=np.zeros(1),
             event_direction=np.array([1, -1] if has else [], dtype=np.int64),
-            atol_scale=np.array(scale),
+            atol_scale=state_scales(states, c, params["omega"]),
             work_size=WORK_SIZE,
             failure=lambda code: _FAILURES.get(code, f"model failure code {code}"),
             data={"stiffness": {"B": k}, "joints": tuple(effects["clearance"])},
@@ -390,15 +364,7 @@ class SliderCrank(Model):
 
     def derive(self, problem, t, Y, AUX, requested):
         ws = np.empty((t.size, N_W))
-        codes = evaluate_many(t, Y, problem.p, problem.ip, AUX, ws)
-        if codes.any():
-            bad = int(np.flatnonzero(codes)[0])
-            raise SolverError(
-                f"the record at t = {float(t[bad]):.9g} s is outside the model's domain: "
-                f"{problem.failure(int(codes[bad]))}; tighten solver.rtol/atol",
-                time=float(t[bad]),
-                cause=f"model_{int(codes[bad])}",
-            )
+        check_records(problem, t, Y, evaluate_many(t, Y, problem.p, problem.ip, AUX, ws))
         out = {
             "torque": ws[:, W_TAU : W_TAU + 1],
             "slider_position": ws[:, W_S],

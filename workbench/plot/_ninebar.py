@@ -3,22 +3,16 @@ torques and slider acceleration."""
 
 from __future__ import annotations
 
-import tomllib
-
 import numpy as np
 import xarray as xr
 
-from workbench.plot._runs import axis_label, plt, register_overview
+from workbench.plot._runs import axis_label, plt, register_overview, run_parameters
 
 
 def _clearances(ds: xr.Dataset) -> dict[str, float]:
     from workbench.models import get_model
 
-    scene = tomllib.loads(ds.attrs["scene"])
-    model = get_model("ninebar")
-    params = model.default_parameters()
-    params.update(scene.get("parameters", {}))
-    return model.clearances(params)
+    return get_model("ninebar").clearances(run_parameters(ds))
 
 
 @register_overview("ninebar")

@@ -26,6 +26,15 @@ def register_overview(model: str):
     return deco
 
 
+def run_parameters(ds: xr.Dataset) -> dict[str, float]:
+    """The resolved parameters (model defaults and the scene's values, SI) of a stored run."""
+    import tomllib
+
+    from workbench import load_scene
+
+    return load_scene(tomllib.loads(ds.attrs["scene"])).resolved_parameters
+
+
 def axis_label(da: xr.DataArray) -> str:
     """``long_name [units]`` of a variable or coordinate."""
     name = da.attrs.get("long_name", da.name)

@@ -3,27 +3,22 @@ acceleration and crank moment against the crank angle, and the journal orbit in 
 
 from __future__ import annotations
 
-import tomllib
-
 import numpy as np
 import xarray as xr
 
-from workbench.plot._runs import axis_label, plt, register_overview
+from workbench.plot._runs import axis_label, plt, register_overview, run_parameters
 
 
-def crank_angle_deg(ds: xr.Dataset) -> np.ndarray:
-    """Crank angle (deg) at the records: theta10 + omega t, from the run's stored scene."""
-    from workbench.models import get_model
-
-    params = get_model("slider_crank").default_parameters()
-    params.update(tomllib.loads(ds.attrs["scene"]).get("parameters", {}))
+def crank_angle_deg(ds: xr.Dataset, params: dict[str, float]) -> np.ndarray:
+    """Crank angle (deg) at the records: theta10 + omega t."""
     return np.degrees(params["theta10"] + params["omega"] * ds.time.values)
 
 
 @register_overview("slider_crank")
 def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
     """Slider acceleration and crank moment against crank angle; the journal orbit (x/c, y/c)."""
-    angle = crank_angle_deg(ds)
+    params = run_parameters(ds)
+    angle = crank_angle_deg(ds, params)
     has_joint = "clearance_x" in ds
     fig, axes = plt.subplots(1, 3 if has_joint else 2, figsize=(15 if has_joint else 10, 4.2))
     axes[0].plot(angle, ds.slider_acceleration, lw=0.7)
@@ -34,10 +29,6 @@ def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
         ax.set_xlabel("crank angle [deg]")
         ax.grid(alpha=0.3)
     if has_joint:
-        from workbench.models import get_model
-
-        params = get_model("slider_crank").default_parameters()
-        params.update(tomllib.loads(ds.attrs["scene"]).get("parameters", {}))
         c = params["clearance"]
         theta = np.linspace(0, 2 * np.pi, 200)
         ax = axes[2]

@@ -470,12 +470,9 @@ def run_exudyn(
         ) from err
     wall = _time.perf_counter() - start
 
-    def data(key):
-        return mbs.GetSensorStoredData(key)
-
     # exudyn writes a record when its time passes a multiple of the write period; keep the
     # records that fall on the grid k * record_dt (to round-off) and put them exactly there
-    t_raw = data(sensors["drive"][0])[:, 0]
+    t_raw = mbs.GetSensorStoredData(sensors["drive"][0])[:, 0]
     k = np.round(t_raw / record_dt)
     keep = np.flatnonzero(np.abs(t_raw - k * record_dt) < 1e-3 * step)
     keep = keep[np.unique(k[keep], return_index=True)[1]]
@@ -486,7 +483,8 @@ def run_exudyn(
         )
     t = k[keep] * record_dt
 
-    def data(key):  # noqa: F811 - the records on the grid
+    def data(key):
+        """A sensor's records on the grid."""
         return mbs.GetSensorStoredData(key)[keep]
 
     rates = [rate for _, rate in mech.drives]

@@ -34,6 +34,7 @@ from workbench.models._reduced import (
     cholesky_solve,
     clearance_joint,
 )
+from workbench.models.contact import onset_velocity
 from workbench.models.ninebar._geometry import GEOMETRY_FIELDS
 from workbench.models.ninebar._kinematics import (
     N_POINTS,
@@ -318,13 +319,8 @@ def apply_event(k, t, y, p, ip, aux, work):
     # which joint does slot k belong to?
     j = 0 if (ip[IP_HAS] == 1 and k < 2) else 1
     slot = k - (k % 2)
-    x = y[slot]
-    yy = y[slot + 1]
-    e = math.sqrt(x * x + yy * yy)
     if k % 2 == 0:
-        aux[j] = max((x * y[nf + slot] + yy * y[nf + slot + 1]) / e, 0.0)
-        if aux[j] == 0.0:
-            aux[j] = 1e-300  # "in contact" with a zero onset velocity: the floor applies
+        aux[j] = onset_velocity(y[slot], y[slot + 1], y[nf + slot], y[nf + slot + 1])
         iz = ip[IP_Z + j]
         if iz >= 0:
             y[iz] = 0.0

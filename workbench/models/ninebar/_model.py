@@ -6,16 +6,18 @@ import math
 
 import numpy as np
 
-from workbench._errors import SolverError
 from workbench.models import register
-from workbench.models._base import Effect, Model, Parameter, Problem, Quantity
+from workbench.models._base import Effect, Model, Parameter, Problem
 from workbench.models._clearance import (
+    ENERGY_STATES,
     FRICTION_CODES,
     FRICTION_EFFECT,
+    check_records,
+    clearance_states,
     contact_parameters,
-    energy_outputs,
     friction_block,
-    joint_outputs,
+    mechanism_outputs,
+    state_scales,
     validate_joint,
 )
 from workbench.models._clearance import stiffness as joint_stiffness
@@ -121,38 +123,10 @@ class NineBar(Model):
 
     # -- declarations -------------------------------------------------------------------------
     def states(self, effects):
-        joints = effects["clearance"]
-        out = []
-        for j in joints:
-            out += [
-                Quantity(f"x_{j}", "m", f"clearance vector x at joint {j}"),
-                Quantity(f"y_{j}", "m", f"clearance vector y at joint {j}"),
-            ]
-        for j in joints:
-            out += [
-                Quantity(f"vx_{j}", "m s-1", f"clearance velocity x at joint {j}"),
-                Quantity(f"vy_{j}", "m s-1", f"clearance velocity y at joint {j}"),
-            ]
-        if effects["friction"] == "lugre":
-            out += [
-                Quantity(f"z_{j}", "m", f"LuGre bristle deflection at joint {j}") for j in joints
-            ]
-        return tuple(out)
+        return tuple(clearance_states(effects["clearance"], effects["friction"]))
 
     def outputs(self, effects):
-        joints = bool(effects["clearance"])
-        out = joint_outputs(effects) if joints else []
-        out += [
-            Quantity("torque", "N m", "driving torque", ("crank",)),
-            Quantity("slider_position", "m", "slider displacement S9"),
-            Quantity("slider_velocity", "m s-1", "slider velocity"),
-            Quantity("slider_acceleration", "m s-2", "slider acceleration"),
-            Quantity("kinetic_energy", "J", "kinetic energy of the mechanism"),
-            Quantity("potential_energy", "J", "gravity and contact elastic potential energy"),
-        ]
-        if joints:
-            out += energy_outputs()
-        return tuple(out)
+        return mechanism_outputs(effects, "slider displacement S9")
 
     def variables(self, effects):
         return {q.name: q for q in self.outputs(effects)}
@@ -185,10 +159,7 @@ class NineBar(Model):
         states = list(self.states(effects))
         y0 = [float(initial.get(q.name, 0.0)) for q in states]
         if energy:
-            states += [
-                Quantity("_driver_work", "J", "driver work since t0"),
-                Quantity("_dissipated", "J", "dissipated energy since t0"),
-            ]
+            states += ENERGY_STATES
             y0 += [0.0, 0.0]
         p = np.zeros(dyn.N_P)
         for i, f in enumerate(GEOMETRY_FIELDS):
@@ -234,14 +205,6 @@ class NineBar(Model):
         if energy:
             ip[dyn.IP_W] = 2 * nf + (len(joints) if lugre else 0)
         c_min = min(self.clearances(params)[j] for j in joints) if joints else 1.0
-        scale = []
-        for q in states:
-            if q.units == "m":
-                scale.append(c_min)
-            elif q.units == "m s-1":
-                scale.append(c_min * params["omega"])
-            else:
-                scale.append(1.0)  # the energy quadratures (driver work, dissipation), J
         codes = {
             dyn.CODE_ASSEMBLY: "the mechanism cannot be assembled at this configuration (a loop "
             "does not close); the clearance vector left its physical range",
@@ -258,7 +221,7 @@ class NineBar(Model):
             ip=ip,
             aux0=np.zeros(2),
             event_direction=np.array([1, -1] * len(joints), dtype=np.int64),
-            atol_scale=np.array(scale),
+            atol_scale=state_scales(states, c_min, params["omega"]),
             t0=0.0,
             work_size=dyn.WORK_SIZE,
             failure=lambda code: codes.get(code, f"model failure code {code}"),
@@ -304,17 +267,5 @@ class NineBar(Model):
 def _workspaces(problem: Problem, t, Y, AUX) -> np.ndarray:
     """The model's workspace (dyn.W_* layout) at every record."""
     ws = np.empty((t.size, dyn.N_W))
-    codes = dyn.evaluate_many(t, Y, problem.p, problem.ip, AUX, ws)
-    if codes.any():
-        bad = int(np.flatnonzero(codes)[0])
-        # the integrator accepted states (or interpolated records between them) that the
-        # mechanism cannot take: a loose tolerance or a solver without the model's guards
-        raise SolverError(
-            f"the record at t = {float(t[bad]):.9g} s is outside the model's domain: "
-            f"{problem.failure(int(codes[bad]))}; the solver's tolerance is too loose for this "
-            "scene (tighten solver.rtol/atol)",
-            time=float(t[bad]),
-            state={q.name: float(v) for q, v in zip(problem.states, Y[bad], strict=True)},
-            cause=f"model_{int(codes[bad])}",
-        )
+    check_records(problem, t, Y, dyn.evaluate_many(t, Y, problem.p, problem.ip, AUX, ws))
     return ws
