@@ -225,7 +225,13 @@ def _dense_eval(method, t_old, h, y_old, F, t, out):
 
 @njit(cache=True)
 def _crossed(direction, g_a, g_b):
-    if direction >= 0 and g_a < 0.0 and g_b >= 0.0:
+    """Whether event function g crossed between two points in the event's direction.
+
+    The sides are g <= 0 ("before", for a rising event) and g > 0 ("beyond"), the partition the
+    models use (a contact exists where the penetration is > 0), so that a state located exactly
+    on g = 0 cannot hide the next crossing.
+    """
+    if direction >= 0 and g_a <= 0.0 and g_b > 0.0:
         return True
     if direction <= 0 and g_a > 0.0 and g_b <= 0.0:
         return True
@@ -250,7 +256,7 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, work,
         _dense_eval(method, t_old, h, y_old, F, t_m, yint)
         event_values(t_m, yint, p, ip, aux, work, gtmp)
         g_m = gtmp[k]
-        if g_m != 0.0 and (g_m < 0.0) == (g_a < 0.0):
+        if (g_m > 0.0) == (g_a > 0.0):
             t_a = t_m
             g_a = g_m
             if side == -1:
@@ -498,8 +504,13 @@ def advance(
         if status == MODEL_FAILURE:
             break
         if fired >= 0:
-            _dense_eval(method, t, h, y, F, t_stop, yint)
-            y[:] = yint
+            if t_stop == t_new:
+                # the root is the step's end: its state is y_new, where g already has its
+                # post-crossing sign (the dense output can differ from it by rounding)
+                y[:] = y_new
+            else:
+                _dense_eval(method, t, h, y, F, t_stop, yint)
+                y[:] = yint
             t = t_stop
             stats[ST_EVENTS] += 1
             stop = apply_event(fired, t, y, p, ip, aux, work)
