@@ -125,24 +125,16 @@ def duffing(tmp: Path, scale: int = 1, repeats: int = 3) -> float:
     return speedup
 
 
-# ---------------------------------------------------------------------------------------------
-# PLACEHOLDER: nine-bar omega sweep. Runs only when workbench.models.get_model("ninebar") exists
-# (the model is being written). Scene: studies/ninebar.toml with omega swept over 0.1 pi .. 3 pi
-# (rad/s), a few cycles per point; estimates the paper's Fig. 32 sweep (300 points) from it.
-# ---------------------------------------------------------------------------------------------
+# nine-bar omega sweep (studies/ninebar.toml, omega 0.1 pi .. 3 pi rad/s, a few cycles per point)
+# and from it an estimate of the paper's Fig. 32 sweep (300 points)
 NINEBAR_POINTS = 16
 NINEBAR_TRANSIENT, NINEBAR_CYCLES = 2, 3
 FIG32_POINTS = 300
 FIG32_CYCLES_PER_POINT = 100 + 100  # assumed (transient + recorded): the paper does not say
 
 
-def ninebar_omega_sweep(tmp: Path, workers: int) -> None:
-    """PLACEHOLDER (nine-bar model in progress): 16-point omega sweep and the Fig. 32 estimate."""
-    try:
-        workbench.models.get_model("ninebar")
-    except KeyError:
-        print("--- nine-bar omega sweep: skipped (no 'ninebar' model yet)")
-        return
+def ninebar_omega_sweep(tmp: Path) -> None:
+    """16-point nine-bar omega sweep with 1 and 2 workers, and the Fig. 32 estimate."""
     base = workbench.load_scene(Path(__file__).resolve().parents[1] / "studies" / "ninebar.toml")
     scene = base.replace(
         effects={**base.effects, "clearance": list(base.effects["clearance"])},
@@ -151,25 +143,36 @@ def ninebar_omega_sweep(tmp: Path, workers: int) -> None:
         sweep={"omega": {"start": 0.1 * math.pi, "stop": 3 * math.pi, "num": NINEBAR_POINTS}},
     )
     workbench.simulate(scene.with_parameters(omega=2.5 * math.pi).replace(run={"cycles": 1}))
-    t0 = time.perf_counter()
-    ds = workbench.run_campaign(scene, tmp / "ninebar.nc", workers=workers, restart=True)
-    wall = time.perf_counter() - t0
     cycles = NINEBAR_TRANSIENT + NINEBAR_CYCLES
-    per_point = float(ds.point_wall_time.mean())
-    per_cycle = per_point / cycles
+    walls, runs = {}, {}
+    for workers in (1, 2):
+        t0 = time.perf_counter()
+        runs[workers] = workbench.run_campaign(
+            scene, tmp / f"ninebar-{workers}.nc", workers=workers, restart=True
+        )
+        walls[workers] = time.perf_counter() - t0
+        ds = runs[workers]
+        per_point = float(ds.point_wall_time.mean())
+        print(
+            f"--- nine-bar omega sweep: {NINEBAR_POINTS} points (omega 0.1 pi .. 3 pi rad/s), "
+            f"{NINEBAR_TRANSIENT} + {NINEBAR_CYCLES} cycles each, {workers} worker(s): wall "
+            f"{walls[workers]:.1f} s, {per_point:.2f} s per point ({per_point / cycles:.3f} s "
+            f"per cycle, mean over omega), {ds.attrs['failed_points']} failed"
+        )
+        if ds.attrs["failed_points"]:
+            print(workbench.campaign.summary(ds, limit=3))
+    same = np.array_equal(runs[1].clearance_x.values, runs[2].clearance_x.values, equal_nan=True)
     print(
-        f"--- nine-bar omega sweep: {NINEBAR_POINTS} points (omega 0.1 pi .. 3 pi rad/s), "
-        f"{NINEBAR_TRANSIENT} + {NINEBAR_CYCLES} cycles each, {workers} workers: wall "
-        f"{wall:.1f} s, {per_point:.2f} s per point ({per_cycle:.3f} s per cycle, mean over "
-        f"omega), {ds.attrs['failed_points']} failed"
+        f"speed-up 2 vs 1 workers: {walls[1] / walls[2]:.2f}x (target >= 1.8x); same numbers: "
+        f"{same}"
     )
-    if ds.attrs["failed_points"]:
-        print(workbench.campaign.summary(ds, limit=3))
+    per_cycle = walls[1] / (NINEBAR_POINTS * cycles)  # one core, overheads included
     estimate = FIG32_POINTS * FIG32_CYCLES_PER_POINT * per_cycle
     print(
         f"estimate of Fig. 32 ({FIG32_POINTS} points, {FIG32_CYCLES_PER_POINT} cycles each, "
-        f"assumed): {estimate / 3600:.2f} h on one core, {estimate / 3600 / workers:.2f} h on "
-        f"{workers} workers, {estimate / 3600 / 16:.2f} h on 16"
+        f"assumed): {estimate / 3600:.2f} h on one core, "
+        f"{estimate / 3600 * walls[2] / walls[1]:.2f} h on 2 workers (the measured speed-up), "
+        f"{estimate / 3600 / 16:.2f} h on 16 (target 10 min on this machine)"
     )
 
 
@@ -192,7 +195,7 @@ def main() -> None:
             duffing(tmp, 1)
             duffing(tmp, 10, repeats=2)
         if not args.skip_ninebar:
-            ninebar_omega_sweep(tmp, workers=2)
+            ninebar_omega_sweep(tmp)
 
 
 if __name__ == "__main__":

@@ -241,3 +241,36 @@ def test_cli_campaign_and_bifurcation(tmp_path, capsys):
     assert png.stat().st_size > 0
     assert main(["bifurcation", str(out), "--var", "nope"]) == 2
     assert "no variable 'nope' over time" in capsys.readouterr().err
+
+
+def test_longest_blocks_run_first(tmp_path):
+    """A sweep over the forcing frequency: the blocks of low omega simulate the longest time
+    (cycles x 2 pi / omega) and are started first (Graham's rule), whatever dask's own order of
+    task names; with one worker the execution order is visible in each block file."""
+    from workbench.campaign._run import longest_first, simulated_span
+    from workbench.campaign._store import expand_grid
+
+    scene = workbench.load_scene(
+        {**BASE, "sweep": {"omega": [0.8, 1.0, 1.2, 1.4, 0.5, 2.0]}}  # slowest at flat 4
+    )
+    grid = expand_grid(scene)
+    assert simulated_span(scene, grid, 4) == pytest.approx(6 * 2 * np.pi / 0.5, rel=1e-12)
+    store = tmp_path / "c.nc"
+    workbench.run_campaign(scene, store, workers=1, chunk=1)
+    blocks = store_paths(store)["blocks"]
+    started = {}
+    for path in blocks.glob("block-*.nc"):
+        b = workbench.open_run(path)
+        started[int(b.attrs["block"])] = int(b.attrs["worker_task_number"])
+    by_start = [blk for blk, _ in sorted(started.items(), key=lambda kv: kv[1])]
+    assert by_start == [4, 0, 1, 2, 3, 5]  # omega 0.5, 0.8, 1.0, 1.2, 1.4, 2.0
+    assert by_start == [t.block for t in longest_first(scene, grid, _tasks(scene, grid))]
+
+
+def _tasks(scene, grid):
+    from workbench.campaign._block import BlockTask
+
+    return [
+        BlockTask(scene.to_toml(), grid.dims, (f,), (tuple(grid.point(f).values()),), "", "", f)
+        for f in range(grid.size)
+    ]

@@ -50,16 +50,27 @@ def _grid_attrs(scene: Scene, grid: Grid) -> tuple[dict, np.ndarray | None]:
 
 
 def assemble(
-    scene: Scene, grid: Grid, store: Store, chunk: int, cid: str, run_attrs: dict
+    scene: Scene,
+    grid: Grid,
+    store: Store,
+    chunk: int,
+    cid: str,
+    run_attrs: dict,
+    computed: dict[int, xr.Dataset] | None = None,
 ) -> xr.Dataset:
-    """Read every block of the store and build the campaign dataset.
+    """Build the campaign dataset from its blocks: those in ``computed`` (block index ->
+    dataset, as the tasks of this call wrote them) from memory, every other from its file.
 
     Dims: the parameter dims (scene ``[sweep]`` order), then ``time``, then the model's dims.
     When every point has the same record times they are the 1-D coordinate ``time``; otherwise
     (e.g. a sweep over the forcing frequency) ``time`` is a dim without coordinate and the
     coordinate ``record_time`` (parameter dims, time) holds each point's times, NaN-padded.
     """
-    blocks = [open_run(store.block_path(i)) for i in range(len(grid.blocks(chunk)))]
+    computed = computed or {}
+    blocks = [
+        computed[i] if i in computed else open_run(store.block_path(i))
+        for i in range(len(grid.blocks(chunk)))
+    ]
     n, shape = grid.size, grid.shape
     n_time = max(b.sizes["time"] for b in blocks)
     first = blocks[0]

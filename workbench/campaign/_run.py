@@ -34,6 +34,7 @@ from workbench.campaign._store import (
     expand_grid,
     format_point,
 )
+from workbench.models import get_model
 
 __all__ = ["run_campaign"]
 
@@ -201,8 +202,10 @@ def run_campaign(
         for i, rng in enumerate(blocks)
         if i not in done
     ]
+    tasks = longest_first(scene, grid, tasks)
     n_workers = _client_threads(client) if client is not None else (workers or _cpu_count())
     compute0 = time.perf_counter()
+    results: list[dict] = []
     if tasks:
         bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
         try:
@@ -217,6 +220,7 @@ def run_campaign(
         if len(results) != len(tasks):  # pragma: no cover - guards the schedulers
             raise RuntimeError(f"{len(tasks)} blocks were scheduled, {len(results)} came back")
     compute = time.perf_counter() - compute0
+    in_memory = {r["block"]: r["dataset"] for r in results if r.get("dataset") is not None}
     ds = assemble(
         scene,
         grid,
@@ -230,6 +234,7 @@ def run_campaign(
             "campaign_compute_wall_time": compute,
             "campaign_wall_time": time.perf_counter() - wall0,
         },
+        in_memory,
     )
     save_run(ds, st.archive)
     ds = open_run(st.archive)
@@ -279,6 +284,31 @@ def _warn_failures(ds: xr.Dataset, grid: Grid) -> None:
 
 
 # -- execution -------------------------------------------------------------------------------------
+def simulated_span(scene: Scene, grid: Grid, flat: int) -> float:
+    """Simulated time (s) of one point: transient and recorded cycles times its forcing period,
+    or transient + duration. The cost estimate of a point (the solver's work grows with the
+    simulated time; a sweep over the forcing frequency spans 30x between 0.1 pi and 3 pi)."""
+    model = get_model(scene.model)
+    params = dict(scene.resolved_parameters)
+    params.update(grid.point(flat))
+    try:
+        period = model.forcing_period(params)
+    except Exception:  # the point is invalid: it costs nothing (it fails at validation)
+        return 0.0
+    run = scene.run
+    if period is not None and "cycles" in run:
+        return (run["cycles"] + run["transient_cycles"]) * period
+    return run.get("duration", 0.0) + run.get("transient", 0.0)
+
+
+def longest_first(scene: Scene, grid: Grid, tasks: list[BlockTask]) -> list[BlockTask]:
+    """The tasks ordered by decreasing estimated cost (their points' simulated time), so that
+    the longest blocks start first and no worker is left with one at the end: Graham's (1969)
+    longest-processing-time rule, within 4/3 of the best schedule. Ties keep block order."""
+    cost = {t.block: sum(simulated_span(scene, grid, f) for f in t.flat) for t in tasks}
+    return sorted(tasks, key=lambda t: (-cost[t.block], t.block))
+
+
 def _bar(total: int, initial: int):
     from tqdm.auto import tqdm
 
@@ -323,7 +353,7 @@ def _run_local(tasks: list[BlockTask], workers: int, bar) -> list[dict]:
             if bar is not None:
                 bar.update(result["points"])
 
-    dsk = {f"campaign-block-{t.block:05d}": (run_block, t) for t in tasks}
+    dsk = _graph_in_order(tasks)
     first = tasks[0]
     first_point = load_scene(first.scene_toml).with_parameters(
         **dict(zip(first.dims, first.values[0], strict=True))
@@ -357,6 +387,21 @@ def _run_local(tasks: list[BlockTask], workers: int, bar) -> list[dict]:
         os.environ.pop(PRELOAD_ENV, None)
 
 
+def _graph_in_order(tasks: list[BlockTask]) -> dict:
+    """A dask graph of the tasks whose scheduling priority follows the list order.
+
+    Independent tasks are run by dask's local scheduler in the order of ``dask.order.order``,
+    which for tasks without dependencies depends only on their key names (reverse name order in
+    dask 2025); so the names are drawn first, ranked by dask, and given to the tasks in turn.
+    """
+    from dask.order import order
+
+    names = [f"campaign-task-{i:05d}" for i in range(len(tasks))]
+    rank = order({k: (run_block, None) for k in names})
+    names.sort(key=rank.__getitem__)
+    return {name: (run_block, t) for name, t in zip(names, tasks, strict=True)}
+
+
 def _run_distributed(client, tasks: list[BlockTask], bar, cid: str) -> list[dict]:
     """Tasks on a dask.distributed cluster; a killed worker's task is rescheduled by dask."""
     from distributed import as_completed
@@ -367,8 +412,14 @@ def _run_distributed(client, tasks: list[BlockTask], bar, cid: str) -> list[dict
             print(f"campaign: dask dashboard at {link}", file=sys.stderr)
     token = uuid.uuid4().hex[:8]
     futures = [
-        client.submit(run_block, t, key=f"campaign-{cid}-block-{t.block:05d}-{token}", pure=False)
-        for t in tasks
+        client.submit(
+            run_block,
+            t,
+            key=f"campaign-{cid}-block-{t.block:05d}-{token}",
+            pure=False,
+            priority=len(tasks) - i,  # higher runs first: the list is longest first
+        )
+        for i, t in enumerate(tasks)
     ]
     results, errors = [], []
     try:

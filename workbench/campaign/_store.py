@@ -5,7 +5,8 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
     omega.nc                  assembled archive, written last (atomically)
     omega.nc.blocks/
         manifest.json         scene TOML, grid, chunk, campaign id (written first, atomically)
-        block-00000.nc        points 0 .. chunk-1 (one file per task, written atomically)
+        block-00000.nc        points 0 .. chunk-1 (one file per task, written atomically;
+                              netCDF-3 64-bit offset, half the write time of netCDF-4)
         block-00001.nc        ...
 """
 
