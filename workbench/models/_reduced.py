@@ -71,6 +71,21 @@ def cholesky_solve(M, b, n, L):
 
 
 @njit(cache=True)
+def all_finite(values, n):
+    """Whether values[:n] are all finite: one test on their sum (NaN and inf propagate), the
+    element-wise test only to confirm when the sum is not finite (it may overflow)."""
+    total = 0.0
+    for i in range(n):
+        total += values[i]
+    if math.isfinite(total):
+        return True
+    for i in range(n):
+        if not math.isfinite(values[i]):
+            return False
+    return True
+
+
+@njit(cache=True)
 def generalised_force(Q, J, pos, b, px, py, fx, fy):
     """Add the generalised force of force (fx, fy) N acting at point (px, py) m of body b."""
     arm = (px - pos[b, 0]) * fy - (py - pos[b, 1]) * fx

@@ -63,6 +63,15 @@ def hertz_internal_stiffness(
 
 
 @njit(cache=True)
+def _power(delta, n):
+    """delta**n for delta > 0; Hertz's n = 1.5 as delta * sqrt(delta), several times faster
+    than the general power on the solver's hot path."""
+    if n == 1.5:
+        return delta * math.sqrt(delta)
+    return delta**n
+
+
+@njit(cache=True)
 def lankarani_nikravesh(delta, delta_dot, delta_dot_minus, K, n, c_e, v_floor):
     """Normal force of the Lankarani–Nikravesh law with the grazing rules above, N.
 
@@ -72,7 +81,7 @@ def lankarani_nikravesh(delta, delta_dot, delta_dot_minus, K, n, c_e, v_floor):
     """
     if delta <= 0.0:
         return 0.0, 0.0
-    elastic = K * delta**n
+    elastic = K * _power(delta, n)
     ratio = delta_dot / max(delta_dot_minus, v_floor)
     if ratio > 1.0:
         ratio = 1.0
@@ -90,7 +99,7 @@ def contact_elastic_energy(delta, K, n):
     """Elastic energy stored in a contact, K delta^(n+1) / (n+1), J (0 out of contact)."""
     if delta <= 0.0:
         return 0.0
-    return K * delta ** (n + 1.0) / (n + 1.0)
+    return K * delta * _power(delta, n) / (n + 1.0)
 
 
 @njit(cache=True)

@@ -42,6 +42,7 @@ from workbench.models._clearance import stiffness as joint_stiffness
 from workbench.models._reduced import (
     FRICTION_LUGRE,
     N_FP,
+    all_finite,
     assemble,
     clearance_joint,
 )
@@ -183,9 +184,8 @@ def evaluate(t, y, p, ip, aux, work):
     ws[W_PDRIVE] = ws[W_TAU] * w1
     ws[W_XDD] = xdd
     ws[W_YDD] = ydd
-    for i in range(N_W):
-        if not math.isfinite(ws[i]):
-            return CODE_NONFINITE
+    if not all_finite(ws, N_W):
+        return CODE_NONFINITE
     return 0
 
 

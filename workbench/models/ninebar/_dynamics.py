@@ -30,6 +30,7 @@ from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.models._reduced import (
     FRICTION_LUGRE,
     N_FP,
+    all_finite,
     assemble,
     cholesky_solve,
     clearance_joint,
@@ -257,9 +258,8 @@ def evaluate(t, y, p, ip, aux, work):
     ws[W_PE] = pe
     ws[W_PDRIVE] = ws[W_TAU] * qd[0] + ws[W_TAU + 1] * qd[1]
     ws[W_PDISS] = p_diss
-    for i in range(N_W):
-        if not math.isfinite(ws[i]):
-            return CODE_NONFINITE
+    if not all_finite(ws, N_W):
+        return CODE_NONFINITE
     return 0
 
 
