@@ -1,8 +1,11 @@
 """Speed of the nine-bar model: seconds per crank cycle, steps and evaluations per cycle.
 
 The default scene (studies/ninebar.toml: A and B, 0.5 mm, omega = 2.5 pi, modified Coulomb),
-2 transient + 10 recorded cycles at rtol 1e-6, with the compiled DOP853 and DOPRI5, and one
-cycle with ``scipy:DOP853`` on the same compiled right-hand side; then the same with LuGre.
+2 transient + 10 recorded cycles at rtol 1e-6, with the compiled DOP853 and DOPRI5, and the first
+cycle with the compiled DOP853 and with ``scipy:DOP853`` on the same compiled right-hand side
+(their ratio is the speed-up on the same work); then the same with LuGre. The time per
+right-hand-side evaluation (solver overhead included) shows why the ratio to scipy is what it
+is: scipy adds ~10-15 us of Python per evaluation to a ~2 us model.
 Targets on one core: <= 0.02 s per cycle (Coulomb), <= 0.06 s (LuGre); >= 50x scipy.
 The paper's MATLAB needed 20.05 s (Coulomb) and 37.29 s (LuGre) per cycle.
 
@@ -49,18 +52,22 @@ def main() -> None:
         rows = {
             "dop853": per_cycle(friction, "dop853", 10, 2),
             "dopri5": per_cycle(friction, "dopri5", 10, 2),
+            "dop853 cycle 1": per_cycle(friction, "dop853", 1, 0),
             "scipy:DOP853": per_cycle(friction, "scipy:DOP853", 1, 0),
         }
         for method, r in rows.items():
             print(
-                f"{method:13s} {r['s_per_cycle']:9.4f} s/cycle  {r['steps']:9.0f} steps/cycle  "
+                f"{method:14s} {r['s_per_cycle']:9.4f} s/cycle  {r['steps']:9.0f} steps/cycle  "
                 f"{r['rhs']:10.0f} rhs/cycle  {r['events']:6.0f} events/cycle  "
+                f"{r['s_per_cycle'] / r['rhs'] * 1e6:5.2f} us/rhs  "
                 f"{PAPER[friction] / r['s_per_cycle']:8.0f}x the paper"
             )
-        ratio = rows["scipy:DOP853"]["s_per_cycle"] / rows["dop853"]["s_per_cycle"]
+        # the same first cycle (the transient's cost differs from a settled cycle's)
+        ratio = rows["scipy:DOP853"]["s_per_cycle"] / rows["dop853 cycle 1"]["s_per_cycle"]
         target = 0.02 if friction == "coulomb" else 0.06
         print(
-            f"compiled dop853 vs scipy:DOP853 (same rhs): {ratio:.0f}x (target >= 50x); "
+            f"compiled dop853 vs scipy:DOP853 (same rhs, same first cycle): {ratio:.0f}x "
+            f"(target >= 50x; bounded by (rhs + scipy's per-call overhead) / rhs, see us/rhs); "
             f"target <= {target} s/cycle: "
             f"{'met' if rows['dop853']['s_per_cycle'] <= target else 'NOT met'}"
         )
