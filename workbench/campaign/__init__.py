@@ -27,6 +27,10 @@ Store layout
         block-00001.nc       points chunk .. 2 chunk-1
         ...
 
+* Blocks start longest first: ranked by their points' simulated time (transient + recorded
+  cycles times the forcing period, or transient + duration), the longest-processing-time rule
+  (Graham 1969), so that a sweep over the forcing frequency does not end waiting for its
+  slowest, low-frequency block.
 * Block files are netCDF-3 (64-bit offset; half the write time of netCDF-4 for small files,
   whose cost is HDF5's per-variable overhead); the task also returns a small block (up to
   32 MiB) to the client with its summary, so that the client assembles what this call
