@@ -65,7 +65,12 @@ def study(friction: str, methods: list[str]) -> xr.Dataset:
 
 
 def report(wp: xr.Dataset, friction: str) -> None:
-    print(f"\n== {friction}: reference {REFERENCE[0]} at {REFERENCE[1]:.0e} ==")
+    print(
+        f"\n== {friction}: reference {REFERENCE[0]} at {REFERENCE[1]:.0e}; short horizon "
+        f"{wp.attrs['short_horizon'] * 1e3:.1f} ms, over which the reference and its twin at "
+        f"{wp.attrs['reference_twin_tolerance']:.0e} differ by {wp.attrs['reference_error']:.1e} "
+        "(errors below that are not resolved) =="
+    )
     print(
         f"{'method':>14} {'tol':>7} {'wall s':>8} {'steps':>8} {'short err':>10} "
         f"{'peak err':>9} {'x scipy':>8}"
