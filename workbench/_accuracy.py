@@ -107,6 +107,11 @@ def short_horizon(
     return float(min(t[-1], max(limit, t[min(10, t.size - 1)])))
 
 
+def _records_within(ref_short: xr.Dataset, horizon: float) -> int:
+    """Number of records of the short runs that lie within ``horizon`` (s) of their start."""
+    return int(np.searchsorted(ref_short.time.values - ref_short.time.values[0], horizon, "right"))
+
+
 def _measure(
     short: xr.Dataset,
     long: xr.Dataset,
@@ -116,7 +121,7 @@ def _measure(
     horizon: float,
 ) -> dict[str, float]:
     peak_err, stat_err = 0.0, 0.0
-    n = int(np.searchsorted(ref_short.time.values - ref_short.time.values[0], horizon, "right"))
+    n = _records_within(ref_short, horizon)
     short, ref_short = short.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))
     short_err = float(np.max(_separation(short, ref_short)))
     for name in ref_short.data_vars:
@@ -197,7 +202,7 @@ def accuracy(
         horizon = short_horizon(ref_short, probe, twin)
     ref_error = math.nan
     if twin is not None:
-        n = int(np.searchsorted(ref_short.time.values - ref_short.time.values[0], horizon, "right"))
+        n = _records_within(ref_short, horizon)
         ref_error = float(
             np.max(_separation(twin.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))))
         )

@@ -19,7 +19,13 @@ from workbench.campaign._block import (
     TERMINATED,
     stat_attrs,
 )
-from workbench.campaign._store import Grid, Store, format_point, parameter_attrs
+from workbench.campaign._store import (
+    Grid,
+    Store,
+    forcing_period,
+    format_point,
+    parameter_attrs,
+)
 from workbench.models import get_model
 from workbench.solver._grid import record_grid
 from workbench.solver._simulate import provenance
@@ -32,13 +38,7 @@ _PER_POINT = ("status", "failure", *STATS, "point_wall_time")
 def _grid_attrs(scene: Scene, grid: Grid) -> tuple[dict, np.ndarray | None]:
     """Attributes of the record grid shared by every point, and the per-point forcing period (s,
     None for an autonomous model)."""
-    model = get_model(scene.model)
-    base = scene.resolved_parameters
-    periods = []
-    for flat in range(grid.size):
-        params = dict(base)
-        params.update(grid.point(flat))
-        periods.append(model.forcing_period(params))
+    periods = [forcing_period(scene, grid, flat) for flat in range(grid.size)]
     if any(p is None for p in periods):
         periods_arr = None
         variants = [record_grid(scene, 0.0, None)[1]]

@@ -32,9 +32,9 @@ from workbench.campaign._store import (
     Store,
     campaign_id,
     expand_grid,
+    forcing_period,
     format_point,
 )
-from workbench.models import get_model
 
 __all__ = ["run_campaign"]
 
@@ -288,11 +288,8 @@ def simulated_span(scene: Scene, grid: Grid, flat: int) -> float:
     """Simulated time (s) of one point: transient and recorded cycles times its forcing period,
     or transient + duration. The cost estimate of a point (the solver's work grows with the
     simulated time; a sweep over the forcing frequency spans 30x between 0.1 pi and 3 pi)."""
-    model = get_model(scene.model)
-    params = dict(scene.resolved_parameters)
-    params.update(grid.point(flat))
     try:
-        period = model.forcing_period(params)
+        period = forcing_period(scene, grid, flat)
     except Exception:  # the point is invalid: it costs nothing (it fails at validation)
         return 0.0
     run = scene.run

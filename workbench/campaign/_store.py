@@ -98,6 +98,13 @@ def expand_grid(scene: Scene) -> Grid:
     return Grid(dims, tuple(tuple(float(x) for x in scene.sweep[d]) for d in dims))
 
 
+def forcing_period(scene: Scene, grid: Grid, flat: int) -> float | None:
+    """Forcing period (s) of the grid point ``flat`` (None for an autonomous model)."""
+    params = dict(scene.resolved_parameters)
+    params.update(grid.point(flat))
+    return get_model(scene.model).forcing_period(params)
+
+
 def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
     """``units`` and ``long_name`` of a model parameter (from its declaration)."""
     p = get_model(scene.model).parameter(name)

@@ -16,6 +16,10 @@ import numpy as np
 from workbench._errors import SceneError, SolverError
 from workbench.models._base import Effect, Parameter, Quantity
 from workbench.models._reduced import (
+    CODE_ASSEMBLY,
+    CODE_NONFINITE,
+    CODE_PENETRATION,
+    CODE_SINGULAR,
     FP_CF,
     FP_GAM,
     FP_MUK,
@@ -103,6 +107,18 @@ def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[P
         Parameter("lugre_stribeck_velocity", 1e-3, "m s-1", "LuGre Stribeck velocity v_s", **_POS),
         Parameter("lugre_stribeck_exponent", 2.0, "1", "LuGre Stribeck exponent", **_POS),
     )
+
+
+def failure_messages(assembly: str) -> dict[int, str]:
+    """Message per failure code of a mechanism's right-hand side (CODE_* of ``_reduced``);
+    ``assembly`` says why this mechanism cannot be assembled."""
+    return {
+        CODE_ASSEMBLY: f"{assembly}; the clearance vector left its physical range",
+        CODE_PENETRATION: "a penetration exceeded parameters.max_penetration; the contact is too "
+        "soft for this load or speed (raise contact_stiffness, check units)",
+        CODE_SINGULAR: "the reduced mass matrix is singular (a singular position)",
+        CODE_NONFINITE: "a force or acceleration became non-finite",
+    }
 
 
 def joint_outputs(effects: Mapping[str, Any]) -> list[Quantity]:

@@ -27,6 +27,12 @@ FRICTION_NONE = 0
 FRICTION_COULOMB = 1
 FRICTION_LUGRE = 2
 
+# failure codes a mechanism's right-hand side returns (messages: _clearance.failure_messages)
+CODE_ASSEMBLY = 1  # the mechanism cannot be assembled (a loop does not close)
+CODE_PENETRATION = 2  # penetration beyond parameters.max_penetration
+CODE_SINGULAR = 3  # reduced mass matrix not positive definite
+CODE_NONFINITE = 4  # non-finite force or acceleration
+
 # layout of the friction parameter block ``fp`` (float64[N_FP]) passed to clearance_joint
 FP_CF = 0  # Coulomb coefficient c_f
 FP_V0 = 1  # Coulomb thresholds v0, v1, m s-1

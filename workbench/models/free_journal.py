@@ -16,6 +16,7 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import EVENT_INSIDE_STEP, Model, Parameter, Problem, Quantity
+from workbench.models._clearance import contact_parameters
 from workbench.models.contact import (
     hertz_internal_stiffness,
     lankarani_nikravesh,
@@ -64,6 +65,18 @@ def apply_event(k, t, y, p, ip, aux, work):
     return 0
 
 
+# the contact parameters of the mechanisms' clearance joints that a free journal has
+_CONTACT = (
+    "clearance",
+    "bearing_radius",
+    "youngs_modulus",
+    "poisson_ratio",
+    "contact_exponent",
+    "restitution",
+    "impact_velocity_floor",
+)
+
+
 @register
 class FreeJournal(Model):
     """Free journal in a fixed bearing with Lankarani–Nikravesh contact."""
@@ -73,28 +86,7 @@ class FreeJournal(Model):
     reference = "Lankarani & Nikravesh (1990), J. Mech. Des. 112:369"
     parameters = (
         Parameter("mass", 0.8, "kg", "journal mass", lower=0.0, lower_open=True),
-        Parameter("clearance", 0.5e-3, "m", "radial clearance", lower=0.0, lower_open=True),
-        Parameter("bearing_radius", 10e-3, "m", "bearing radius", lower=0.0, lower_open=True),
-        Parameter("youngs_modulus", 207e9, "Pa", "Young's modulus", lower=0.0, lower_open=True),
-        Parameter("poisson_ratio", 0.3, "1", "Poisson's ratio", lower=0.0, upper=0.5),
-        Parameter("contact_exponent", 1.5, "1", "contact exponent n", lower=0.0, lower_open=True),
-        Parameter(
-            "restitution",
-            0.9,
-            "1",
-            "coefficient of restitution c_e",
-            lower=0.0,
-            upper=1.0,
-            lower_open=True,
-        ),
-        Parameter(
-            "impact_velocity_floor",
-            1e-4,
-            "m s-1",
-            "floor of the onset velocity",
-            lower=0.0,
-            lower_open=True,
-        ),
+        *(p for p in contact_parameters(0.5e-3, 0.0) if p.name in _CONTACT),
         Parameter("speed", 0.5, "m s-1", "initial radial speed (along +x from the centre)"),
     )
     _STATES = (

@@ -33,6 +33,7 @@ from workbench.models._clearance import (
     check_records,
     clearance_states,
     contact_parameters,
+    failure_messages,
     friction_block,
     mechanism_outputs,
     state_scales,
@@ -40,6 +41,10 @@ from workbench.models._clearance import (
 )
 from workbench.models._clearance import stiffness as joint_stiffness
 from workbench.models._reduced import (
+    CODE_ASSEMBLY,
+    CODE_NONFINITE,
+    CODE_PENETRATION,
+    CODE_SINGULAR,
     FRICTION_LUGRE,
     N_FP,
     all_finite,
@@ -74,10 +79,6 @@ _O_QD = _O_Q + 3
 WORK_SIZE = _O_QD + 3
 
 _POS = {"lower": 0.0, "lower_open": True}
-CODE_ASSEMBLY = 1
-CODE_PENETRATION = 2
-CODE_SINGULAR = 3
-CODE_NONFINITE = 4
 
 
 @njit(cache=True)
@@ -246,14 +247,7 @@ def evaluate_many(t, Y, p, ip, AUX, ws):
 
 
 JOINTS = ("B",)
-_FAILURES = {
-    CODE_ASSEMBLY: "the rod cannot reach the slider guide (|y - L1 sin theta1| >= L2); the "
-    "clearance vector left its physical range",
-    CODE_PENETRATION: "a penetration exceeded parameters.max_penetration; the contact is too "
-    "soft for this load or speed (raise contact_stiffness, check units)",
-    CODE_SINGULAR: "the reduced mass matrix is singular",
-    CODE_NONFINITE: "a force or acceleration became non-finite",
-}
+_FAILURES = failure_messages("the rod cannot reach the slider guide (|y - L1 sin theta1| >= L2)")
 
 
 @register

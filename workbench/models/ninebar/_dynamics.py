@@ -28,6 +28,10 @@ from numba import njit
 
 from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.models._reduced import (
+    CODE_ASSEMBLY,
+    CODE_NONFINITE,
+    CODE_PENETRATION,
+    CODE_SINGULAR,
     FRICTION_LUGRE,
     N_FP,
     all_finite,
@@ -111,12 +115,6 @@ W_PE = W_KE + 1  # potential energy (gravity + contact), J
 W_PDRIVE = W_PE + 1  # driver power, W
 W_PDISS = W_PDRIVE + 1  # dissipated power, W
 N_W = W_PDISS + 1
-
-# model failure codes returned by rhs
-CODE_ASSEMBLY = 1  # the mechanism cannot be assembled (no circle intersection)
-CODE_PENETRATION = 2  # penetration beyond the physical bound
-CODE_SINGULAR = 3  # reduced mass matrix not positive definite
-CODE_NONFINITE = 4  # non-finite force or acceleration
 
 BEARING_BODY = (0, 3)  # crank 1 carries bearing A, crank 4 bearing B
 JOURNAL_BODY = (1, 2)  # link 2 carries journal A, link 3 journal B

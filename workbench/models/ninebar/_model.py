@@ -15,6 +15,7 @@ from workbench.models._clearance import (
     check_records,
     clearance_states,
     contact_parameters,
+    failure_messages,
     friction_block,
     mechanism_outputs,
     state_scales,
@@ -205,14 +206,9 @@ class NineBar(Model):
         if energy:
             ip[dyn.IP_W] = 2 * nf + (len(joints) if lugre else 0)
         c_min = min(self.clearances(params)[j] for j in joints) if joints else 1.0
-        codes = {
-            dyn.CODE_ASSEMBLY: "the mechanism cannot be assembled at this configuration (a loop "
-            "does not close); the clearance vector left its physical range",
-            dyn.CODE_PENETRATION: "a penetration exceeded parameters.max_penetration; the "
-            "contact is too soft for this load or speed (raise contact_stiffness, check units)",
-            dyn.CODE_SINGULAR: "the reduced mass matrix is singular (a singular position)",
-            dyn.CODE_NONFINITE: "a force or acceleration became non-finite",
-        }
+        codes = failure_messages(
+            "the mechanism cannot be assembled at this configuration (a loop does not close)"
+        )
         return Problem(
             hooks="workbench.models.ninebar._dynamics",
             states=tuple(states),
