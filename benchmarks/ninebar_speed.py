@@ -6,6 +6,9 @@ cycle with the compiled DOP853 and with ``scipy:DOP853`` on the same compiled ri
 (their ratio is the speed-up on the same work); then the same with LuGre. The time per
 right-hand-side evaluation (solver overhead included) shows why the ratio to scipy is what it
 is: scipy adds ~10-15 us of Python per evaluation to a ~2 us model.
+With LuGre also the implicit-explicit ARK548 (the bristle states implicit), and what it costs
+in accuracy: the short-horizon error (30 ms of the first cycle, ``workbench.accuracy``) of
+DOP853 and ARK548 at rtol 1e-6 and 1e-8 against DOP853 at 1e-11.
 Targets on one core: <= 0.02 s per cycle (Coulomb), <= 0.06 s (LuGre); >= 50x scipy.
 The paper's MATLAB needed 20.05 s (Coulomb) and 37.29 s (LuGre) per cycle.
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import workbench
+from workbench._accuracy import accuracy
 
 SCENE = Path(__file__).resolve().parents[1] / "studies" / "ninebar.toml"
 PAPER = {"coulomb": 20.05, "lugre": 37.29}
@@ -55,6 +59,8 @@ def main() -> None:
             "dop853 cycle 1": per_cycle(friction, "dop853", 1, 0),
             "scipy:DOP853": per_cycle(friction, "scipy:DOP853", 1, 0),
         }
+        if friction == "lugre":
+            rows["ark548"] = per_cycle(friction, "ark548", 10, 2)
         for method, r in rows.items():
             print(
                 f"{method:14s} {r['s_per_cycle']:9.4f} s/cycle  {r['steps']:9.0f} steps/cycle  "
@@ -71,6 +77,33 @@ def main() -> None:
             f"target <= {target} s/cycle: "
             f"{'met' if rows['dop853']['s_per_cycle'] <= target else 'NOT met'}"
         )
+        if friction == "lugre":
+            stiff_remedy()
+
+
+def stiff_remedy() -> None:
+    """What ARK548 costs in accuracy: short-horizon errors against DOP853 at 1e-11."""
+    base = workbench.load_scene(SCENE)
+    scene = base.replace(
+        effects={**base.effects, "friction": "lugre"},
+        run={"cycles": 1, "transient_cycles": 0},
+        record={"samples_per_period": 200, "variables": ["clearance_x", "clearance_y"]},
+    )
+    wp = accuracy(
+        scene,
+        methods=["dop853", "ark548"],
+        tolerances=[1e-6, 1e-8],
+        reference=("dop853", 1e-11),
+        horizon=0.03,
+    )
+    print("LuGre, first 30 ms: short-horizon error (fraction of range) and rhs evaluations")
+    for m in wp.solver_method.values:
+        for tol in wp.rtol.values:
+            r = wp.sel(solver_method=m, rtol=tol)
+            print(
+                f"  {m:7s} rtol {tol:.0e}: error {float(r.short_error):.2e}, "
+                f"{int(r.rhs_evaluations):8d} rhs evaluations (the long run)"
+            )
 
 
 if __name__ == "__main__":

@@ -162,7 +162,7 @@ def accuracy(
     scene : Scene or path
         The scene studied (no sweep).
     methods : sequence of str
-        Solver methods (``"dop853"``, ``"dopri5"``, ``"scipy:<name>"``).
+        Solver methods (``"dop853"``, ``"dopri5"``, ``"ark548"``, ``"scipy:<name>"``).
     tolerances : sequence of float
         rtol = atol values (atol is scaled per state by the model; see the model docs).
     reference : (method, tolerance), optional

@@ -30,7 +30,7 @@ from workbench.models import available_models, get_model
 
 __all__ = ["Scene", "load_scene", "COMPILED_METHODS", "SCIPY_METHODS"]
 
-COMPILED_METHODS = ("dop853", "dopri5")
+COMPILED_METHODS = ("dop853", "dopri5", "ark548")
 SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 _TABLES = (
     "title",

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._scene import Scene, load_scene
+from workbench._scene import COMPILED_METHODS, Scene, load_scene
 from workbench.models import get_model
 from workbench.solver._grid import record_grid
 from workbench.solver._simulate import integrate
@@ -66,7 +66,7 @@ def lle_from_equations(
     if s["method"].startswith("scipy:"):
         raise ValueError(
             f"solver.method={s['method']!r}: lle_from_equations needs a compiled method "
-            "('dop853' or 'dopri5')"
+            f"{COMPILED_METHODS!r}"
         )
     period = model.forcing_period(params)
     t_rec, _ = record_grid(scene, problem.t0, period)

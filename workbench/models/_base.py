@@ -104,6 +104,13 @@ class Problem:
         Length of the scratch array passed to the hooks (allocated once per run).
     failure : callable
         ``failure(code) -> str``: explains a model failure code returned by ``rhs``.
+    stiff_states, stiff_slots, implicit_slot : ndarray of int64, int
+        Optional stiff states for the implicit–explicit method ``ark548``: indices k of states
+        whose rate is ``r_k(y) - a_k(y) y_k`` with a decay rate ``a_k >= 0`` (s-1) independent
+        of every stiff state, the ``work`` slots where ``rhs`` writes ``a_k``, and the slot
+        where the solver puts ``h gamma`` (s) for which ``rhs`` replaces ``y[k]`` by
+        ``(y[k] + h gamma r_k) / (1 + h gamma a_k)`` (0 outside implicit stages); see
+        :mod:`workbench.solver._kernel`.
     data : dict
         Model-private values needed later by :meth:`Model.derive`.
     """
@@ -120,6 +127,9 @@ class Problem:
     work_size: int = 0
     failure: Callable[[int], str] = lambda code: f"model failure code {code}"
     data: dict = field(default_factory=dict)
+    stiff_states: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    stiff_slots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    implicit_slot: int = -1
 
     def __post_init__(self) -> None:
         self.y0 = np.ascontiguousarray(self.y0, dtype=np.float64)
@@ -130,6 +140,16 @@ class Problem:
         if self.atol_scale is None:
             self.atol_scale = np.ones_like(self.y0)
         self.atol_scale = np.ascontiguousarray(self.atol_scale, dtype=np.float64)
+        self.stiff_states = np.ascontiguousarray(self.stiff_states, dtype=np.int64)
+        self.stiff_slots = np.ascontiguousarray(self.stiff_slots, dtype=np.int64)
+        if self.stiff_states.shape != self.stiff_slots.shape or (
+            self.stiff_states.size > 0 and not 0 <= self.implicit_slot < self.work_size
+        ):
+            raise ValueError(
+                f"stiff_states {self.stiff_states!r}, stiff_slots {self.stiff_slots!r} and "
+                f"implicit_slot {self.implicit_slot!r}: one slot per stiff state, and an "
+                f"implicit slot inside work (size {self.work_size!r}) when there are any"
+            )
 
 
 class Model:

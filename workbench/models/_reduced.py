@@ -21,7 +21,7 @@ import math
 from numba import njit
 
 from workbench.models.contact import contact_elastic_energy, lankarani_nikravesh
-from workbench.models.friction import coulomb_modified, lugre_force, lugre_rate
+from workbench.models.friction import coulomb_modified, lugre_decay, lugre_force
 
 FRICTION_NONE = 0
 FRICTION_COULOMB = 1
@@ -155,7 +155,7 @@ def assemble(J, gam, pos, qd, mass, inertia, gx, gy, M, h, Q):
 @njit(cache=True)
 def clearance_joint(
     Q, J, pos, qd, bj, bb, bcx, bcy, x, y, vx, vy, onset, r1, r2, c, K, n, ce, vfloor,
-    friction, fp, z,
+    friction, fp, z, hg,
 ):  # fmt: skip
     """Contact and friction of one revolute clearance joint; adds their generalised forces to Q.
 
@@ -165,18 +165,22 @@ def clearance_joint(
     held since the contact began (m s-1, 0 if not located); bearing and journal radii r1, r2
     and clearance c (m); contact stiffness K (N m^-n), exponent n, restitution ce,
     impact-velocity floor vfloor (m s-1); ``friction`` (FRICTION_*), its parameter block
-    ``fp`` (FP_* layout) and the LuGre bristle deflection z (m).
+    ``fp`` (FP_* layout), the LuGre bristle deflection z (m) and ``hg`` (s): h gamma of an
+    implicit stage of ARK548 (0 otherwise), for which z is the stage's known part B and is
+    replaced by the solution of z = B + hg (vt - a z) (see :mod:`workbench.solver._kernel`).
 
-    Returns (e, delta, ddot, fn, ft, vt, zdot, p_diss, e_el): eccentricity and penetration (m),
-    penetration rate (m s-1), normal and friction force on the journal (N, friction along
-    t = (-ny, nx)), sliding velocity (m s-1), bristle rate (m s-1), dissipated power (W) and
-    stored elastic energy (J). The forces act at the material contact points (journal and
-    bearing surfaces along n), so friction also exerts moments on both bodies.
+    Returns (e, delta, ddot, fn, ft, vt, z, zdot, decay, p_diss, e_el): eccentricity and
+    penetration (m), penetration rate (m s-1), normal and friction force on the journal (N,
+    friction along t = (-ny, nx)), sliding velocity (m s-1), the bristle deflection used (m),
+    its rate (m s-1) and decay rate a in zdot = vt - a z (s-1; both 0 out of contact, where the
+    bristles are frozen), dissipated power (W) and stored elastic energy (J). The
+    forces act at the material contact points (journal and bearing surfaces along n), so
+    friction also exerts moments on both bodies.
     """
     e = math.sqrt(x * x + y * y)
     delta = e - c
     if delta <= 0.0 or e == 0.0:
-        return e, delta, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return e, delta, 0.0, 0.0, 0.0, 0.0, z, 0.0, 0.0, 0.0, 0.0
     nx = x / e
     ny = y / e
     ddot = nx * vx + ny * vy
@@ -192,10 +196,13 @@ def clearance_joint(
     vt = (vjx - vbx) * tx + (vjy - vby) * ty
     ft = 0.0
     zdot = 0.0
+    decay = 0.0
     if friction == FRICTION_COULOMB:
         ft = coulomb_modified(vt, fn, fp[FP_CF], fp[FP_V0], fp[FP_V1])
-    elif friction == FRICTION_LUGRE:
-        zdot = lugre_rate(vt, z, fp[FP_S0], fp[FP_MUK], fp[FP_MUS], fp[FP_VS], fp[FP_GAM])
+    elif friction == FRICTION_LUGRE and fn > 0.0:
+        decay = lugre_decay(vt, fp[FP_S0], fp[FP_MUK], fp[FP_MUS], fp[FP_VS], fp[FP_GAM])
+        z = (z + hg * vt) / (1.0 + hg * decay)  # exact for hg = 0
+        zdot = vt - decay * z  # the bristle equation, Eq. (9)
         ft = lugre_force(vt, z, zdot, fn, fp[FP_S0], fp[FP_S1], fp[FP_S2])
     # force on the journal: the normal force pushes it back towards the bearing centre
     fx = -fn * nx + ft * tx
@@ -204,4 +211,4 @@ def clearance_joint(
     generalised_force(Q, J, pos, bb, bx, by, -fx, -fy)
     # power lost: normal damping + friction (relative sliding); the elastic energy is stored
     p_diss = fdamp * ddot - ft * vt
-    return e, delta, ddot, fn, ft, vt, zdot, p_diss, contact_elastic_energy(delta, K, n)
+    return e, delta, ddot, fn, ft, vt, z, zdot, decay, p_diss, contact_elastic_energy(delta, K, n)

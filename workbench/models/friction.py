@@ -19,7 +19,7 @@ import math
 
 from numba import njit
 
-__all__ = ["coulomb_modified", "lugre_rate", "lugre_force", "stribeck"]
+__all__ = ["coulomb_modified", "lugre_decay", "lugre_force", "stribeck"]
 
 
 @njit(cache=True)
@@ -39,9 +39,13 @@ def stribeck(v_t, mu_k, mu_s, v_s, gamma):
 
 
 @njit(cache=True)
-def lugre_rate(v_t, z, sigma0, mu_k, mu_s, v_s, gamma):
-    """Bristle deflection rate dz/dt of the LuGre model, m s-1."""
-    return v_t - sigma0 * abs(v_t) * z / stribeck(v_t, mu_k, mu_s, v_s, gamma)
+def lugre_decay(v_t, sigma0, mu_k, mu_s, v_s, gamma):
+    """Decay rate a = s0 |v_t| / g(v_t) of the bristle deflection (s-1): dz/dt = v_t - a z.
+
+    It is the stiff part of the LuGre model (1e5-1e6 s-1 when sliding at 0.01-0.1 m/s with
+    the nine-bar's parameters) and does not depend on z, so an implicit-explicit method can
+    treat ``-a z`` implicitly at the cost of one division."""
+    return sigma0 * abs(v_t) / stribeck(v_t, mu_k, mu_s, v_s, gamma)
 
 
 @njit(cache=True)

@@ -68,7 +68,8 @@ N_IP = 3
 # -- workspace of `evaluate` ---------------------------------------------------------------------
 W_X, W_Y, W_VX, W_VY, W_E, W_DELTA, W_FN, W_FT = range(8)
 W_TAU, W_S, W_SV, W_SA, W_KE, W_PE, W_PDRIVE, W_PDISS, W_XDD, W_YDD, W_ZDOT = range(8, 19)
-N_W = 19
+W_DECAY = 19  # decay rate of the LuGre bristle deflection in contact (s-1; 0 otherwise)
+N_W = 20
 _O_POS = N_W  # scratch: pos (3x3), J (3x3x3), gam (3x3), M (3x3), h, Q, qd
 _O_J = _O_POS + 9
 _O_GAM = _O_J + 27
@@ -76,7 +77,8 @@ _O_M = _O_GAM + 9
 _O_H = _O_M + 9
 _O_Q = _O_H + 3
 _O_QD = _O_Q + 3
-WORK_SIZE = _O_QD + 3
+O_HG = _O_QD + 3  # h gamma of an implicit ARK548 stage (s; 0 otherwise), set by the solver
+WORK_SIZE = O_HG + 1
 
 _POS = {"lower": 0.0, "lower_open": True}
 
@@ -156,10 +158,13 @@ def evaluate(t, y, p, ip, aux, work):
     if has:
         friction = ip[IP_FRICTION]
         z = y[4] if friction == FRICTION_LUGRE else 0.0
-        e, delta, ddot, fn, ft, vt, zdot, pd, eel = clearance_joint(
+        e, delta, ddot, fn, ft, vt, z, zdot, decay, pd, eel = clearance_joint(
             Q, J, pos, qd, 1, 2, s, 0.0, x, yy, vx, vy, aux[0], p[P_R1], p[P_R2], p[P_C],
             p[P_K], p[P_N], p[P_CE], p[P_VFLOOR], friction, p[P_FRICTION : P_FRICTION + N_FP], z,
+            work[O_HG],
         )  # fmt: skip
+        if friction == FRICTION_LUGRE:
+            y[4] = z  # solved in an implicit stage (unchanged otherwise)
         if delta > p[P_DMAX]:
             return CODE_PENETRATION
         ws[W_X], ws[W_Y], ws[W_VX], ws[W_VY] = x, yy, vx, vy
@@ -167,6 +172,7 @@ def evaluate(t, y, p, ip, aux, work):
         ws[W_PDISS] = pd
         pe += eel
         ws[W_ZDOT] = zdot
+        ws[W_DECAY] = decay
         # free accelerations: 2 x 2 solve of M_ff qdd_f = Q_f - h_f
         r0 = Q[1] - h[1]
         r1 = Q[2] - h[2]
@@ -204,7 +210,7 @@ def rhs(t, y, p, ip, aux, work, dydt):
     k = 4
     if ip[IP_FRICTION] == FRICTION_LUGRE:
         # bristles exist only in contact: frozen out of contact (reset at each onset)
-        dydt[4] = work[W_ZDOT] if work[W_FN] > 0.0 else 0.0
+        dydt[4] = work[W_ZDOT]
         k = 5
     if ip[IP_ENERGY] == 1:
         dydt[k] = work[W_PDRIVE]
@@ -354,6 +360,9 @@ class SliderCrank(Model):
             work_size=WORK_SIZE,
             failure=lambda code: _FAILURES.get(code, f"model failure code {code}"),
             data={"stiffness": {"B": k}, "joints": tuple(effects["clearance"])},
+            stiff_states=[4] if has and ip[IP_FRICTION] == FRICTION_LUGRE else [],
+            stiff_slots=[W_DECAY] if has and ip[IP_FRICTION] == FRICTION_LUGRE else [],
+            implicit_slot=O_HG,
         )
 
     def derive(self, problem, t, Y, AUX, requested):

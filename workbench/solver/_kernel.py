@@ -22,7 +22,22 @@ Hooks (all ``numba.njit``), in SI units of the model's state:
 so that the hot right-hand side allocates nothing.
 
 Algorithms: Dormand & Prince (1980) DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853
-(Hairer, Nørsett & Wanner 1993, Sec. II.10); step-size control and initial step as in Hairer's
+(Hairer, Nørsett & Wanner 1993, Sec. II.10); the additive implicit–explicit ARK5(4)8L[2]SA of
+Kennedy & Carpenter (2003) with cubic Hermite dense output, for problems that declare *stiff
+states*: states k whose rate has the form ``dy_k/dt = r_k(y) - a_k(y) y_k`` with a decay rate
+``a_k >= 0`` (s-1), where ``r_k`` and ``a_k`` depend on the non-stiff states only (a LuGre
+bristle deflection: ``dz/dt = v - a(v) z``). ARK548 integrates the stiff states' whole rate
+with the ESDIRK table and the rest with the explicit one, so that the step is no longer bounded
+by ``|h a| < ~6`` as for the explicit pairs. (Treating only ``-a y_k`` implicitly would leave
+the forcing ``r_k ~ a y_k`` explicit, and the stages off the slow manifold y_k = r_k / a_k by
+O(h) in the stiff limit.) The implicit stage equation ``Y_k = B_k + h gamma (r_k - a_k Y_k)``
+is linear in ``Y_k`` with coefficients explicit in the stage, so the model's ``rhs`` solves it:
+one division, no Jacobian, no Newton iteration. Protocol: before an implicit stage the kernel
+writes ``h gamma`` (s) into ``work[implicit_slot]`` (0 for every other evaluation) and ``B_k``
+into ``y[k]``; ``rhs`` replaces ``y[k]`` by ``(B_k + h gamma r_k) / (1 + h gamma a_k)`` and
+writes ``a_k`` into ``work[stiff_slot[k]]`` on every call.
+
+Step-size control and initial step as in Hairer's
 codes and ``scipy.integrate`` (Hairer et al. 1993, Sec. II.4); event location by the Illinois
 variant of regula falsi (Dowell & Jarratt 1971) on the dense output.
 """
@@ -35,6 +50,12 @@ from numba import njit
 from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.solver._hooks_template import apply_event, event_values, rhs  # @@HOOKS@@
 from workbench.solver._tableaux import (
+    ARK_AE,
+    ARK_AI,
+    ARK_B,
+    ARK_C,
+    ARK_E,
+    ARK_GAMMA,
     DOP853_A,
     DOP853_A_EXTRA,
     DOP853_B,
@@ -55,6 +76,7 @@ from workbench.solver._tableaux import (
 
 DOPRI5 = 0
 DOP853 = 1
+ARK548 = 2
 
 # Return codes of `advance`.
 DONE = 0
@@ -76,7 +98,8 @@ ST_EVENT_RETRIES = 6  # steps retried because an event happened between their en
 N_STATS = 7
 
 # Indices of the float64 controller array: current time (s), next step size (s), flag "last
-# failure was non-finite", flag "the current derivative f was flagged EVENT_INSIDE_STEP".
+# failure was non-finite", flag "the current derivative f was flagged EVENT_INSIDE_STEP"; then
+# one entry per stiff state: its decay rate a_k (s-1) at the current point.
 CT_T = 0
 CT_H = 1
 CT_NONFINITE = 2
@@ -86,7 +109,16 @@ N_CTRL = 4
 
 @njit(cache=True)
 def _n_stages(method):
-    return 12 if method == DOP853 else 6
+    if method == DOP853:
+        return 12
+    return 8 if method == ARK548 else 6
+
+
+@njit(cache=True)
+def _read_decay(work, stiff_slot, decay):
+    """Copy the stiff states' decay rates (s-1) that the last ``rhs`` call wrote into work."""
+    for k in range(stiff_slot.size):
+        decay[k] = work[stiff_slot[k]]
 
 
 @njit(cache=True)
@@ -101,14 +133,22 @@ def _stage_point(K, a, s, h, y, out):
 
 
 @njit(cache=True)
-def _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats):
-    """One explicit RK step; stages in K, FSAL derivative in K[ns].
+def _rk_step(
+    method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats,
+    stiff_idx, stiff_slot, implicit_slot, decay_new,
+):  # fmt: skip
+    """One RK step; stages in K, derivative at the step's end in K[ns] (FSAL).
 
-    Returns ``(code, inside_stage, inside_end)``: the first model failure code (0 if none) and
-    whether an intermediate stage, and the step's end, returned EVENT_INSIDE_STEP.
+    For ARK548 the stiff states' stages use the implicit table (the model's ``rhs`` solves
+    them); ``decay_new`` receives the decay rates at the step's end.
+
+    Returns ``(code, inside_stage, inside_end)``: the first model failure
+    code (0 if none) and whether an intermediate stage, and the step's end, returned
+    EVENT_INSIDE_STEP.
     """
     ns = _n_stages(method)
     n = y.size
+    ms = stiff_idx.size
     inside_stage = False
     for i in range(n):
         K[0, i] = f[i]
@@ -116,30 +156,54 @@ def _rk_step(method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats):
         if method == DOP853:
             _stage_point(K, DOP853_A[s], s, h, y, ytmp)
             c = DOP853_C[s]
+        elif method == ARK548:
+            _stage_point(K, ARK_AE[s], s, h, y, ytmp)
+            c = ARK_C[s]
+            # stiff states: B_k = y_k + h sum_{j<s} AI_sj f_k(Y_j)
+            for k in range(ms):
+                i = stiff_idx[k]
+                acc = 0.0
+                for j in range(s):
+                    acc += ARK_AI[s, j] * K[j, i]
+                ytmp[i] = y[i] + h * acc
         else:
             _stage_point(K, RK45_A[s], s, h, y, ytmp)
             c = RK45_C[s]
         stats[ST_RHS] += 1
-        code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
+        if method == ARK548 and implicit_slot >= 0:
+            work[implicit_slot] = h * ARK_GAMMA  # rhs solves Y_k = B_k + h gamma f_k(Y)
+            code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
+            work[implicit_slot] = 0.0
+        else:
+            code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
         if code == EVENT_INSIDE_STEP:
             inside_stage = True
         elif code != 0:
             return code, inside_stage, False
     if method == DOP853:
         _stage_point(K, DOP853_B, ns, h, y, y_new)
+    elif method == ARK548:
+        _stage_point(K, ARK_B, ns, h, y, y_new)
     else:
         _stage_point(K, RK45_B, ns, h, y, y_new)
     stats[ST_RHS] += 1
     code = rhs(t + h, y_new, p, ip, aux, work, K[ns])
+    _read_decay(work, stiff_slot, decay_new)
     if code == EVENT_INSIDE_STEP:
         return 0, inside_stage, True
     return code, inside_stage, False
 
 
 @njit(cache=True)
-def _error_norm(method, K, h, y, y_new, rtol, atol):
+def _error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
     """Scaled RMS error estimate of the step (Hairer et al. 1993, Eq. II.4.11; DOP853's
-    combination of its 5th- and 3rd-order estimators)."""
+    combination of its 5th- and 3rd-order estimators; for DOPRI5 and ARK548 the difference of
+    the 5th- and 4th-order solutions).
+
+    For ARK548 the stiff states' estimates are filtered by (1 + h gamma a)^-1, the diagonal form
+    of Hairer & Wanner's (1996, Sec. IV.8) (I - h gamma J)^-1: the embedded solution is not
+    L-stable, so the raw difference stays O(1) for |h a| >> 1 where both solutions are exact
+    to the tolerance, and would bound the step by the decay rate again."""
     n = y.size
     if method == DOP853:
         e5 = 0.0
@@ -156,12 +220,17 @@ def _error_norm(method, K, h, y, y_new, rtol, atol):
         if e5 == 0.0 and e3 == 0.0:
             return 0.0
         return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * n)
+    E = ARK_E if method == ARK548 else RK45_E
     acc = 0.0
     for i in range(n):
         sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
         e = 0.0
-        for j in range(7):
-            e += RK45_E[j] * K[j, i]
+        for j in range(E.size):
+            e += E[j] * K[j, i]
+        if method == ARK548:
+            for k in range(stiff_idx.size):
+                if stiff_idx[k] == i:
+                    e /= 1.0 + h * ARK_GAMMA * decay[k]
         acc += (h * e / sc) ** 2
     return np.sqrt(acc / n)
 
@@ -188,6 +257,12 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats):
                 for s in range(16):
                     acc += DOP853_D[r, s] * K[s, i]
                 F[3 + r, i] = h * acc
+    elif method == ARK548:
+        # cubic Hermite interpolation between the step's ends (values and derivatives)
+        for i in range(n):
+            F[0, i] = y_new[i] - y[i]
+            F[1, i] = h * K[0, i]
+            F[2, i] = h * K[8, i]
     else:
         for i in range(n):
             for j in range(4):
@@ -213,6 +288,13 @@ def _dense_eval(method, t_old, h, y_old, F, t, out):
                 else:
                     acc *= 1.0 - x
             out[i] = y_old[i] + acc
+    elif method == ARK548:
+        for i in range(n):
+            d = F[0, i]
+            out[i] = y_old[i] + x * (
+                F[1, i]
+                + x * (3.0 * d - 2.0 * F[1, i] - F[2, i] + x * (F[1, i] + F[2, i] - 2.0 * d))
+            )
     else:
         for i in range(n):
             acc = 0.0
@@ -272,11 +354,13 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, work,
 
 
 @njit(cache=True)
-def start(t, y, p, ip, aux, work, f, g, stats):
-    """Derivative and event functions at the initial point. Returns the hook code (0, a
-    failure code, or EVENT_INSIDE_STEP when the point lies beyond an event surface)."""
+def start(t, y, p, ip, aux, work, f, g, stats, stiff_slot, ctrl):
+    """Derivative, event functions and stiff decay rates (into ``ctrl[N_CTRL:]``) at the
+    initial point. Returns the hook code (0, a failure code, or EVENT_INSIDE_STEP when the
+    point lies beyond an event surface)."""
     stats[ST_RHS] += 1
     code = rhs(t, y, p, ip, aux, work, f)
+    _read_decay(work, stiff_slot, ctrl[N_CTRL:])
     if g.size > 0:
         event_values(t, y, p, ip, aux, work, g)
     return code
@@ -289,7 +373,7 @@ def initial_step(method, t0, y0, f0, p, ip, aux, work, rtol, atol, max_step, t_e
     interval = abs(t_end - t0)
     if interval == 0.0:
         return 0.0
-    order = 7 if method == DOP853 else 4
+    order = 7 if method == DOP853 else 4  # of the error estimator
     d0 = 0.0
     d1 = 0.0
     for i in range(n):
@@ -343,9 +427,15 @@ def advance(
     stats,
     Yrec,
     AUXrec,
+    stiff_idx,
+    stiff_slot,
+    implicit_slot,
 ):
     """Integrate from ctrl[CT_T] until t_end (or the first step ending at or after t_pause).
 
+    ``stiff_idx`` and ``stiff_slot`` (int64) name the stiff states and the work slots of their
+    decay rates, ``implicit_slot`` the work slot of h gamma (empty and -1 for none; used by
+    ARK548, see the module docstring).
     All loop state lives in the caller's arrays (ctrl, y, f, aux, g_old, stats), so calling
     again continues exactly where the last call stopped: a run split into pauses is bit-identical
     to an unbroken one. Records ``Yrec[i] = y(t_rec[i])`` and ``AUXrec[i] = aux(t_rec[i])``.
@@ -356,6 +446,9 @@ def advance(
     nrec = t_rec.size
     ns = _n_stages(method)
     exponent = -1.0 / 8.0 if method == DOP853 else -1.0 / 5.0
+    ms = stiff_idx.size
+    decay = ctrl[N_CTRL : N_CTRL + ms]
+    decay_new = np.empty(ms)
     K = np.empty((16, n))
     F = np.empty((7, n))
     y_new = np.empty(n)
@@ -399,13 +492,14 @@ def advance(
                 t_new = t_end
             h = t_new - t
             code, inside_stage, inside_end = _rk_step(
-                method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats
-            )
+                method, t, y, f, h, p, ip, aux, work, K, y_new, ytmp, stats,
+                stiff_idx, stiff_slot, implicit_slot, decay_new,
+            )  # fmt: skip
             if code != 0:
                 last_code = code
                 err = np.inf
             else:
-                err = _error_norm(method, K, h, y, y_new, rtol, atol)
+                err = _error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay)
                 if not np.isfinite(err):
                     ctrl[CT_NONFINITE] = 1.0
                     err = np.inf
@@ -514,7 +608,7 @@ def advance(
             t = t_stop
             stats[ST_EVENTS] += 1
             stop = apply_event(fired, t, y, p, ip, aux, work)
-            code = start(t, y, p, ip, aux, work, f, g_old, stats)
+            code = start(t, y, p, ip, aux, work, f, g_old, stats, stiff_slot, ctrl)
             f_inside = code == EVENT_INSIDE_STEP
             if code != 0 and not f_inside:
                 stats[ST_MODEL_CODE] = code
@@ -527,6 +621,7 @@ def advance(
             t = t_new
             y[:] = y_new
             f[:] = K[ns]
+            decay[:] = decay_new
             f_inside = inside_end
             if ne > 0:
                 g_old[:] = g_new

@@ -21,7 +21,7 @@ from workbench.solver._grid import record_grid
 
 __all__ = ["simulate", "integrate", "RunResult"]
 
-_METHOD_IDS = {"dopri5": 0, "dop853": 1}
+_METHOD_IDS = {"dopri5": 0, "dop853": 1, "ark548": 2}
 _PACKAGES = ("workbench", "numpy", "scipy", "numba", "xarray", "netCDF4", "dask")
 
 
@@ -82,12 +82,14 @@ def integrate(
     f = np.empty(n)
     g = np.empty(ne)
     stats = np.zeros(k.N_STATS, np.int64)
-    ctrl = np.zeros(k.N_CTRL)
+    ctrl = np.zeros(k.N_CTRL + problem.stiff_states.size)
     Y = np.full((t_rec.size, n), np.nan)
     AUX = np.full((t_rec.size, na), np.nan)
     _compiled(k, mid, problem, rtol, atol_arr, max_step)
     wall0 = _time.perf_counter()
-    code = k.start(problem.t0, y, problem.p, problem.ip, aux, work, f, g, stats)
+    code = k.start(
+        problem.t0, y, problem.p, problem.ip, aux, work, f, g, stats, problem.stiff_slots, ctrl
+    )
     ctrl[k.CT_F_INSIDE] = 1.0 if code == k.EVENT_INSIDE_STEP else 0.0
     if code != 0 and code != k.EVENT_INSIDE_STEP:
         raise SolverError(
@@ -137,6 +139,9 @@ def integrate(
             stats,
             Y,
             AUX,
+            problem.stiff_states,
+            problem.stiff_slots,
+            problem.implicit_slot,
         )
         if progress is not None:
             progress(float(ctrl[k.CT_T]))
@@ -170,11 +175,12 @@ def _compiled(k, mid, problem, rtol, atol_arr, max_step) -> None:
     the recorded wall time is integration only."""
     n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
     y, f, aux = problem.y0.copy(), np.empty(n), problem.aux0.copy()
-    g, stats, ctrl = np.empty(ne), np.zeros(k.N_STATS, np.int64), np.zeros(k.N_CTRL)
+    g, stats = np.empty(ne), np.zeros(k.N_STATS, np.int64)
+    ctrl = np.zeros(k.N_CTRL + problem.stiff_states.size)
     work = np.zeros(max(problem.work_size, 1))
     p, ip, t0 = problem.p, problem.ip, problem.t0
     ctrl[k.CT_T] = t0
-    k.start(t0, y, p, ip, aux, work, f, g, stats)
+    k.start(t0, y, p, ip, aux, work, f, g, stats, problem.stiff_slots, ctrl)
     k.initial_step(mid, t0, y, f, p, ip, aux, work, 1e-3, atol_arr, max_step, t0 + 1.0, stats)
     k.advance(
         mid,
@@ -197,6 +203,9 @@ def _compiled(k, mid, problem, rtol, atol_arr, max_step) -> None:
         stats,
         np.empty((0, n)),
         np.empty((0, na)),
+        problem.stiff_states,
+        problem.stiff_slots,
+        problem.implicit_slot,
     )
 
 

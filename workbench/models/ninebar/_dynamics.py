@@ -108,7 +108,8 @@ WJ_VT = 9  # sliding velocity, m s-1
 WJ_ZDOT = 10  # bristle rate, m s-1
 WJ_PDISS = 11  # dissipated power, W
 WJ_EEL = 12  # elastic contact energy, J
-N_WJ = 13
+WJ_DECAY = 13  # decay rate of the LuGre bristle deflection in contact, s-1 (0 otherwise)
+N_WJ = 14
 W_SLIDER = W_JOINT + 2 * N_WJ  # slider position, velocity, acceleration (m, m s-1, m s-2)
 W_KE = W_SLIDER + 3  # kinetic energy, J
 W_PE = W_KE + 1  # potential energy (gravity + contact), J
@@ -136,7 +137,8 @@ _O_MFF = _O_Q6 + 6
 _O_RF = _O_MFF + 36
 _O_QDD = _O_RF + 6
 _O_L = _O_QDD + 6
-WORK_SIZE = _O_L + 36
+O_HG = _O_L + 36  # h gamma of an implicit ARK548 stage (s; 0 otherwise), set by the solver
+WORK_SIZE = O_HG + 1
 
 
 @njit(cache=True)
@@ -197,12 +199,14 @@ def evaluate(t, y, p, ip, aux, work):
         vy = qd[ix + 1]
         bearing = PT_A if j == 0 else PT_B
         z = y[ip[IP_Z + j]] if friction == FRICTION_LUGRE else 0.0
-        e, delta, ddot, fn, ft, vt, zdot, pd, eel = clearance_joint(
+        e, delta, ddot, fn, ft, vt, z, zdot, decay, pd, eel = clearance_joint(
             Q, J, pos, qd, JOURNAL_BODY[j], BEARING_BODY[j], pts[bearing, 0], pts[bearing, 1],
             x, yv, vx, vy, aux[j], p[base + PJ_R1], p[base + PJ_R2], p[base + PJ_C],
             p[base + PJ_K], p[base + PJ_N], p[base + PJ_CE], p[P_VFLOOR], friction,
-            p[P_CF : P_CF + N_FP], z,
+            p[P_CF : P_CF + N_FP], z, work[O_HG],
         )  # fmt: skip
+        if friction == FRICTION_LUGRE:
+            y[ip[IP_Z + j]] = z  # solved in an implicit stage (unchanged otherwise)
         ws[wb + WJ_X] = x
         ws[wb + WJ_Y] = yv
         ws[wb + WJ_VX] = vx
@@ -218,6 +222,7 @@ def evaluate(t, y, p, ip, aux, work):
         ws[wb + WJ_FT] = ft
         ws[wb + WJ_VT] = vt
         ws[wb + WJ_ZDOT] = zdot
+        ws[wb + WJ_DECAY] = decay
         ws[wb + WJ_PDISS] = pd
         ws[wb + WJ_EEL] = eel
 
@@ -279,9 +284,7 @@ def rhs(t, y, p, ip, aux, work, dydt):
         iz = ip[IP_Z + j]
         if iz >= 0:
             # bristles exist only in contact: frozen out of contact (reset at each onset)
-            dydt[iz] = (
-                ws[W_JOINT + j * N_WJ + WJ_ZDOT] if ws[W_JOINT + j * N_WJ + WJ_FN] > 0 else 0.0
-            )
+            dydt[iz] = ws[W_JOINT + j * N_WJ + WJ_ZDOT]
     iw = ip[IP_W]
     if iw >= 0:
         dydt[iw] = ws[W_PDRIVE]

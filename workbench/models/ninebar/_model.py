@@ -222,6 +222,11 @@ class NineBar(Model):
             work_size=dyn.WORK_SIZE,
             failure=lambda code: codes.get(code, f"model failure code {code}"),
             data={"stiffness": stiffness, "joints": joints},
+            stiff_states=[ip[dyn.IP_Z + JOINTS.index(j)] for j in joints] if lugre else [],
+            stiff_slots=[dyn.W_JOINT + JOINTS.index(j) * dyn.N_WJ + dyn.WJ_DECAY for j in joints]
+            if lugre
+            else [],
+            implicit_slot=dyn.O_HG,
         )
 
     def derive(self, problem, t, Y, AUX, requested):
