@@ -10,6 +10,8 @@ import math
 
 from numba import njit
 
+from workbench.solver._hooks_template import apply_event, event_values  # noqa: F401 (no events)
+
 
 @njit(cache=True)
 def rhs(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
@@ -19,14 +21,4 @@ def rhs(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
     work[0] = a
     dydt[0] = math.cos(t)
     dydt[1] = r - a * y[1]
-    return 0
-
-
-@njit(cache=True)
-def event_values(t, y, p, ip, aux, work, g):  # noqa: ARG001
-    return None
-
-
-@njit(cache=True)
-def apply_event(k, t, y, p, ip, aux, work):  # noqa: ARG001
     return 0
