@@ -23,7 +23,7 @@ so that the hot right-hand side allocates nothing.
 
 Algorithms: Dormand & Prince (1980) DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853
 (Hairer, Nørsett & Wanner 1993, Sec. II.10); the additive implicit–explicit ARK5(4)8L[2]SA of
-Kennedy & Carpenter (2003) with cubic Hermite dense output, for problems that declare *stiff
+Kennedy & Carpenter (2003) with quartic Hermite dense output, for problems that declare *stiff
 states*: states k whose rate has the form ``dy_k/dt = r_k(y) - a_k(y) y_k`` with a decay rate
 ``a_k >= 0`` (s-1), where ``r_k`` and ``a_k`` depend on the non-stiff states only (a LuGre
 bristle deflection: ``dz/dt = v - a(v) z``). ARK548 integrates the stiff states' whole rate
@@ -236,8 +236,16 @@ def _error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
 
 
 @njit(cache=True)
-def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats):
-    """Coefficients of the continuous extension over the last step. Returns the hook code."""
+def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats, stiff_idx):
+    """Coefficients of the continuous extension over the last step. Returns the hook code.
+
+    ARK548: quartic Hermite interpolation (4th order: O(h^5) between the step's ends, like
+    DOPRI5's) through the values and derivatives at both ends and the derivative at t + h/3,
+    evaluated (one extra ``rhs`` call) at the cubic Hermite interpolant there, whose O(h^4)
+    error enters the quartic only times h. Stiff states keep the cubic Hermite interpolant: their
+    derivative at an interpolated point carries its error times the decay rate a, which would
+    spoil the quartic for |h a| >> 1.
+    """
     n = y.size
     if method == DOP853:
         for r in range(3):
@@ -258,11 +266,37 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats):
                     acc += DOP853_D[r, s] * K[s, i]
                 F[3 + r, i] = h * acc
     elif method == ARK548:
-        # cubic Hermite interpolation between the step's ends (values and derivatives)
+        # y(t + x h) = y + x (F1 + x (F2 + x (F3 + x F4))); F1 = h f0. Cubic Hermite first,
+        # with d = y_new - y and h f1: F2 = 3 d - 2 h f0 - h f1, F3 = h f0 + h f1 - 2 d.
         for i in range(n):
-            F[0, i] = y_new[i] - y[i]
+            d = y_new[i] - y[i]
+            F[0, i] = d
             F[1, i] = h * K[0, i]
-            F[2, i] = h * K[8, i]
+            F[2, i] = 3.0 * d - 2.0 * h * K[0, i] - h * K[8, i]
+            F[3, i] = h * K[0, i] + h * K[8, i] - 2.0 * d
+            F[4, i] = 0.0
+            x = 1.0 / 3.0
+            ytmp[i] = y[i] + x * (F[1, i] + x * (F[2, i] + x * F[3, i]))
+        stats[ST_RHS] += 1
+        code = rhs(t + h / 3.0, ytmp, p, ip, aux, work, K[9])
+        if code != 0 and code != EVENT_INSIDE_STEP:
+            return code
+        # quartic: p(1) = y_new, p'(0) = h f0, p'(1) = h f1, p'(1/3) = h f(t + h/3); with
+        # R1 = d - h f0, R2 = h (f1 - f0), R3 = h (f(t + h/3) - f0) the coefficients of x^2,
+        # x^3, x^4 are the rows of [[-6, 5/4, 27/4], [16, -7/2, -27/2], [-9, 9/4, 27/4]] @ R
+        for i in range(n):
+            stiff = False
+            for k in range(stiff_idx.size):
+                if stiff_idx[k] == i:
+                    stiff = True
+            if stiff:
+                continue
+            r1 = F[0, i] - h * K[0, i]
+            r2 = h * (K[8, i] - K[0, i])
+            r3 = h * (K[9, i] - K[0, i])
+            F[2, i] = -6.0 * r1 + 1.25 * r2 + 6.75 * r3
+            F[3, i] = 16.0 * r1 - 3.5 * r2 - 13.5 * r3
+            F[4, i] = -9.0 * r1 + 2.25 * r2 + 6.75 * r3
     else:
         for i in range(n):
             for j in range(4):
@@ -290,11 +324,7 @@ def _dense_eval(method, t_old, h, y_old, F, t, out):
             out[i] = y_old[i] + acc
     elif method == ARK548:
         for i in range(n):
-            d = F[0, i]
-            out[i] = y_old[i] + x * (
-                F[1, i]
-                + x * (3.0 * d - 2.0 * F[1, i] - F[2, i] + x * (F[1, i] + F[2, i] - 2.0 * d))
-            )
+            out[i] = y_old[i] + x * (F[1, i] + x * (F[2, i] + x * (F[3, i] + x * F[4, i])))
     else:
         for i in range(n):
             acc = 0.0
@@ -548,7 +578,7 @@ def advance(
                 if _crossed(ev_dir[k], g_old[k], g_new[k]):
                     if not dense_ready:
                         code = _dense_prepare(
-                            method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats
+                            method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats, stiff_idx
                         )
                         if code != 0:
                             stats[ST_MODEL_CODE] = code
@@ -584,7 +614,7 @@ def advance(
             else:
                 if not dense_ready:
                     code = _dense_prepare(
-                        method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats
+                        method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats, stiff_idx
                     )
                     if code != 0:
                         stats[ST_MODEL_CODE] = code
