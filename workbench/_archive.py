@@ -61,8 +61,10 @@ def save_run(
     A reader never sees a half-written file, and an interrupted write leaves any previous file
     at ``path`` intact. Float variables are zlib-compressed (level 4, lossless) when ``compress``.
     ``classic`` writes the netCDF-3 64-bit-offset format instead (no compression, 64-bit
-    integers stored as 32-bit where their values fit): about half the time of netCDF-4 for a
-    small file, whose cost is mostly HDF5's per-variable overhead (campaign block files).
+    integers stored as 32-bit where their values fit) with scipy's writer: a third of the time
+    of netCDF-4 for a small file, whose cost is mostly HDF5's per-variable overhead (campaign
+    block files of 5 Duffing points: 4.0 ms against 8.0 ms with the netCDF library's netCDF-3
+    writer and 11.8 ms for netCDF-4; the files read back identical).
 
     Returns the path written.
     """
@@ -70,7 +72,7 @@ def save_run(
     encoding = {}
     if classic:
         with atomic_path(path) as tmp:
-            _encodable(ds).to_netcdf(tmp, engine="netcdf4", format="NETCDF3_64BIT")
+            _encodable(ds).to_netcdf(tmp, engine="scipy", format="NETCDF3_64BIT")
         return path
     if compress:
         for name, var in ds.data_vars.items():

@@ -4,7 +4,7 @@ The client puts the scene of the campaign's first point (TOML) in the environmen
 ``WORKBENCH_CAMPAIGN_PRELOAD`` before the fork server starts; importing this module there loads
 (or, on a cold cache, compiles) the model's kernel a single time, and every worker forked from
 the server inherits the machine code instead of loading it from disk itself (and xarray's and
-netCDF's first-use imports). Anything that goes
+netCDF's first-use imports, and the package versions of the provenance). Anything that goes
 wrong here is ignored: the workers then load the kernel on their first point as usual.
 """
 
@@ -34,17 +34,22 @@ def _load_kernel(scene_toml: str) -> None:
 
 
 def _warm_xarray() -> None:
-    """First-use imports of xarray (array backends) and of the netCDF writer, done once here."""
+    """First-use costs, paid once here instead of once per worker: xarray's array backends, the
+    netCDF writers (netCDF-4 and the netCDF-3 one of the block files), and the package-version
+    look-ups of a run's provenance (~20 ms of importlib.metadata on a worker's first point)."""
     import tempfile
 
     import numpy as np
     import xarray as xr
 
     from workbench._archive import save_run
+    from workbench.solver._simulate import _versions
 
     ds = xr.Dataset({"a": ("t", np.zeros(2))}, coords={"t": ("t", np.arange(2.0))})
     with tempfile.TemporaryDirectory() as d:
         save_run(ds, os.path.join(d, "warm.nc"))
+        save_run(ds, os.path.join(d, "warm3.nc"), classic=True)
+    _versions()
 
 
 if os.environ.get(PRELOAD_ENV):
