@@ -31,11 +31,11 @@ Store layout
   cycles times the forcing period, or transient + duration), the longest-processing-time rule
   (Graham 1969), so that a sweep over the forcing frequency does not end waiting for its
   slowest, low-frequency block.
-* Block files are netCDF-3 (64-bit offset; half the write time of netCDF-4 for small files,
-  whose cost is HDF5's per-variable overhead); the task also returns a small block (up to
-  32 MiB) to the client with its summary, so that the client assembles what this call
-  computed without reading those files again. Only blocks of an earlier, interrupted call are
-  read from disk.
+* Block files are netCDF-3 (64-bit offset, scipy's writer; a third of the write time of
+  netCDF-4 for small files, whose cost is HDF5's per-variable overhead); the task also
+  returns a small block (up to 32 MiB) to the client with its summary, so that the client
+  assembles what this call computed without reading those files again. Only blocks of an
+  earlier, interrupted call are read from disk.
 
 * Each task owns one block file and writes it atomically (a temporary file beside it, then a
   rename), so a block file exists only when complete; only the client writes the manifest and

@@ -122,6 +122,15 @@ def _read_decay(work, stiff_slot, decay):
 
 
 @njit(cache=True)
+def _stiff_position(stiff_idx, i):
+    """Position k of state i in ``stiff_idx`` (-1 if state i is not stiff)."""
+    for k in range(stiff_idx.size):
+        if stiff_idx[k] == i:
+            return k
+    return -1
+
+
+@njit(cache=True)
 def _stage_point(K, a, s, h, y, out):
     """out = y + h * sum_{j<s} a[j] K[j]."""
     n = y.size
@@ -228,9 +237,9 @@ def _error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
         for j in range(E.size):
             e += E[j] * K[j, i]
         if method == ARK548:
-            for k in range(stiff_idx.size):
-                if stiff_idx[k] == i:
-                    e /= 1.0 + h * ARK_GAMMA * decay[k]
+            k = _stiff_position(stiff_idx, i)
+            if k >= 0:
+                e /= 1.0 + h * ARK_GAMMA * decay[k]
         acc += (h * e / sc) ** 2
     return np.sqrt(acc / n)
 
@@ -268,6 +277,7 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats, 
     elif method == ARK548:
         # y(t + x h) = y + x (F1 + x (F2 + x (F3 + x F4))); F1 = h f0. Cubic Hermite first,
         # with d = y_new - y and h f1: F2 = 3 d - 2 h f0 - h f1, F3 = h f0 + h f1 - 2 d.
+        x = 1.0 / 3.0
         for i in range(n):
             d = y_new[i] - y[i]
             F[0, i] = d
@@ -275,7 +285,6 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats, 
             F[2, i] = 3.0 * d - 2.0 * h * K[0, i] - h * K[8, i]
             F[3, i] = h * K[0, i] + h * K[8, i] - 2.0 * d
             F[4, i] = 0.0
-            x = 1.0 / 3.0
             ytmp[i] = y[i] + x * (F[1, i] + x * (F[2, i] + x * F[3, i]))
         stats[ST_RHS] += 1
         code = rhs(t + h / 3.0, ytmp, p, ip, aux, work, K[9])
@@ -285,11 +294,7 @@ def _dense_prepare(method, t, y, y_new, h, p, ip, aux, work, K, F, ytmp, stats, 
         # R1 = d - h f0, R2 = h (f1 - f0), R3 = h (f(t + h/3) - f0) the coefficients of x^2,
         # x^3, x^4 are the rows of [[-6, 5/4, 27/4], [16, -7/2, -27/2], [-9, 9/4, 27/4]] @ R
         for i in range(n):
-            stiff = False
-            for k in range(stiff_idx.size):
-                if stiff_idx[k] == i:
-                    stiff = True
-            if stiff:
+            if _stiff_position(stiff_idx, i) >= 0:
                 continue
             r1 = F[0, i] - h * K[0, i]
             r2 = h * (K[8, i] - K[0, i])

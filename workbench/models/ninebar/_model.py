@@ -206,6 +206,7 @@ class NineBar(Model):
         if energy:
             ip[dyn.IP_W] = 2 * nf + (len(joints) if lugre else 0)
         c_min = min(self.clearances(params)[j] for j in joints) if joints else 1.0
+        bristles = joints if lugre else ()  # the LuGre bristle states are stiff (ARK548)
         codes = failure_messages(
             "the mechanism cannot be assembled at this configuration (a loop does not close)"
         )
@@ -222,10 +223,8 @@ class NineBar(Model):
             work_size=dyn.WORK_SIZE,
             failure=lambda code: codes.get(code, f"model failure code {code}"),
             data={"stiffness": stiffness, "joints": joints},
-            stiff_states=[ip[dyn.IP_Z + JOINTS.index(j)] for j in joints] if lugre else [],
-            stiff_slots=[dyn.W_JOINT + JOINTS.index(j) * dyn.N_WJ + dyn.WJ_DECAY for j in joints]
-            if lugre
-            else [],
+            stiff_states=[ip[dyn.IP_Z + JOINTS.index(j)] for j in bristles],
+            stiff_slots=[dyn.W_JOINT + JOINTS.index(j) * dyn.N_WJ + dyn.WJ_DECAY for j in bristles],
             implicit_slot=dyn.O_HG,
         )
 
