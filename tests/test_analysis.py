@@ -76,14 +76,10 @@ def test_lorenz_rosenstein_cross_check(lorenz):
 
 
 def test_lorenz_lle_from_equations():
-    r = lle_from_equations(
-        {
-            "model": {"name": "lorenz"},
-            "run": {"duration": 1000.0, "transient": 10.0},
-            "solver": {"rtol": 1e-10, "atol": 1e-10},
-        }
-    )
-    assert float(r.lle) == pytest.approx(LORENZ_LLE, rel=0.01)
+    """Finite-time exponents of 500-unit windows scatter by ~2 % about 0.9056."""
+    r = lle_from_equations({"model": {"name": "lorenz"}, "run": {"duration": 500.0}})
+    assert float(r.lle) == pytest.approx(LORENZ_LLE, rel=0.05)
+    assert bool(r.converged)
 
 
 def test_henon_wolf():

@@ -1,6 +1,7 @@
 """Analysis of runs: phase portraits, Poincaré sections, delay and embedding selection, largest
 Lyapunov exponents (Wolf et al. 1985; Rosenstein et al. 1993 via nolds; from the equations,
-Benettin et al. 1980), the 0-1 test for chaos and bifurcation diagrams.
+Benettin et al. 1980: two trajectories, and the spectrum from the variational equations with
+saltation at events), the 0-1 test for chaos and bifurcation diagrams.
 
 Every estimator accepts numpy arrays and xarray DataArrays (a ``time`` coordinate gives dt) and
 returns an ``xarray.Dataset`` with units: the chosen value and the evidence behind it.
@@ -15,6 +16,7 @@ from workbench.analysis._benettin import lle_from_equations
 from workbench.analysis._bifurcation import bifurcation_diagram
 from workbench.analysis._delay import delay_acf, delay_ami
 from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
+from workbench.analysis._lyapunov import lyapunov_spectrum
 from workbench.analysis._rosenstein import rosenstein_lle
 from workbench.analysis._sections import crossing_section, phase_portrait, poincare_section
 from workbench.analysis._wolf import wolf_lle
@@ -29,6 +31,7 @@ __all__ = [
     "embedding_cao",
     "embedding_fnn",
     "lle_from_equations",
+    "lyapunov_spectrum",
     "phase_portrait",
     "poincare_section",
     "rosenstein_lle",

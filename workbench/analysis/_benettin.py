@@ -1,7 +1,15 @@
-"""The largest Lyapunov exponent of a simulated model from its equations: two nearby
-trajectories with periodic renormalisation (Benettin, Galgani, Giorgilli & Strelcyn 1980,
-Meccanica 15, 9). The reference the time-series estimates are judged against; it needs no
-variational equations, so it holds for the non-smooth contact models as well."""
+"""The largest Lyapunov exponent of a simulated model from its equations: a fiducial trajectory
+and nearby copies renormalised as their separation grows (Benettin, Galgani & Strelcyn 1976,
+Phys. Rev. A 14, 2338; Benettin, Galgani, Giorgilli & Strelcyn 1980, Meccanica 15, 9), with the
+separation chosen from evidence and the convergence under its knobs shown.
+
+It needs no variational equations: the copies meet their own impacts, so it checks the
+saltation matrices of :func:`workbench.analysis.lyapunov_spectrum` independently. The copies are
+integrated side by side with the fiducial trajectory in one step-size sequence, so that their
+integration errors are nearly equal and their separation is integrated far more accurately than
+the tolerance (two separately integrated trajectories differ by the tolerance times the ~1e4-fold
+amplification of an impact's timing error, a noise floor far above any useful separation).
+"""
 
 from __future__ import annotations
 
@@ -11,12 +19,120 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._scene import COMPILED_METHODS, Scene, load_scene
-from workbench.models import get_model
-from workbench.solver._grid import record_grid
+from workbench._scene import Scene
+from workbench.analysis._lyapunov import Prepared, prepare
+from workbench.solver._copies import copies_problem, split_copies
 from workbench.solver._simulate import integrate
+from workbench.solver._tangent import state_scale, tangent_problem
 
 __all__ = ["lle_from_equations"]
+
+#: candidate scaled separations of the pilot run
+_PILOT_SEPARATIONS = 10.0 ** np.arange(-11, -3)
+#: default log growth of a copy's separation that triggers its renormalisation (a factor 10)
+GROWTH = math.log(10.0)
+#: records per measured window (running estimate, batch means)
+_RECORDS = 400
+#: integration segments when the fiducial carries a tangent vector, renormalised between them
+_SEGMENTS = 40
+#: relative agreement that counts as converged
+TOLERANCE = 0.05
+#: tightest tolerance the automatic tightening goes to
+MIN_RTOL = 1e-11
+
+
+def follow_copies(
+    prep: Prepared,
+    separations: np.ndarray,
+    growth: np.ndarray,
+    length: float,
+    rtol: float,
+    seed: int,
+    *,
+    variational: bool = False,
+) -> dict:
+    """Integrate the fiducial trajectory and one copy per entry of ``separations`` (scaled,
+    dimensionless) side by side over ``length`` seconds, each renormalised whenever its log
+    growth reaches its ``growth``; with ``variational`` the fiducial also carries a tangent
+    vector (the variational equations with saltation, :mod:`workbench.solver._tangent`), so
+    that both estimates follow one trajectory. Returns the record ``times`` (s), every copy's
+    accumulated log growth at them (renormalisations plus the current separation), the tangent
+    vector's (``variational``), renormalisation counts and solver statistics."""
+    pb = prep.problem
+    n, na = pb.y0.size, pb.aux0.size
+    scale = state_scale(pb)
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal(n)
+    u /= np.linalg.norm(u)
+    separations = np.asarray(separations, dtype=float)
+    k = separations.size + 1
+    base = pb
+    if variational:
+        base = tangent_problem(pb, np.concatenate([u * scale, np.zeros(na)])[:, None])
+    Y = np.tile(base.y0, (k, 1))
+    Y[1:, n:] = 0.0  # only the fiducial copy carries the tangent vector
+    Y[1:, :n] += separations[:, None] * u[None, :] * scale[None, :]
+    system = copies_problem(
+        base, Y, np.tile(base.aux0, (k, 1)), separations=separations, growth=growth, measured=n
+    )
+    y, aux = system.y0.copy(), system.aux0.copy()
+    t_rec = pb.t0 + np.linspace(0.0, length, _RECORDS + 1)
+    total = np.zeros((t_rec.size, k - 1))
+    tangent = np.zeros(t_rec.size)
+    log_tangent = 0.0  # log growth of the tangent vector removed by its renormalisations
+    stats = {"steps": 0, "rejected_steps": 0, "rhs_evaluations": 0, "events": 0}
+    counts = np.zeros(k - 1)
+    segments = np.array_split(np.arange(1, t_rec.size), _SEGMENTS if variational else 1)
+    for seg in segments:
+        t0 = t_rec[seg[0] - 1]
+        res = integrate(
+            dataclasses.replace(system, y0=y, aux0=aux, t0=t0),
+            t_rec[seg],
+            method=prep.method if prep.method != "ark548" else "dop853",
+            rtol=rtol,
+            atol=prep.atol * rtol / prep.rtol,
+            max_step=prep.max_step,
+            max_steps=prep.max_steps,
+        )
+        for key in stats:
+            stats[key] += res.stats[key]
+        for j, r in enumerate(seg):
+            Yr, _, logs, counts = split_copies(res.Y[j], res.AUX[j], k)
+            d = np.linalg.norm((Yr[1:, :n] - Yr[0, :n]) / scale, axis=1)
+            if not np.all(d > 0) or not np.all(np.isfinite(d)):
+                raise FloatingPointError(
+                    f"a copy coincides with the fiducial trajectory or left it at t = "
+                    f"{t_rec[r]:g} s (scaled distances {d!r}); choose other separations"
+                )
+            total[r] = logs + np.log(d / separations)
+            if variational:
+                tangent[r] = log_tangent + math.log(np.linalg.norm(Yr[0, n : 2 * n] / scale))
+        y, aux = res.Y[-1].copy(), res.AUX[-1].copy()
+        if variational:  # renormalise the tangent vector (and its discrete-state part)
+            norm = float(np.linalg.norm(y[n : 2 * n] / scale))
+            y[n : 2 * n + na] /= norm
+            log_tangent += math.log(norm)
+    return {
+        "times": t_rec,
+        "total": total,
+        "variational": tangent if variational else None,
+        "renormalisations": counts,
+        "stats": stats,
+    }
+
+
+def _plateau(rates: np.ndarray) -> tuple[int, int]:
+    """The widest range of consecutive candidates whose estimates agree within TOLERANCE of
+    their median (first of equal width)."""
+    best = (0, 0)
+    for i in range(rates.size):
+        for j in range(i, rates.size):
+            window = rates[i : j + 1]
+            med = float(np.median(window))
+            if np.all(np.abs(window - med) <= TOLERANCE * max(abs(med), 1e-300)):
+                if j - i > best[1] - best[0]:
+                    best = (i, j)
+    return best
 
 
 def lle_from_equations(
@@ -24,115 +140,215 @@ def lle_from_equations(
     *,
     cycles: int | None = None,
     duration: float | None = None,
-    interval: float | None = None,
-    separation: float = 1e-8,
+    separation: float | None = None,
+    growth: float = GROWTH,
+    rtol: float | None = None,
+    tighten: bool = True,
+    variational: bool = True,
     seed: int = 0,
 ) -> xr.Dataset:
-    """LLE (1/s) of a scene's model: follow the scene's run and a copy displaced by
-    ``separation`` (relative to each state's scale, the model's ``atol_scale``); every
-    ``interval`` seconds add log(d / separation) and pull the copy back along the separation.
+    """Largest Lyapunov exponent (1/s) of a scene's model by the two-trajectory method, with
+    its convergence shown.
+
+    A fiducial trajectory (the scene's run after its transient) and copies displaced by a
+    scaled separation ``d0`` (each state divided by its size, the model's ``atol_scale``) are
+    integrated side by side in one step sequence; whenever a copy's separation has grown by
+    ``exp(growth)`` (located as an event, so that the copies stay in the linear range through
+    the bursts of stretching at impacts, whatever their rate) it adds the log growth and is
+    pulled back along its separation. Five copies run at once on the same fiducial trajectory:
+    ``(d0, growth)`` (the estimate), ``(d0 / 2, growth)``, ``(2 d0, growth)``,
+    ``(d0, growth / 2)`` and ``(d0, 2 growth)``: the separation and the renormalisation
+    interval halved and doubled. ``converged`` says whether all five agree within 5 %.
 
     Parameters
     ----------
     scene : Scene, path or mapping
-        The run starts after the scene's transient (the state there is computed first).
     cycles, duration : optional
-        Length of the measurement: forcing periods (forced models) or seconds; default: the
-        scene's ``cycles`` or ``duration``.
-    interval : float, optional
-        Renormalisation interval, s; default T/32 for a forced model (an impacting mechanism
-        separates at ~100-300 1/s, so a whole period would saturate), else 0.1 s.
-    separation : float
-        Initial and renormalised separation in scaled units (dimensionless).
+        Measured length: forcing periods (forced models) or seconds; default the scene's.
+    separation : float, optional
+        Scaled separation d0. Default: from a pilot run over the first quarter of the window
+        with copies at 1e-11 .. 1e-4, the geometric middle of the widest range of them whose
+        estimates agree within 5 % (below it the integration error, above it the nonlinearity
+        moves the estimate).
+    growth : float
+        Log growth of a copy's separation that triggers its renormalisation (default ln 10).
+    rtol : float, optional
+        Tolerance (default the scene's; ``atol`` scales with it).
+    tighten : bool
+        Where the five variants do not agree, repeat at a 100x tighter tolerance (down to
+        1e-11): in the linear range they differ only by the integration error (and the rare
+        contact whose timing a copy resolves differently). Every attempt is reported
+        (``attempt_rtol``, ``attempt_lle``, ``attempt_spread``).
+    variational : bool
+        The fiducial trajectory also carries a tangent vector of the variational equations
+        with saltation at events (:func:`workbench.analysis.lyapunov_spectrum`'s method):
+        ``lle_variational`` on the very same trajectory, so that the two methods are compared
+        without the scatter of two chaotic realisations.
+    seed : int
+        Seed of the direction of the initial separation.
 
     Returns
     -------
     xarray.Dataset
-        ``lle`` (1/s), ``lle_per_period`` (forced models), ``running`` over ``elapsed`` (s), and
-        the settings.
+        ``lle`` (s-1) and ``lle_per_period`` (forced models), ``converged``, the five
+        ``estimate`` values over dim ``variant`` with their ``separation`` and ``growth``,
+        ``spread`` (largest relative deviation from ``lle``), ``stderr`` (10 batch means),
+        ``running`` estimate over ``elapsed`` (s), and the pilot evidence (``pilot_rate`` over
+        ``pilot_separation``).
 
     Examples
     --------
     >>> r = lle_from_equations({"model": {"name": "lorenz"},
-    ...                         "run": {"duration": 100.0, "transient": 10.0}})
-    >>> abs(float(r.lle) - 0.9056) < 0.05
-    True
+    ...                         "run": {"duration": 200.0, "transient": 10.0}})
+    >>> abs(float(r.lle) - 0.9056) < 0.05, bool(r.converged)
+    (True, True)
     """
-    scene = scene if isinstance(scene, Scene) else load_scene(scene)
-    model = get_model(scene.model)
-    params = dict(scene.resolved_parameters)
-    problem = model.problem(params, scene.effects, scene.initial, ())
-    s = scene.solver
-    if s["method"].startswith("scipy:"):
-        raise ValueError(
-            f"solver.method={s['method']!r}: lle_from_equations needs a compiled method "
-            f"{COMPILED_METHODS!r}"
-        )
-    period = model.forcing_period(params)
-    t_rec, _ = record_grid(scene, problem.t0, period)
-    start = float(t_rec[0])
-    if period is not None:
-        n_cycles = cycles if cycles is not None else scene.run.get("cycles", 1)
-        length = n_cycles * period
-        interval = period / 32 if interval is None else interval
-    else:
-        length = duration if duration is not None else float(scene.run["duration"])
-        interval = 0.1 if interval is None else interval
-    if interval <= 0 or length < interval:
-        raise ValueError(f"interval={interval!r} s must be positive and at most {length!r} s")
-
-    def advance(pb, t1: float):
-        res = integrate(
-            pb,
-            np.array([t1]),
-            method=s["method"],
-            rtol=s["rtol"],
-            atol=s["atol"],
-            max_step=s["max_step"],
-            max_steps=s["max_steps"],
-        )
-        return res.Y[-1].copy(), res.AUX[-1].copy()
-
-    y, aux = (problem.y0, problem.aux0) if start == problem.t0 else advance(problem, start)
-    scale = np.where(np.isfinite(problem.atol_scale), problem.atol_scale, 0.0)
-    scale = np.where(scale > 0, scale, np.maximum(np.abs(y), 1.0))
-    rng = np.random.default_rng(seed)
-    u = rng.standard_normal(y.size)
-    u /= np.linalg.norm(u)
-    y2, aux2 = y + separation * u * scale, aux.copy()
-    n_steps = int(math.floor(length / interval + 1e-9))
-    total = 0.0
-    running = np.empty(n_steps)
-    t = start
-    for k in range(n_steps):
-        t1 = start + (k + 1) * interval
-        y, aux = advance(dataclasses.replace(problem, y0=y, aux0=aux, t0=t), t1)
-        y2, aux2 = advance(dataclasses.replace(problem, y0=y2, aux0=aux2, t0=t), t1)
-        d = (y2 - y) / scale
-        dist = float(np.linalg.norm(d))
-        if not dist > 0:
-            raise ValueError(f"the two trajectories coincide at t = {t1:g} s: increase separation")
-        total += math.log(dist / separation)
-        running[k] = total / (t1 - start)
-        y2 = y + d * (separation / dist) * scale
-        t = t1
-    lle = float(running[-1])
+    prep = prepare(scene, cycles=cycles, duration=duration)
+    rtol = prep.rtol if rtol is None else float(rtol)
+    if not growth > 0:
+        raise ValueError(f"growth={growth!r}: must be a positive log growth")
+    pilot = None
+    if separation is None:
+        pilot_length = prep.length / 4
+        run = follow_copies(
+            prep, _PILOT_SEPARATIONS, np.full(_PILOT_SEPARATIONS.size, growth), pilot_length,
+            rtol, seed,
+        )  # fmt: skip
+        rates = run["total"][-1] / pilot_length
+        i, j = _plateau(rates)
+        separation = float(np.sqrt(_PILOT_SEPARATIONS[i] * _PILOT_SEPARATIONS[j]))
+        pilot = (rates, pilot_length)
+    if not separation > 0:
+        raise ValueError(f"separation={separation!r}: must be a positive scaled separation")
+    seps = np.array([1.0, 0.5, 2.0, 1.0, 1.0]) * separation
+    grow = np.array([1.0, 1.0, 1.0, 0.5, 2.0]) * growth
+    tried = []
+    while True:
+        run = follow_copies(prep, seps, grow, prep.length, rtol, seed, variational=variational)
+        times, total = run["times"], run["total"]
+        estimates = total[-1] / prep.length
+        lle = float(estimates[0])
+        spread = float(np.max(np.abs(estimates - lle)) / max(abs(lle), 1e-300))
+        tried.append((rtol, lle, spread))
+        if spread <= TOLERANCE or not tighten or rtol / 100 < MIN_RTOL:
+            break
+        rtol /= 100  # the variants part by the integration error: tighten, and say so
+    start = times[0]
+    batches = np.array_split(np.arange(1, times.size), 10)
+    rates = [
+        (total[b[-1], 0] - total[b[0] - 1, 0]) / (times[b[-1]] - times[b[0] - 1]) for b in batches
+    ]
+    stderr = float(np.std(rates, ddof=1) / math.sqrt(len(rates)))
     out = xr.Dataset(
         {
             "lle": ((), lle, {"units": "s-1", "long_name": "largest Lyapunov exponent"}),
-            "running": ("elapsed", running, {"units": "s-1", "long_name": "running estimate"}),
-            "interval": ((), interval, {"units": "s", "long_name": "renormalisation interval"}),
-            "separation": ((), separation, {"units": "1", "long_name": "scaled separation"}),
+            "converged": (
+                (),
+                spread <= TOLERANCE,
+                {"long_name": f"the five variants agree within {TOLERANCE:.0%}"},
+            ),
+            "spread": (
+                (),
+                spread,
+                {"units": "1", "long_name": "largest relative deviation of a variant"},
+            ),
+            "stderr": (
+                (),
+                stderr,
+                {"units": "s-1", "long_name": "standard error (10 batch means)"},
+            ),
+            "estimate": ("variant", estimates, {"units": "s-1", "long_name": "estimate"}),
+            "separation": (
+                "variant",
+                seps,
+                {"units": "1", "long_name": "scaled separation"},
+            ),
+            "growth": (
+                "variant",
+                grow,
+                {"units": "1", "long_name": "log growth between renormalisations"},
+            ),
+            "attempt_rtol": (
+                "attempt",
+                [a[0] for a in tried],
+                {"units": "1", "long_name": "rtol of the attempt"},
+            ),
+            "attempt_lle": (
+                "attempt",
+                [a[1] for a in tried],
+                {"units": "s-1", "long_name": "estimate of the attempt"},
+            ),
+            "attempt_spread": (
+                "attempt",
+                [a[2] for a in tried],
+                {"units": "1", "long_name": "spread of the attempt"},
+            ),
+            "renormalisations": (
+                "variant",
+                run["renormalisations"],
+                {"units": "1", "long_name": "number of renormalisations"},
+            ),
+            "running": (
+                "elapsed",
+                total[1:, 0] / (times[1:] - start),
+                {"units": "s-1", "long_name": "running estimate"},
+            ),
         },
         coords={
+            "variant": (
+                "variant",
+                ["chosen", "half separation", "double separation", "half growth", "double growth"],
+            ),  # fmt: skip
             "elapsed": (
                 "elapsed",
-                interval * np.arange(1, n_steps + 1),
+                times[1:] - start,
                 {"units": "s", "long_name": "time followed"},
-            )
+            ),
         },
-        attrs={"method": "two trajectories, periodic renormalisation (Benettin et al. 1980)"},
+        attrs={
+            "method": "fiducial trajectory and copies in one step sequence, renormalised on "
+            "growth (Benettin et al. 1976, 1980)",
+            "rtol": rtol,
+            "start_time": start,
+            **{f"solver_{k}": v for k, v in run["stats"].items()},
+        },
     )
-    if period is not None:
-        out["lle_per_period"] = ((), lle * period, {"units": "1", "long_name": "LLE per period"})
+    if variational:
+        lv = float(run["variational"][-1] / prep.length)
+        out["lle_variational"] = (
+            (),
+            lv,
+            {"units": "s-1", "long_name": "LLE of the variational equations, same trajectory"},
+        )
+        out["running_variational"] = (
+            "elapsed",
+            run["variational"][1:] / (times[1:] - start),
+            {"units": "s-1", "long_name": "running estimate of the variational equations"},
+        )
+        out["method_difference"] = (
+            (),
+            abs(lle - lv) / max(abs(lv), 1e-300),
+            {"units": "1", "long_name": "relative difference, two trajectories vs variational"},
+        )
+    if pilot is not None:
+        out["pilot_rate"] = (
+            "pilot_separation",
+            pilot[0],
+            {"units": "s-1", "long_name": "pilot estimate"},
+        )
+        out = out.assign_coords(
+            pilot_separation=(
+                "pilot_separation",
+                _PILOT_SEPARATIONS,
+                {"units": "1", "long_name": "scaled separation of the pilot copies"},
+            )
+        )
+        out.attrs["pilot_length"] = pilot[1]
+    if prep.period is not None:
+        out["lle_per_period"] = (
+            (),
+            lle * prep.period,
+            {"units": "1", "long_name": "LLE per forcing period"},
+        )
+        out.attrs["forcing_period"] = prep.period
     return out

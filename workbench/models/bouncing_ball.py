@@ -10,13 +10,28 @@ import numpy as np
 from numba import njit
 
 from workbench.models import register
-from workbench.models._base import Model, Parameter, Problem, Quantity
+from workbench.models._base import EVENT_INSIDE_STEP, Model, Parameter, Problem, Quantity
 
 
 @njit(cache=True)
 def rhs(t, y, p, ip, aux, work, dydt):
     dydt[0] = y[1]
     dydt[1] = -p[0]
+    if y[0] < 0.0:
+        # below the floor without a located bounce: a step that rose and fell back through the
+        # floor between its ends (the free flight is a parabola, which the error estimate
+        # cannot see), so the loop must retry it shorter (see EVENT_INSIDE_STEP)
+        return EVENT_INSIDE_STEP
+    return 0
+
+
+@njit(cache=True)
+def jacobian(t, y, p, ip, aux, work, J):
+    """d(h', v')/d(h, v) = [[0, 1], [0, 0]]."""
+    J[0, 0] = 0.0
+    J[0, 1] = 1.0
+    J[1, 0] = 0.0
+    J[1, 1] = 0.0
     return 0
 
 

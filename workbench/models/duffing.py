@@ -26,6 +26,16 @@ def rhs(t, y, p, ip, aux, work, dydt):
 
 
 @njit(cache=True)
+def jacobian(t, y, p, ip, aux, work, J):
+    """Analytic Jacobian d(x', v')/d(x, v); its trace is -delta (s-1)."""
+    J[0, 0] = 0.0
+    J[0, 1] = 1.0
+    J[1, 0] = -p[1] - 3.0 * p[2] * y[0] * y[0]
+    J[1, 1] = -p[0]
+    return 0
+
+
+@njit(cache=True)
 def event_values(t, y, p, ip, aux, work, g):
     return None
 

@@ -23,6 +23,22 @@ def rhs(t, y, p, ip, aux, work, dydt):
 
 
 @njit(cache=True)
+def jacobian(t, y, p, ip, aux, work, J):
+    """Analytic Jacobian d(x', y', z')/d(x, y, z) (s-1); its trace is -(sigma + 1 + beta)."""
+    sigma, rho, beta = p[0], p[1], p[2]
+    J[0, 0] = -sigma
+    J[0, 1] = sigma
+    J[0, 2] = 0.0
+    J[1, 0] = rho - y[2]
+    J[1, 1] = -1.0
+    J[1, 2] = -y[0]
+    J[2, 0] = y[1]
+    J[2, 1] = y[0]
+    J[2, 2] = -beta
+    return 0
+
+
+@njit(cache=True)
 def event_values(t, y, p, ip, aux, work, g):
     return None
 

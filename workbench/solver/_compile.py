@@ -1,29 +1,81 @@
-"""Specialise the compiled integration loop for one model.
+"""Specialise compiled templates for one model.
 
 Numba cannot cache a compiled function that receives other compiled functions as arguments or
-closes over them (its cache then recompiles every process, seconds each time). Instead the kernel
-source (:mod:`workbench.solver._kernel`) is written once per model into the cache directory with
-its hook import pointing at the model's module, and imported from there: an ordinary module whose
-functions call global compiled functions, which numba caches on disk. Every process after the
-first (a CLI call, a dask worker) loads machine code instead of compiling.
+closes over them (its cache then recompiles every process, seconds each time). Instead a template
+(the integration loop :mod:`workbench.solver._kernel`, the Jacobian
+:mod:`workbench.solver._jacobian_template`, the tangent system
+:mod:`workbench.solver._tangent_template`, side-by-side copies
+:mod:`workbench.solver._copies_template`) is written once per model into the cache directory
+with its hook imports pointing at the model's module, and imported from there as a module of the
+package ``workbench_kernels``: an ordinary module whose functions call global compiled functions,
+which numba caches on disk. Every process after the first (a CLI call, a dask worker) loads
+machine code instead of compiling.
 """
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 import os
 import re
 import sys
+import types
 from functools import cache
 from pathlib import Path
 from types import ModuleType
 
 from workbench._cache import cache_root, package_digest
 
-_TEMPLATE = Path(__file__).with_name("_kernel.py")
+_HERE = Path(__file__).parent
 # read at import, like the package digest that keys the cache, so that both describe one source
-_TEMPLATE_SOURCE = _TEMPLATE.read_text()
-_MARKER = re.compile(r"^from .* import apply_event, event_values, rhs  # @@HOOKS@@$", re.M)
+_SOURCES = {
+    name: (_HERE / f"{name}.py").read_text()
+    for name in ("_kernel", "_jacobian_template", "_tangent_template", "_copies_template")
+}
+PACKAGE = "workbench_kernels"
+_PLACEHOLDER = "workbench.solver._hooks_template"
+
+
+def _directory() -> Path:
+    directory = cache_root() / "kernels" / package_digest()
+    directory.mkdir(parents=True, exist_ok=True)
+    if PACKAGE not in sys.modules:
+        # a namespace for the generated modules, so that they import each other by name
+        package = types.ModuleType(PACKAGE)
+        package.__path__ = [str(directory)]
+        sys.modules[PACKAGE] = package
+    return directory
+
+
+def _substitute(source: str, marker: str, module: str) -> str:
+    """Point the import lines tagged ``# @@<marker>@@`` at ``module`` (the names they import
+    stay)."""
+    pattern = re.compile(rf"^from \S+ import (.*)  # @@{marker}@@$", re.M)
+    source, n = pattern.subn(rf"from {module} import \1  # generated", source)
+    if n == 0:  # pragma: no cover - guards an edit of a template
+        raise RuntimeError(f"marker @@{marker}@@ not found in a template")
+    return source
+
+
+def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=None) -> ModuleType:
+    """Write ``template`` with its tagged import lines pointed at ``modules`` (marker -> module)
+    and its tagged flags set (``flags``: name -> bool) as module
+    ``workbench_kernels.<prefix>_<hooks>``, and import it."""
+    source = _SOURCES[template]
+    for marker, module in modules.items():
+        source = _substitute(source, marker, module)
+    for flag, value in (flags or {}).items():
+        pattern = re.compile(rf"^{flag} = \w+  # @@FLAG@@$", re.M)
+        source, n = pattern.subn(f"{flag} = {bool(value)}  # generated", source)
+        if n != 1:  # pragma: no cover
+            raise RuntimeError(f"flag {flag} not found exactly once in {template}")
+    directory = _directory()
+    name = f"{prefix}_" + re.sub(r"\W", "_", hooks)
+    path = directory / f"{name}.py"
+    if not path.exists() or path.read_text() != source:
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(source)
+        os.replace(tmp, path)  # atomic: concurrent workers never see a half-written file
+    return importlib.import_module(f"{PACKAGE}.{name}")
 
 
 @cache
@@ -35,22 +87,34 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    source = _TEMPLATE_SOURCE
-    line = f"from {hooks} import apply_event, event_values, rhs  # generated"
-    source, n = _MARKER.subn(line, source)
-    if n != 1:  # pragma: no cover - guards an edit of the template
-        raise RuntimeError(f"hook marker not found exactly once in {_TEMPLATE}")
-    directory = cache_root() / "kernels" / package_digest()
-    directory.mkdir(parents=True, exist_ok=True)
-    name = "kernel_" + re.sub(r"\W", "_", hooks)
-    path = directory / f"{name}.py"
-    if not path.exists() or path.read_text() != source:
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(source)
-        os.replace(tmp, path)  # atomic: concurrent workers never see a half-written file
-    module_name = f"workbench_kernels.{name}"
-    spec = importlib.util.spec_from_file_location(module_name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[module_name] = module
-    spec.loader.exec_module(module)
-    return module
+    return _specialise("_kernel", "kernel", hooks, {"HOOKS": hooks})
+
+
+@cache
+def jacobian_for(hooks: str) -> ModuleType:
+    """The compiled Jacobian ``jacobian(t, y, p, ip, aux, work, J)`` of the model whose hooks
+    are in module ``hooks``: the module's own analytic ``jacobian`` if it defines one, else
+    central finite differences of its compiled ``rhs`` (``fd_jacobian``, always available, so
+    that an analytic Jacobian can be checked against it). See
+    :mod:`workbench.solver._jacobian_template`.
+    """
+    analytic = hasattr(importlib.import_module(hooks), "jacobian")
+    modules = {"HOOKS": hooks, "JACOBIAN": hooks if analytic else _PLACEHOLDER}
+    flags = {"HAS_ANALYTIC": analytic}
+    return _specialise("_jacobian_template", "jacobian", hooks, modules, flags)
+
+
+@cache
+def tangent_for(hooks: str) -> ModuleType:
+    """Hooks of the tangent (variational) system of the model whose hooks are in ``hooks``, with
+    saltation at events; see :mod:`workbench.solver._tangent_template`. Integrate it with
+    ``kernel_for(tangent_for(hooks).__name__)``."""
+    modules = {"HOOKS": hooks, "MODEL_JACOBIAN": jacobian_for(hooks).__name__}
+    return _specialise("_tangent_template", "tangent", hooks, modules)
+
+
+@cache
+def copies_for(hooks: str) -> ModuleType:
+    """Hooks of several copies of the model whose hooks are in ``hooks``, integrated side by
+    side with one step-size sequence; see :mod:`workbench.solver._copies_template`."""
+    return _specialise("_copies_template", "copies", hooks, {"HOOKS": hooks})

@@ -24,3 +24,13 @@ def event_values(t, y, p, ip, aux, work, g):  # noqa: ARG001
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):  # noqa: ARG001
     return 0
+
+
+@njit(cache=True)
+def jacobian(t, y, p, ip, aux, work, J):  # noqa: ARG001
+    """Analytic Jacobian of dy/dt = -y: J = -I (the optional ``jacobian`` hook)."""
+    n = y.size
+    for i in range(n):
+        for j in range(n):
+            J[i, j] = -1.0 if i == j else 0.0
+    return 0

@@ -356,6 +356,19 @@ def _crossed(direction, g_a, g_b):
 
 
 @njit(cache=True)
+def _any_crossed(t, y, p, ip, aux, work, ev_dir, g_old, g):
+    """Whether any event function crosses between ``g_old`` and its values at (t, y), which are
+    written into ``g``."""
+    if ev_dir.size == 0:
+        return False
+    event_values(t, y, p, ip, aux, work, g)
+    for k in range(ev_dir.size):
+        if _crossed(ev_dir[k], g_old[k], g[k]):
+            return True
+    return False
+
+
+@njit(cache=True)
 def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, p, ip, aux, work, yint, gtmp):
     """Root of event k in [t_a, t_b] by the Illinois method on the dense output.
 
@@ -538,11 +551,23 @@ def advance(
                 if not np.isfinite(err):
                     ctrl[CT_NONFINITE] = 1.0
                     err = np.inf
-            if err < 1.0 and inside_stage and not inside_end and not f_inside:
+            if (
+                err < 1.0
+                and not f_inside
+                and (
+                    (inside_stage and not inside_end)
+                    or (
+                        inside_end
+                        and not _any_crossed(t_new, y_new, p, ip, aux, work, ev_dir, g_old, g_new)
+                    )
+                )
+            ):
                 # a stage lay beyond an event surface that both ends of the step are short of:
                 # the event began and ended inside the step, invisible to the sign test on g
-                # and, when few stages see it, to the error estimate. Halve until an end of a
-                # step lands beyond the surface, so that the event is located.
+                # and, when few stages see it, to the error estimate. Or the step's end lies
+                # beyond a surface that the sign test sees no crossing of (the step crossed it
+                # twice, e.g. left it and came back). Halve until an end of a step lands beyond
+                # the surface with a crossing, so that the event is located.
                 stats[ST_REJECTED] += 1
                 stats[ST_EVENT_RETRIES] += 1
                 h_abs = 0.5 * h
@@ -643,6 +668,17 @@ def advance(
             t = t_stop
             stats[ST_EVENTS] += 1
             stop = apply_event(fired, t, y, p, ip, aux, work)
+            # simultaneous events: any other event function that has crossed by t_stop has its
+            # root there too (within the root's tolerance, or the same double), so its update
+            # is applied now; left for the next step, it would start beyond its surface and
+            # never fire
+            if ne > 1:
+                event_values(t, y, p, ip, aux, work, gtmp)
+                for k in range(ne):
+                    if k != fired and _crossed(ev_dir[k], g_old[k], gtmp[k]):
+                        stats[ST_EVENTS] += 1
+                        if apply_event(k, t, y, p, ip, aux, work) != 0:
+                            stop = 1
             code = start(t, y, p, ip, aux, work, f, g_old, stats, stiff_slot, ctrl)
             f_inside = code == EVENT_INSIDE_STEP
             if code != 0 and not f_inside:

@@ -1,0 +1,257 @@
+"""Compiled tangent (variational) system of a model, with saltation at events (a template,
+specialised per model by :func:`workbench.solver._compile.tangent_for`).
+
+The state of the tangent system is ``Y = [y (n), V (m columns of N = n + na), L]``: the model's
+state ``y``, ``m`` tangent vectors of the *extended* state ``x = (y, aux)`` (the discrete state
+``aux`` is part of the state the future depends on: a contact's held onset velocity sets its
+damping) and ``L``, the sum of ``log |det S_yy|`` over the events so far (the state block of
+each saltation matrix; the phase-space volume change at events, for the contraction check).
+
+Between events ``dy/dt = f(t, y, aux)`` and for each column ``v = (v_y, v_a)``
+
+    dv_y/dt = J_y v_y + J_a v_a,        dv_a/dt = 0,
+
+with ``J_y = df/dy`` from the model's Jacobian (its analytic ``jacobian`` hook, or a central
+difference of ``rhs`` along ``v_y``: two evaluations per column) and ``J_a = df/daux`` by central
+differences over the discrete states that a column carries and that are active (``aux_k != 0``;
+a zero discrete state means "inactive", e.g. no contact, and is not differenced). At an event
+with event function ``g`` and reset ``x+ = R(t, x-)`` every column jumps by the saltation matrix
+(Müller 1995, Chaos Solitons Fractals 5, 1671; Dellago, Posch & Hoover 1996, Phys. Rev. E 53,
+1485; Leine & Nijmeijer 2004, Sec. 3.5):
+
+    S = DR + (F+ - DR F- - dR/dt) grad(g)^T / (grad(g) . F- + dg/dt),
+
+where ``F-`` and ``F+`` are the extended vector fields ``(f, 0)`` before and after the reset.
+``DR``, ``dR/dt``, ``grad g`` and ``dg/dt`` are central differences of the model's
+``apply_event`` and ``event_values`` (steps: :func:`workbench.solver._jacobian_template.step`).
+
+Layout (set by :func:`workbench.solver.tangent.tangent_problem`): ``p = [model p, s (n),
+time scale]`` with the state scales ``s`` (state units) and a time scale (s) for the difference
+steps; ``ip = [model ip, n, na, m, ne, len(model p), len(model ip), model work size]``;
+``work = [model work, scratch]``; the kernel's ``aux`` is the model's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from workbench.solver._hooks_template import apply_event as model_apply_event  # @@HOOKS@@
+from workbench.solver._hooks_template import event_values as model_event_values  # @@HOOKS@@
+from workbench.solver._hooks_template import rhs as model_rhs  # @@HOOKS@@
+from workbench.solver._jacobian_template import (  # @@MODEL_JACOBIAN@@
+    HAS_ANALYTIC,
+    fd_aux_jacobian,
+    jacobian,
+    step,
+)
+
+N_META = 7
+
+
+@njit(cache=True)
+def _meta(ip):
+    """(n, na, m, ne, len(p), len(ip), work size) of the model, from the tail of ``ip``."""
+    k = ip.size - N_META
+    return ip[k], ip[k + 1], ip[k + 2], ip[k + 3], ip[k + 4], ip[k + 5], ip[k + 6]
+
+
+@njit(cache=True)
+def rhs(t, Y, p, ip, aux, work, dY):
+    n, na, m, ne, npm, nip, ws = _meta(ip)
+    pm = p[:npm]
+    ipm = ip[:nip]
+    wm = work[:ws]
+    scale = p[npm : npm + n]
+    y = Y[:n]
+    code = model_rhs(t, y, pm, ipm, aux, wm, dY[:n])
+    if code > 0:
+        return code
+    nx = n + na
+    o = ws
+    yd = work[o : o + n]
+    fp = work[o + n : o + 2 * n]
+    fm = work[o + 2 * n : o + 3 * n]
+    ja = work[o + 3 * n : o + 3 * n + n * na]
+    jy = work[o + 3 * n + n * na : o + 3 * n + n * na + n * n]
+    # J_a: columns of the active discrete states that some tangent vector carries
+    need = np.zeros(na, np.bool_)
+    for k in range(na):
+        for c in range(m):
+            if Y[n + c * nx + n + k] != 0.0:
+                need[k] = True
+    jam = ja.reshape((n, na))
+    c1 = fd_aux_jacobian(t, y, pm, ipm, aux, wm, need, yd, fp, fm, jam)
+    if c1 > 0:
+        return c1
+    if HAS_ANALYTIC:
+        jm = jy.reshape((n, n))
+        c1 = jacobian(t, y, pm, ipm, aux, wm, scale, jm)
+        if c1 > 0:
+            return c1
+    for c in range(m):
+        b = n + c * nx
+        if HAS_ANALYTIC:
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += jy[i * n + j] * Y[b + j]
+                dY[b + i] = acc
+        else:
+            nv = 0.0
+            for j in range(n):
+                nv += (Y[b + j] / scale[j]) ** 2
+            nv = math.sqrt(nv)
+            if nv == 0.0:
+                for i in range(n):
+                    dY[b + i] = 0.0
+            else:
+                eps = 6.0554544523933395e-06 / nv  # EPS3 in scaled units along v
+                for j in range(n):
+                    yd[j] = y[j] + eps * Y[b + j]
+                c1 = model_rhs(t, yd, pm, ipm, aux, wm, fp)
+                for j in range(n):
+                    yd[j] = y[j] - eps * Y[b + j]
+                c2 = model_rhs(t, yd, pm, ipm, aux, wm, fm)
+                if c1 > 0:
+                    return c1
+                if c2 > 0:
+                    return c2
+                for i in range(n):
+                    dY[b + i] = (fp[i] - fm[i]) / (2.0 * eps)
+        for k in range(na):
+            va = Y[b + n + k]
+            if va != 0.0:
+                for i in range(n):
+                    dY[b + i] += ja[i * na + k] * va
+            dY[b + n + k] = 0.0
+    dY[Y.size - 1] = 0.0
+    return code
+
+
+@njit(cache=True)
+def event_values(t, Y, p, ip, aux, work, g):
+    n, na, m, ne, npm, nip, ws = _meta(ip)
+    model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g)
+
+
+@njit(cache=True)
+def _reset(k, t, y, a, pm, ipm, wm, out):
+    """``out = R(t, (y, a))``: the model's event update applied to copies."""
+    n = y.size
+    yc = y.copy()
+    ac = a.copy()
+    model_apply_event(k, t, yc, pm, ipm, ac, wm)
+    out[:n] = yc
+    out[n:] = ac
+
+
+@njit(cache=True)
+def apply_event(k, t, Y, p, ip, aux, work):
+    n, na, m, ne, npm, nip, ws = _meta(ip)
+    pm = p[:npm]
+    ipm = ip[:nip]
+    wm = work[:ws]
+    scale = p[npm : npm + n]
+    h_t = step(t, p[npm + n])
+    nx = n + na
+    y = Y[:n]
+    carried = False
+    for i in range(n, n + m * nx):
+        if Y[i] != 0.0:
+            carried = True
+    if not carried:  # no tangent vector to carry over the event (a copy without one)
+        return model_apply_event(k, t, y, pm, ipm, aux, wm)
+    y0 = y.copy()
+    a0 = aux.copy()
+    # vector field before the reset
+    f_minus = np.empty(n)
+    model_rhs(t, y0.copy(), pm, ipm, a0.copy(), wm, f_minus)
+    # gradient and time derivative of event function k
+    gp = np.empty(ne)
+    gm = np.empty(ne)
+    grad = np.empty(n)
+    yd = y0.copy()
+    for j in range(n):
+        h = step(y0[j], scale[j])
+        yd[j] = y0[j] + h
+        model_event_values(t, yd, pm, ipm, a0, wm, gp)
+        yd[j] = y0[j] - h
+        model_event_values(t, yd, pm, ipm, a0, wm, gm)
+        yd[j] = y0[j]
+        grad[j] = (gp[k] - gm[k]) / (2.0 * h)
+    model_event_values(t + h_t, y0, pm, ipm, a0, wm, gp)
+    model_event_values(t - h_t, y0, pm, ipm, a0, wm, gm)
+    g_dot = (gp[k] - gm[k]) / (2.0 * h_t)
+    for j in range(n):
+        g_dot += grad[j] * f_minus[j]
+    if g_dot == 0.0:
+        g_dot = 1e-300  # an exactly tangent crossing: the saltation is unbounded there
+    # the update itself, and the vector field after it
+    stop = model_apply_event(k, t, y, pm, ipm, aux, wm)
+    f_plus = np.empty(n)
+    model_rhs(t, y.copy(), pm, ipm, aux.copy(), wm, f_plus)
+    # DR (extended state) and dR/dt by central differences of the update
+    DR = np.zeros((nx, nx))
+    rp = np.empty(nx)
+    rm = np.empty(nx)
+    ad = a0.copy()
+    for j in range(nx):
+        if j < n:
+            h = step(y0[j], scale[j])
+            yd[j] = y0[j] + h
+            _reset(k, t, yd, a0, pm, ipm, wm, rp)
+            yd[j] = y0[j] - h
+            _reset(k, t, yd, a0, pm, ipm, wm, rm)
+            yd[j] = y0[j]
+        else:
+            a = a0[j - n]
+            if not math.isfinite(a):
+                continue
+            h = step(a, 0.0)
+            ad[j - n] = a + h
+            _reset(k, t, y0, ad, pm, ipm, wm, rp)
+            ad[j - n] = a - h
+            _reset(k, t, y0, ad, pm, ipm, wm, rm)
+            ad[j - n] = a
+        for i in range(nx):
+            d = (rp[i] - rm[i]) / (2.0 * h)
+            DR[i, j] = d if math.isfinite(d) else 0.0
+    _reset(k, t + h_t, y0, a0, pm, ipm, wm, rp)
+    _reset(k, t - h_t, y0, a0, pm, ipm, wm, rm)
+    # jump direction per unit event-time shift: DR F- + dR/dt - F+
+    jump = np.empty(nx)
+    for i in range(nx):
+        acc = (rp[i] - rm[i]) / (2.0 * h_t)
+        if not math.isfinite(acc):
+            acc = 0.0
+        for j in range(n):
+            acc += DR[i, j] * f_minus[j]
+        if i < n:
+            acc -= f_plus[i]
+        jump[i] = acc
+    # state block of S, for the volume change
+    S = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = DR[i, j] - jump[i] * grad[j] / g_dot
+    det = abs(np.linalg.det(S))
+    Y[Y.size - 1] += math.log(det) if det > 0.0 else -math.inf
+    # every column: v <- DR v - jump * dt, dt = -(grad . v_y) / g_dot the event-time shift
+    v = np.empty(nx)
+    for c in range(m):
+        b = n + c * nx
+        shift = 0.0
+        for j in range(n):
+            shift += grad[j] * Y[b + j]
+        shift /= g_dot
+        for i in range(nx):
+            v[i] = Y[b + i]
+        for i in range(nx):
+            acc = -jump[i] * shift
+            for j in range(nx):
+                acc += DR[i, j] * v[j]
+            Y[b + i] = acc
+    return stop
