@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from workbench._accuracy import REFERENCE_FLOOR, accuracy, recommend
 from workbench.cli import main
+from workbench.precision import REFERENCE_FLOOR, Recommendation, accuracy, recommend
 
 DUFFING = {"model": {"name": "duffing"}, "run": {"cycles": 10}}
 
@@ -36,9 +36,13 @@ def test_study_is_self_described(study):
 
 def test_recommend_picks_cheapest_meeting_target(study):
     r = recommend(study, 1e-4)
-    assert r["short_error"] < 1e-4 and r["peak_error"] < 1e-4
+    assert isinstance(r, Recommendation) and set(r.errors) == {"short_error", "peak_error"}
+    assert r.errors["short_error"] < 1e-4 and r.errors["peak_error"] < 1e-4
+    assert repr(r).startswith(f"Recommendation(method={r.method!r}, rtol={r.rtol:g}, wall_time=")
+    pick = study.sel(solver_method=r.method, rtol=r.rtol)
+    assert float(pick.short_error) == r.errors["short_error"]
     ok = study.short_error.where((study.short_error < 1e-4) & (study.peak_error < 1e-4))
-    assert r["wall_time"] <= float(study.wall_time.where(ok.notnull()).min()) + 1e-12
+    assert r.wall_time <= float(study.wall_time.where(ok.notnull()).min()) + 1e-12
     with pytest.raises(ValueError, match="no setting"):
         recommend(study, 1e-30)
 
@@ -138,7 +142,7 @@ def test_short_horizon_stops_where_the_reference_is_no_longer_exact():
     record before, 0.199 s."""
     import xarray as xr
 
-    from workbench._accuracy import short_horizon
+    from workbench.precision import short_horizon
 
     t = np.linspace(0.0, 1.0, 1001)
     x = np.sin(2 * np.pi * t)  # range 2

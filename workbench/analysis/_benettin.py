@@ -11,10 +11,10 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._scene import COMPILED_METHODS, Scene, load_scene
 from workbench.models import get_model
-from workbench.solver._grid import record_grid
-from workbench.solver._simulate import integrate
+from workbench.run import record_times as record_grid
+from workbench.scene import Scene, load_scene
+from workbench.solver import COMPILED_METHODS, integrate
 
 __all__ = ["lle_from_equations"]
 
@@ -91,6 +91,7 @@ def lle_from_equations(
             max_step=s["max_step"],
             max_steps=s["max_steps"],
         )
+        res.raise_for_status()
         return res.Y[-1].copy(), res.AUX[-1].copy()
 
     y, aux = (problem.y0, problem.aux0) if start == problem.t0 else advance(problem, start)

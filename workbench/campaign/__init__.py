@@ -7,8 +7,8 @@
 ...     "record": {"samples_per_period": 1},
 ...     "sweep": {"gamma": [0.3, 0.5], "omega": [1.0, 1.2]},
 ... })
->>> from workbench.campaign import expand_grid
->>> expand_grid(scene).shape
+>>> from workbench.campaign import expand_sweep
+>>> expand_sweep(scene).shape
 (2, 2)
 
 :func:`run_campaign` expands the sweep into a grid over the named parameters (several at once),
@@ -56,8 +56,9 @@ When every point has the same record times they are the 1-D coordinate ``time`` 
 The local pool is dask's multiprocessing scheduler on a fork server that imports workbench and
 loads the campaign's compiled kernel once; its workers (one thread each) start in milliseconds.
 
-The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: 0 ok,
-1 solver_failed, 2 terminated_early, 3 invalid_parameters), ``failure`` (the message), solver
+The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: the
+codes of :class:`workbench.Status`, 0 ok, 1 terminated, 2 max_steps, 3 step_underflow,
+4 non_finite, 5 model_failure, and 6 invalid_parameters), ``failure`` (the message), solver
 statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluations``,
 ``solver_events``, ``solver_wall_time``) and ``point_wall_time``; and in its attributes the scene
 TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It
@@ -69,13 +70,13 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 
 from workbench.campaign._assemble import summary
 from workbench.campaign._run import run_campaign, store_paths
-from workbench.campaign._store import CampaignError, CampaignWarning, Grid, expand_grid
+from workbench.campaign._store import CampaignError, CampaignWarning, SweepGrid, expand_sweep
 
 __all__ = [
     "CampaignError",
     "CampaignWarning",
-    "Grid",
-    "expand_grid",
+    "SweepGrid",
+    "expand_sweep",
     "run_campaign",
     "store_paths",
     "summary",

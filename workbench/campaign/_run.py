@@ -14,27 +14,26 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench._archive import open_run, save_run
-from workbench._scene import Scene, load_scene
+from workbench.archive import open_run, save_run
 from workbench.campaign._assemble import assemble
 from workbench.campaign._block import (
-    OK,
     PRELOAD_ENV,
-    TERMINATED,
     BlockTask,
+    failed,
     ignore_sigint,
     run_block,
 )
 from workbench.campaign._store import (
     CampaignError,
     CampaignWarning,
-    Grid,
     Store,
+    SweepGrid,
     campaign_id,
-    expand_grid,
+    expand_sweep,
     forcing_period,
     format_point,
 )
+from workbench.scene import Scene, SceneSource, load_scene, scene_from_toml
 
 __all__ = ["run_campaign"]
 
@@ -62,7 +61,7 @@ def _client_threads(client) -> int:
 
 
 def run_campaign(
-    scene: Scene | str | os.PathLike | dict,
+    scene: SceneSource,
     store: str | os.PathLike,
     *,
     client=None,
@@ -104,8 +103,8 @@ def run_campaign(
     -------
     xarray.Dataset
         The parameter dims first, then ``time`` and the model's dims. Variables: the scene's
-        recorded variables (NaN where a point failed), ``status`` (int8 per point: 0 ok,
-        1 solver_failed, 2 terminated_early, 3 invalid_parameters; CF flag attributes),
+        recorded variables (NaN where a point failed), ``status`` (int8 per point: the
+        point's :class:`workbench.Status`, or 6 invalid_parameters; CF flag attributes),
         ``failure`` (message per point, empty if none), ``solver_steps``,
         ``solver_rejected_steps``, ``solver_rhs_evaluations``, ``solver_events``,
         ``solver_wall_time`` (s), ``point_wall_time`` (s), and ``forcing_period`` (s) for a
@@ -123,8 +122,8 @@ def run_campaign(
         The scene has no ``[sweep]``, or the store holds a campaign of another scene or chunk
         size (the message lists the differences; pass ``restart=True``).
     RuntimeError
-        A point raised something other than :class:`workbench.SolverError` (a bug or a broken
-        setup); the blocks finished so far are kept.
+        A point raised something other than a failed run or invalid parameters (a bug or a
+        broken setup); the blocks finished so far are kept.
 
     Warns
     -----
@@ -155,9 +154,8 @@ def run_campaign(
     (('gamma', 'delta', 'time'), 'm s-2', 0)
     """
     wall0 = time.perf_counter()
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
-    grid = expand_grid(scene)
+    scene = load_scene(scene)
+    grid = expand_sweep(scene)
     workers = _positive_int("workers", workers)
     chunk = _positive_int("chunk", chunk)
     if client is not None and workers is not None:
@@ -268,15 +266,15 @@ def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset 
     return ds
 
 
-def _warn_failures(ds: xr.Dataset, grid: Grid) -> None:
+def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
     flags = ds["status"].values.reshape(-1)
     messages = ds["failure"].values.reshape(-1)
-    failed = np.flatnonzero((flags != OK) & (flags != TERMINATED))
-    shown = "; ".join(f"{format_point(grid.point(int(f)))}: {messages[f]}" for f in failed[:3])
-    more = f"; and {len(failed) - 3} more" if len(failed) > 3 else ""
+    bad = np.flatnonzero(failed(flags))
+    shown = "; ".join(f"{format_point(grid.point(int(f)))}: {messages[f]}" for f in bad[:3])
+    more = f"; and {len(bad) - 3} more" if len(bad) > 3 else ""
     warnings.warn(
         CampaignWarning(
-            f"{len(failed)} of {grid.size} campaign points failed and are flagged in 'status' "
+            f"{len(bad)} of {grid.size} campaign points failed and are flagged in 'status' "
             f"with their message in 'failure' (the campaign went on): {shown}{more}"
         ),
         stacklevel=3,
@@ -284,7 +282,7 @@ def _warn_failures(ds: xr.Dataset, grid: Grid) -> None:
 
 
 # -- execution -------------------------------------------------------------------------------------
-def simulated_span(scene: Scene, grid: Grid, flat: int) -> float:
+def simulated_span(scene: Scene, grid: SweepGrid, flat: int) -> float:
     """Simulated time (s) of one point: transient and recorded cycles times its forcing period,
     or transient + duration. The cost estimate of a point (the solver's work grows with the
     simulated time; a sweep over the forcing frequency spans 30x between 0.1 pi and 3 pi)."""
@@ -298,7 +296,7 @@ def simulated_span(scene: Scene, grid: Grid, flat: int) -> float:
     return run.get("duration", 0.0) + run.get("transient", 0.0)
 
 
-def longest_first(scene: Scene, grid: Grid, tasks: list[BlockTask]) -> list[BlockTask]:
+def longest_first(scene: Scene, grid: SweepGrid, tasks: list[BlockTask]) -> list[BlockTask]:
     """The tasks ordered by decreasing estimated cost (their points' simulated time), so that
     the longest blocks start first and no worker is left with one at the end: Graham's (1969)
     longest-processing-time rule, within 4/3 of the best schedule. Ties keep block order."""
@@ -352,7 +350,7 @@ def _run_local(tasks: list[BlockTask], workers: int, bar) -> list[dict]:
 
     dsk = _graph_in_order(tasks)
     first = tasks[0]
-    first_point = load_scene(first.scene_toml).with_parameters(
+    first_point = scene_from_toml(first.scene_toml).with_parameters(
         **dict(zip(first.dims, first.values[0], strict=True))
     )
     pool = ProcessPoolExecutor(

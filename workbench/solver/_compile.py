@@ -18,7 +18,7 @@ from functools import cache
 from pathlib import Path
 from types import ModuleType
 
-from workbench._cache import cache_root, package_digest
+from workbench._cache import KERNEL_PACKAGE, kernel_directory
 
 _TEMPLATE = Path(__file__).with_name("_kernel.py")
 # read at import, like the package digest that keys the cache, so that both describe one source
@@ -40,7 +40,7 @@ def kernel_for(hooks: str) -> ModuleType:
     source, n = _MARKER.subn(line, source)
     if n != 1:  # pragma: no cover - guards an edit of the template
         raise RuntimeError(f"hook marker not found exactly once in {_TEMPLATE}")
-    directory = cache_root() / "kernels" / package_digest()
+    directory = kernel_directory()
     directory.mkdir(parents=True, exist_ok=True)
     name = "kernel_" + re.sub(r"\W", "_", hooks)
     path = directory / f"{name}.py"
@@ -48,7 +48,7 @@ def kernel_for(hooks: str) -> ModuleType:
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_text(source)
         os.replace(tmp, path)  # atomic: concurrent workers never see a half-written file
-    module_name = f"workbench_kernels.{name}"
+    module_name = f"{KERNEL_PACKAGE}.{name}"
     spec = importlib.util.spec_from_file_location(module_name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[module_name] = module

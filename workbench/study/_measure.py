@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench._scene import Scene
 from workbench.models import get_model
+from workbench.scene import Scene
 
 __all__ = [
     "select",

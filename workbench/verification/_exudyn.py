@@ -37,9 +37,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench._scene import Scene
 from workbench.models import get_model
 from workbench.models._clearance import stiffness as joint_stiffness
+from workbench.scene import Scene
 
 Point = tuple[float, float]
 

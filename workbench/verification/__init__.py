@@ -1,10 +1,10 @@
 """Independent verification against the exudyn multibody engine (optional extra ``verify``).
 
->>> from workbench.verify import verify                                 # doctest: +SKIP
+>>> from workbench.verification import verify                                 # doctest: +SKIP
 >>> ds = verify("studies/ninebar.toml", horizon=0.02, steps=(2e-6,))    # doctest: +SKIP
 """
 
-from workbench.verify._compare import STATISTICS, verify
-from workbench.verify._exudyn import MECHANISMS, run_exudyn
+from workbench.verification._compare import STATISTICS, verify
+from workbench.verification._exudyn import MECHANISMS, run_exudyn
 
 __all__ = ["MECHANISMS", "STATISTICS", "run_exudyn", "verify"]
