@@ -99,6 +99,7 @@ def test_check_must_be_boolean():
         workbench.load_scene({"model": {"name": "duffing"}, "solver": {"check": "yes"}})
 
 
+@pytest.mark.slow
 def test_ninebar_work_precision_dop853():
     """Default nine-bar scene (1 transient + 1 recorded cycle), compiled DOP853 against itself
     at 1e-11: the short-horizon error falls over five decades of tolerance and the cost grows

@@ -95,6 +95,7 @@ def test_dims_units_and_archive(scene, one_worker):
     assert paths["manifest"].is_file()
 
 
+@pytest.mark.slow
 def test_distributed_client_gives_the_same_numbers(scene, one_worker, tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     with (
@@ -164,6 +165,7 @@ KILL = {
 }
 
 
+@pytest.mark.slow
 def test_killed_campaign_resumes_without_recomputing(tmp_path):
     scene = workbench.load_scene(KILL)
     store = tmp_path / "kill.nc"

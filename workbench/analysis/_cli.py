@@ -64,7 +64,7 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
         "lle": plot.lle_figure(wolf, float(ros.lle), label),
     }
     if period is not None and ds.attrs.get("samples_per_period"):
-        strobe = analysis.poincare_section(ds.assign(_v=da), "_v")
+        strobe = analysis.poincare_section(ds.assign(_v=da), "_v")["_v"]
         if strobe.sizes["strobe"] >= 100:
             z = analysis.zero_one_test(strobe)
             print(f"  0-1 test on {strobe.sizes['strobe']} strobe samples: K = {float(z.K):.3f}")
