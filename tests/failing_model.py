@@ -11,6 +11,8 @@ Parameter ``mode`` is the value of the status; what the model does after ``t_fai
    its slope is unbounded at t_fail, where the step collapses while the state stays finite.
 4. ``non_finite``: the derivative is NaN after t_fail.
 5. ``model_failure``: ``rhs`` returns the model failure code 7 after t_fail.
+
+And 6: ``problem`` raises RuntimeError, as a bug would (no status: a campaign stops).
 """
 
 import math
@@ -20,7 +22,7 @@ from numba import njit
 
 from workbench.models import Model, Parameter, Problem, Quantity, register
 
-OK, TERMINATED, MAX_STEPS, STEP_UNDERFLOW, NON_FINITE, MODEL_FAILURE = range(6)
+OK, TERMINATED, MAX_STEPS, STEP_UNDERFLOW, NON_FINITE, MODEL_FAILURE, BUG = range(7)
 CODE = 7  # the model failure code of MODEL_FAILURE
 
 
@@ -57,7 +59,7 @@ class Failing(Model):
 
     name = "failing"
     parameters = (
-        Parameter("mode", 0.0, "1", "value of the workbench.Status to end with", 0.0, 5.0),
+        Parameter("mode", 0.0, "1", "value of the workbench.Status to end with, 6 a bug", 0, 6),
         Parameter("t_fail", 0.5, "s", "time of the failure", lower=0.0, lower_open=True),
     )
     _STATES = (Quantity("y", "1", "state"),)
@@ -67,6 +69,8 @@ class Failing(Model):
 
     def problem(self, params, effects, initial, requested):
         mode = int(params["mode"])
+        if mode == BUG:
+            raise RuntimeError("a bug in the test model")
         y0 = math.sqrt(params["t_fail"]) if mode == STEP_UNDERFLOW else 2.0
         return Problem(
             hooks=__name__,

@@ -156,6 +156,32 @@ def test_scene_without_sweep_and_bad_arguments_are_refused(scene, tmp_path):
         workbench.run_campaign(scene, tmp_path / "run.nc")
 
 
+def test_an_error_stops_the_blocks_in_flight(tmp_path):
+    """A point that raises (a bug, not a failed run) ends the campaign at once: the other
+    worker's long block is stopped, not waited for, and writes no file."""
+    import dask
+    import failing_model
+
+    scene = workbench.load_scene(
+        {
+            "model": {"name": "failing"},
+            "run": {"duration": 1.0},
+            "solver": {"max_step": 1e-7},  # 1e7 steps: minutes for the ok point
+            "record": {"dt": 0.5},
+            "sweep": {"mode": [failing_model.OK, failing_model.BUG]},
+        }
+    )
+    store = tmp_path / "c.nc"
+    t0 = time.monotonic()
+    with (
+        dask.config.set({"multiprocessing.context": "fork"}),  # the workers know the model
+        pytest.raises(RuntimeError, match="raised RuntimeError: a bug in the test model"),
+    ):
+        workbench.run_campaign(scene, store, workers=2, chunk=1)
+    assert time.monotonic() - t0 < 20
+    assert not list(store_paths(store)["blocks"].glob("block-*.nc"))
+
+
 KILL = {
     "model": {"name": "duffing"},
     "solver": {"rtol": 1e-12, "atol": 1e-12},  # about 0.15 s per point
@@ -251,7 +277,7 @@ def test_longest_blocks_run_first(tmp_path):
     (cycles x 2 pi / omega) and are started first (Graham's rule), whatever dask's own order of
     task names; with one worker the execution order is visible in each block file."""
     from workbench.campaign import expand_sweep
-    from workbench.campaign._run import longest_first, simulated_span
+    from workbench.campaign._schedule import longest_first, simulated_span
 
     scene = workbench.load_scene(
         {**BASE, "sweep": {"omega": [0.8, 1.0, 1.2, 1.4, 0.5, 2.0]}}  # slowest at flat 4

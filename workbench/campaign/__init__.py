@@ -1,4 +1,4 @@
-"""Parameter campaigns: a scene's ``[sweep]`` grid run as dask tasks, resumable, one dataset.
+"""Parameter campaigns: a scene's ``[sweep]`` grid run in parallel, resumable, one dataset.
 
 >>> import workbench
 >>> scene = workbench.load_scene({
@@ -12,9 +12,13 @@
 (2, 2)
 
 :func:`run_campaign` expands the sweep into a grid over the named parameters (several at once),
-runs blocks of points as dask tasks (a local process pool by default, any
+runs blocks of points as tasks (on a local process pool by default, on any
 ``dask.distributed.Client`` when given) and returns one :class:`xarray.Dataset` with the
 parameter dims first, then ``time`` and the model's dims.
+
+Modules: ``_run`` (the orchestration), ``_store`` (the sweep grid and the store on disk),
+``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
+(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server).
 
 Store layout
 ------------
@@ -53,8 +57,12 @@ When every point has the same record times they are the 1-D coordinate ``time`` 
 ``k T / samples_per_period``), ``time`` is a dim without coordinate and ``record_time``
 (parameter dims, time; s) holds each point's times, NaN-padded if runs differ in length.
 
-The local pool is dask's multiprocessing scheduler on a fork server that imports workbench and
-loads the campaign's compiled kernel once; its workers (one thread each) start in milliseconds.
+Both executors run through one loop (``_execute``): as many blocks in flight as there are
+workers, the next one submitted, longest first, when one finishes, so the start order is the
+campaign's own whatever the scheduler. The local pool is a process pool on a fork server that
+imports workbench and loads the campaign's compiled kernel once; its workers (one thread each)
+start in milliseconds and stop with the campaign (on an error or Ctrl-C the blocks in flight are
+stopped at once).
 
 The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: the
 codes of :class:`workbench.Status`, 0 ok, 1 terminated, 2 max_steps, 3 step_underflow,

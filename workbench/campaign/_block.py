@@ -21,7 +21,7 @@ from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
 
-__all__ = ["BlockTask", "INVALID", "STATUS", "STATS", "failed", "run_block"]
+__all__ = ["BlockTask", "INVALID", "STATUS", "STATS", "failed", "run_block", "worker_start"]
 
 # Per-point outcome (int8 ``status``, CF flag_values / flag_meanings): the run's Status, or
 # INVALID for a point that did not run.
@@ -58,8 +58,8 @@ POINT_WALL_ATTRS = {
 
 _TASKS_IN_PROCESS = 0
 # A block dataset up to this size (bytes) also travels back to the client with the task's
-# summary, so that the client assembles it without reading its file again (~15 ms per block of
-# netCDF overhead); a larger one the client reads from the file.
+# summary, so that the client assembles it without reading its file again (netCDF's overhead
+# per block); a larger one the client reads from the file.
 RETURN_LIMIT = 32 * 2**20
 PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork server loads
 
@@ -77,10 +77,13 @@ class BlockTask:
     block: int
 
 
-def ignore_sigint() -> None:
-    """Initializer of a local pool's worker: Ctrl-C is the client's to handle (it stops the
-    workers), so that a terminal's interrupt does not print a traceback per worker."""
+def worker_start(pids) -> None:
+    """Initializer of a local pool's worker: report this process's id (``pids``, a
+    multiprocessing queue) so that the client can stop the blocks in flight, and leave Ctrl-C
+    to the client (it stops the workers), so that a terminal's interrupt does not print a
+    traceback per worker."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    pids.put(os.getpid())
 
 
 def stat_attrs(name: str) -> dict:

@@ -132,8 +132,8 @@ def register_cli(sub) -> None:
     """Add the ``campaign`` and ``bifurcation`` subcommands."""
     p = sub.add_parser(
         "campaign",
-        help="run a scene's [sweep] grid on dask into one netCDF campaign (resumable)",
-        description="Run every point of a scene's [sweep] grid as dask tasks (a local process "
+        help="run a scene's [sweep] grid in parallel into one netCDF campaign (resumable)",
+        description="Run every point of a scene's [sweep] grid as tasks (a local process "
         "pool, or a dask.distributed scheduler) and assemble one netCDF archive. Blocks go to "
         "OUTPUT.blocks/; running the same command again computes only missing blocks.",
     )

@@ -21,7 +21,7 @@ def _load_kernel(scene_toml: str) -> None:
     from workbench.scene import scene_from_toml
 
     prepared = prepare(scene_from_toml(scene_toml))
-    provenance(prepared.scene)  # ~20 ms of importlib.metadata, once
+    provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
     if prepared.scene.solver["method"].startswith("scipy:"):
         return
     # An empty interval: every compiled entry point is loaded, nothing is integrated.

@@ -5,6 +5,7 @@
 """
 
 from workbench.verification._compare import STATISTICS, verify
-from workbench.verification._exudyn import MECHANISMS, run_exudyn
+from workbench.verification._exudyn import run_exudyn
+from workbench.verification._mechanisms import MECHANISMS
 
 __all__ = ["MECHANISMS", "STATISTICS", "run_exudyn", "verify"]

@@ -23,7 +23,8 @@ import xarray as xr
 
 from workbench.run import simulate
 from workbench.scene import SceneSource, load_scene
-from workbench.verification._exudyn import check_scene, run_exudyn
+from workbench.verification._exudyn import run_exudyn
+from workbench.verification._mechanisms import check_scene
 
 _SERIES = (
     "torque",
