@@ -11,9 +11,8 @@ work-precision diagrams; for non-smooth systems e.g. Acary & Brogliato 2008, Ch.
     trajectories separate at ~200 1/s, a whole crank cycle would measure chaos, not accuracy.
     It is cut further where the reference itself stops being exact: where it and a twin run
     10x tighter separate by REFERENCE_FLOOR (1e-6) of a range (impacts amplify the reference's
-    own error too: on the default nine-bar scene 1e-11 and 1e-12 differ by 3e-6 after the
-    impacts near 20 ms and by 2.4e-4 at 34 ms, which made errors below ~1e-4 a matter of luck).
-    The largest twin separation over the horizon is stored as ``reference_error``;
+    own error too, which would make small errors a matter of luck; README, "Accuracy and
+    cost"). The largest twin separation over the horizon is stored as ``reference_error``;
 (b) ``peak_error``: the relative error of the peak of each variable over that horizon (e.g.
     the peak force of the first impacts), and ``events_error``: the relative error of the
     number of events (e.g. contact onsets and ends) per forcing period over the whole run;
