@@ -1,11 +1,12 @@
 # workbench: `make demo` and `make test` each set up .venv on a fresh machine, then run.
+# `make test-fast` is the quick tier while developing; CI runs `make test`.
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test lint format studies data benchmarks clean
+.PHONY: demo test test-fast lint format studies data benchmarks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -25,8 +26,14 @@ format: $(STAMP)
 	$(VENV)/bin/ruff format workbench tests benchmarks studies
 	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies
 
+# What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests
+# and every code block of README.md (tests/test_readme.py).
 test: lint
-	$(PY) -m pytest -q --timeout=900
+	$(PY) -m pytest -q --timeout=900 --doctest-modules tests workbench
+
+# The fast tier while developing: no slow, hard-case or exudyn tests (doctests included).
+test-fast: $(STAMP)
+	$(PY) -m pytest -q --timeout=900 --doctest-modules -m "not slow and not hard and not verify" tests workbench
 
 # Every study of the paper (archives and figures in $(OUT)/studies), then studies/REPORT.md.
 studies: $(STAMP)

@@ -20,7 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import workbench
-from workbench._accuracy import accuracy
+from workbench import accuracy
 
 SCENE = Path(__file__).resolve().parents[1] / "studies" / "ninebar.toml"
 PAPER = {"coulomb": 20.05, "lugre": 37.29}

@@ -24,8 +24,8 @@ import numpy as np
 import xarray as xr
 
 import workbench
-from workbench._accuracy import accuracy, recommend
-from workbench.plot._accuracy import work_precision_figure
+from workbench import accuracy, recommend
+from workbench.plot import work_precision_figure
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "studies" / "ninebar.toml"
@@ -103,9 +103,9 @@ def report(wp: xr.Dataset, friction: str) -> None:
     try:
         r = recommend(wp, TARGET)
         print(
-            f"recommended for errors < {TARGET:g}: {r['method']} at rtol = atol = "
-            f"{r['tolerance']:.0e}: {r['wall_time']:.3f} s for 3 cycles, short error "
-            f"{r['short_error']:.2e}, peak error {r['peak_error']:.2e}"
+            f"recommended for errors < {TARGET:g}: {r.method} at rtol = atol = "
+            f"{r.rtol:.0e}: {r.wall_time:.3f} s for 3 cycles, short error "
+            f"{r.errors['short_error']:.2e}, peak error {r.errors['peak_error']:.2e}"
         )
     except ValueError as exc:
         print(f"no recommendation: {exc}")

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from workbench._accuracy import REFERENCE_FLOOR, accuracy, recommend
 from workbench.cli import main
+from workbench.precision import REFERENCE_FLOOR, Recommendation, accuracy, recommend
 
 DUFFING = {"model": {"name": "duffing"}, "run": {"cycles": 10}}
 
@@ -36,9 +36,13 @@ def test_study_is_self_described(study):
 
 def test_recommend_picks_cheapest_meeting_target(study):
     r = recommend(study, 1e-4)
-    assert r["short_error"] < 1e-4 and r["peak_error"] < 1e-4
+    assert isinstance(r, Recommendation) and set(r.errors) == {"short_error", "peak_error"}
+    assert r.errors["short_error"] < 1e-4 and r.errors["peak_error"] < 1e-4
+    assert repr(r).startswith(f"Recommendation(method={r.method!r}, rtol={r.rtol:g}, wall_time=")
+    pick = study.sel(solver_method=r.method, rtol=r.rtol)
+    assert float(pick.short_error) == r.errors["short_error"]
     ok = study.short_error.where((study.short_error < 1e-4) & (study.peak_error < 1e-4))
-    assert r["wall_time"] <= float(study.wall_time.where(ok.notnull()).min()) + 1e-12
+    assert r.wall_time <= float(study.wall_time.where(ok.notnull()).min()) + 1e-12
     with pytest.raises(ValueError, match="no setting"):
         recommend(study, 1e-30)
 
@@ -95,21 +99,19 @@ def test_check_must_be_boolean():
         workbench.load_scene({"model": {"name": "duffing"}, "solver": {"check": "yes"}})
 
 
+@pytest.mark.slow
 def test_ninebar_work_precision_dop853():
     """Default nine-bar scene (1 transient + 1 recorded cycle), compiled DOP853 against itself
     at 1e-11: the short-horizon error falls over five decades of tolerance and the cost grows
     sub-linearly in 1/tol.
 
     Single errors are not monotone in the tolerance: impacts amplify differences ~100x over the
-    32-ms horizon, so a run at 1e-9 can pass an impact on the other side of the reference and
-    read 1e-5. The reference itself is checked against a twin 10x tighter (its separation,
-    ``reference_error``, was 3.6e-8 over the horizon in this build), so those errors are real,
-    and rounding-level changes of the code reshuffle them; three builds of 2026-11-22/23 read
-    (1e-4 .. 1e-9) 0.27, 0.024, 3.2e-3, 2.2e-3, 2.2e-4, 1.8e-6; then 0.11, 0.43, 8.4e-3, 4.0e-4,
-    1.0e-4, 1.1e-4; then 0.026, 0.064, 1.4e-3, 4.2e-3, 9.0e-6, 1.4e-5. The test asserts what
-    holds for all of them: a log-log slope of error against tolerance above 0.4 (0.92, 0.78,
-    0.78), the tight end at least 100x below the loose end (7e-6, 2e-4, 1e-4 of it), the three
-    tightest below 1e-2, and a reference exact to REFERENCE_FLOOR over the horizon."""
+    short horizon, so a run at 1e-9 can pass an impact on the other side of the reference and
+    read 1e-5; the reference itself is checked against a twin 10x tighter, so those errors are
+    real, and rounding-level changes of the code reshuffle them (README, "Accuracy and cost").
+    The test asserts the trend that survives such reshuffles: a log-log slope of error against
+    tolerance above 0.4, the tight end at least 100x below the loose end, the three tightest
+    below 1e-2, and a reference exact to REFERENCE_FLOOR over the horizon."""
     import workbench
 
     base = workbench.load_scene("studies/ninebar.toml")
@@ -138,7 +140,7 @@ def test_short_horizon_stops_where_the_reference_is_no_longer_exact():
     record before, 0.199 s."""
     import xarray as xr
 
-    from workbench._accuracy import short_horizon
+    from workbench.precision import short_horizon
 
     t = np.linspace(0.0, 1.0, 1001)
     x = np.sin(2 * np.pi * t)  # range 2

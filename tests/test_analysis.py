@@ -101,7 +101,7 @@ def test_duffing_period_doubling(gamma, points):
             "solver": {"rtol": 1e-10, "atol": 1e-10},
         }
     )
-    strobe = poincare_section(ds, "x")
+    strobe = poincare_section(ds, "x").x
     assert strobe.sizes["strobe"] == 17
     assert len(np.unique(np.round(strobe.values, 5))) == points
 
@@ -116,7 +116,7 @@ def test_duffing_chaos():
     assert float(lle_from_equations(scene, cycles=150).lle) > 0.05
     ds = workbench.simulate(scene)
     assert float(wolf_lle(ds.x, period=ds.attrs["forcing_period"]).lle) > 0
-    assert float(zero_one_test(poincare_section(ds, "x")).K) > 0.8
+    assert float(zero_one_test(poincare_section(ds, "x").x).K) > 0.8
 
 
 def test_periodic_signal_and_noise():
@@ -158,8 +158,11 @@ def test_sections_and_bifurcation(tmp_path):
         workers=1,
     )
     bif = bifurcation_diagram(sweep, "x")
-    assert bif.dims[:2] == ("gamma", "strobe") and bif.attrs["units"] == "m"
-    workbench.save_run(bif.to_dataset(), tmp_path / "bif.nc")
+    assert isinstance(bif, xr.Dataset) and bif.attrs["diagram_parameter"] == "gamma"
+    assert bif.x.dims == ("gamma", "strobe") and bif.x.attrs["units"] == "m"
+    # period 1 at gamma 0.2 (the strobe samples repeat), more at 0.28 (Duffing sections)
+    assert np.ptp(bif.x.sel(gamma=0.2).values) < 1e-6 < np.ptp(bif.x.sel(gamma=0.28).values)
+    workbench.save_run(bif, tmp_path / "bif.nc")
     from workbench.plot import bifurcation_figure
 
     assert bifurcation_figure(bif).axes[0].get_xlabel().endswith("]")

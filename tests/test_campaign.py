@@ -77,8 +77,9 @@ def test_dims_units_and_archive(scene, one_worker):
     ds = one_worker
     assert ds.x.dims == ("gamma", "omega", "time")  # parameter dims first
     assert ds.status.dims == ("gamma", "omega") and ds.status.dtype == np.int8
-    assert list(ds.status.attrs["flag_meanings"].split())[:2] == ["ok", "solver_failed"]
-    np.testing.assert_array_equal(ds.status.attrs["flag_values"], [0, 1, 2, 3])
+    meanings = [s.label for s in workbench.Status] + ["invalid_parameters"]
+    assert ds.status.attrs["flag_meanings"].split() == meanings
+    np.testing.assert_array_equal(ds.status.attrs["flag_values"], range(len(meanings)))
     model = workbench.models.get_model("duffing")
     for d in ("gamma", "omega"):
         p = model.parameter(d)
@@ -86,7 +87,7 @@ def test_dims_units_and_archive(scene, one_worker):
     for name, v in ds.variables.items():
         assert "units" in v.attrs and "long_name" in v.attrs, name
     assert ds.sizes["time"] == 4 * 4 + 1  # only what the scene records
-    assert workbench.load_scene(ds.attrs["scene"]) == scene
+    assert workbench.scene_from_toml(ds.attrs["scene"]) == scene
     assert ds.attrs["campaign_dims"] == "gamma omega"
     assert ds.attrs["Conventions"] == "CF-1.11" and "numba=" in ds.attrs["package_versions"]
     paths = store_paths(ds.encoding["source"])
@@ -94,6 +95,7 @@ def test_dims_units_and_archive(scene, one_worker):
     assert paths["manifest"].is_file()
 
 
+@pytest.mark.slow
 def test_distributed_client_gives_the_same_numbers(scene, one_worker, tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     with (
@@ -119,13 +121,13 @@ def test_failing_points_are_data_and_a_changed_scene_is_refused(tmp_path):
     store = tmp_path / "fail.nc"
     with pytest.warns(CampaignWarning, match="2 of 4 campaign points failed"):
         ds = workbench.run_campaign(scene, store, workers=1)
-    np.testing.assert_array_equal(ds.status.values, [[0, 0], [1, 1]])
+    np.testing.assert_array_equal(ds.status.values, [[0, 0], [2, 2]])  # ok, max_steps
     assert ds.attrs["failed_points"] == 2
     assert np.isnan(ds.x.sel(beta=1e6)).all() and np.isfinite(ds.x.sel(beta=1.0)).all()
     assert all(str(m).startswith("max_steps: ") for m in ds.failure.sel(beta=1e6).values)
-    assert (ds.solver_steps.sel(beta=1e6) == -1).all()
+    assert (ds.solver_steps.sel(beta=1e6) == 2000).all()  # up to the failure
     text = summary(ds)
-    assert "2 ok; 2 solver_failed" in text and "failed beta=1e+06, gamma=0.3: max_steps" in text
+    assert "2 ok; 2 max_steps" in text and "failed beta=1e+06, gamma=0.3: max_steps" in text
     # Same record times everywhere: a 1-D time coordinate, as from simulate
     ref = workbench.simulate(scene.with_parameters(beta=1.0, gamma=0.5))
     xr.testing.assert_identical(ds.x.sel(beta=1.0, gamma=0.5, drop=True), ref.x)
@@ -154,6 +156,32 @@ def test_scene_without_sweep_and_bad_arguments_are_refused(scene, tmp_path):
         workbench.run_campaign(scene, tmp_path / "run.nc")
 
 
+def test_an_error_stops_the_blocks_in_flight(tmp_path):
+    """A point that raises (a bug, not a failed run) ends the campaign at once: the other
+    worker's long block is stopped, not waited for, and writes no file."""
+    import dask
+    import failing_model
+
+    scene = workbench.load_scene(
+        {
+            "model": {"name": "failing"},
+            "run": {"duration": 1.0},
+            "solver": {"max_step": 1e-7},  # 1e7 steps: minutes for the ok point
+            "record": {"dt": 0.5},
+            "sweep": {"mode": [failing_model.OK, failing_model.BUG]},
+        }
+    )
+    store = tmp_path / "c.nc"
+    t0 = time.monotonic()
+    with (
+        dask.config.set({"multiprocessing.context": "fork"}),  # the workers know the model
+        pytest.raises(RuntimeError, match="raised RuntimeError: a bug in the test model"),
+    ):
+        workbench.run_campaign(scene, store, workers=2, chunk=1)
+    assert time.monotonic() - t0 < 20
+    assert not list(store_paths(store)["blocks"].glob("block-*.nc"))
+
+
 KILL = {
     "model": {"name": "duffing"},
     "solver": {"rtol": 1e-12, "atol": 1e-12},  # about 0.15 s per point
@@ -163,12 +191,13 @@ KILL = {
 }
 
 
+@pytest.mark.slow
 def test_killed_campaign_resumes_without_recomputing(tmp_path):
     scene = workbench.load_scene(KILL)
     store = tmp_path / "kill.nc"
     blocks = store_paths(store)["blocks"]
     code = (
-        "import workbench; workbench.run_campaign(workbench.load_scene("
+        "import workbench; workbench.run_campaign(workbench.scene_from_toml("
         f"{scene.to_toml()!r}), {str(store)!r}, workers=1, chunk=2)"
     )
     with open(tmp_path / "stderr.txt", "w") as err:
@@ -247,13 +276,13 @@ def test_longest_blocks_run_first(tmp_path):
     """A sweep over the forcing frequency: the blocks of low omega simulate the longest time
     (cycles x 2 pi / omega) and are started first (Graham's rule), whatever dask's own order of
     task names; with one worker the execution order is visible in each block file."""
-    from workbench.campaign._run import longest_first, simulated_span
-    from workbench.campaign._store import expand_grid
+    from workbench.campaign import expand_sweep
+    from workbench.campaign._schedule import longest_first, simulated_span
 
     scene = workbench.load_scene(
         {**BASE, "sweep": {"omega": [0.8, 1.0, 1.2, 1.4, 0.5, 2.0]}}  # slowest at flat 4
     )
-    grid = expand_grid(scene)
+    grid = expand_sweep(scene)
     assert simulated_span(scene, grid, 4) == pytest.approx(6 * 2 * np.pi / 0.5, rel=1e-12)
     store = tmp_path / "c.nc"
     workbench.run_campaign(scene, store, workers=1, chunk=1)

@@ -62,27 +62,20 @@ def test_crossing_sides_partition_at_zero():
     assert _crossed(0, -1e-9, 1e-9) and _crossed(0, 1e-9, -1e-9)
 
 
-def test_every_contact_of_the_ninebar_has_a_located_onset(monkeypatch):
+def test_every_contact_of_the_ninebar_has_a_located_onset():
     """Over two crank cycles of the default scene, every record in contact (e > c) carries the
     normal velocity of its located onset (aux > 0): the LN damping never falls back to the
     current normal velocity (a missed onset, e.g. right after an end located on g = 0)."""
-    from workbench.solver import _simulate
+    from workbench.run import derive, integrate, prepare, to_dataset
 
-    runs = []
-    integrate = _simulate.integrate
-
-    def spy(problem, t_rec, **kw):
-        result = integrate(problem, t_rec, **kw)
-        runs.append((problem, result))
-        return result
-
-    monkeypatch.setattr(_simulate, "integrate", spy)
     scene = workbench.load_scene("studies/ninebar.toml").replace(
         run={"cycles": 2, "transient_cycles": 0},
         record={"samples_per_period": 80_000, "variables": ["eccentricity"]},
     )
-    ds = workbench.simulate(scene)
-    ((problem, result),) = runs
+    prepared = prepare(scene)
+    result = integrate(prepared)
+    derived, result = derive(prepared, result)
+    ds = to_dataset(prepared, result, derived)
     e = ds.eccentricity.transpose("time", "joint").values
     in_contact = e > 0.5e-3
     assert in_contact.mean() > 0.3  # the check has something to check

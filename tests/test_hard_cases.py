@@ -8,12 +8,12 @@ import math
 
 import numpy as np
 import pytest
+from helpers import ENERGY, energy_residual
 
 import workbench
 
 pytestmark = pytest.mark.hard
 
-ENERGY = ["driver_work", "dissipated_energy", "kinetic_energy", "potential_energy"]
 STATS = ["eccentricity", "penetration", "contact_force"]
 
 
@@ -34,16 +34,6 @@ def run(changes: dict, rtol: float, cycles: int = 3, transient: int = 1, duratio
             else {"dt": duration / 400, "variables": ENERGY + STATS},
         )
     )
-
-
-def energy_residual(ds) -> tuple[float, float]:
-    res = (
-        ds.driver_work
-        - ds.dissipated_energy
-        - (ds.kinetic_energy - ds.kinetic_energy[0])
-        - (ds.potential_energy - ds.potential_energy[0])
-    )
-    return float(abs(res).max()), float(abs(ds.driver_work).max())
 
 
 def robust(ds, c: float) -> dict[str, float]:
@@ -87,7 +77,7 @@ def test_hard_case(name):
     for ds in (coarse, fine):
         for var in ds.data_vars.values():
             assert np.isfinite(var.values).all(), var.name
-        worst, swing = energy_residual(ds)
+        worst, swing = float(abs(energy_residual(ds)).max()), float(abs(ds.driver_work).max())
         assert worst < 1e-4 * swing, f"energy residual {worst:.3g} J of {swing:.3g} J"
         # penetration stays a small fraction of the journal radius (Hertz contact valid)
         assert float(ds.penetration.max()) < 0.01 * 10e-3
@@ -117,27 +107,31 @@ def test_grazing_contact_below_1e6_m_per_s():
 
 
 def test_long_run_has_no_energy_drift():
-    """1000 crank cycles at omega = pi with one clearance joint: the energy residual stays below
-    1e-4 of the work swing and does not grow with time."""
-    ds = run(
-        {"effects": {"clearance": ["A"]}, "parameters": {"omega": math.pi}},
-        1e-6,
-        cycles=1000,
-        transient=0,
+    """200 crank cycles at omega = pi with one clearance joint, one record per cycle: the energy
+    residual has no trend. Its least-squares slope over the cycles after the first, times the
+    run's length, stays below 1e-7 of the energy dissipated over the run: an error that
+    accumulates, e.g. a dissipation term computed 1e-6 too small, would read 1e-6 of it; the
+    errors of a correct run at rtol 1e-6 do not accumulate (they are set by each contact's
+    events, not by the elapsed time)."""
+    base = workbench.load_scene("studies/ninebar.toml")
+    ds = workbench.simulate(
+        base.replace(
+            effects={**base.effects, "clearance": ["A"]},
+            parameters={**base.parameters, "omega": math.pi},
+            run={"cycles": 200, "transient_cycles": 0},
+            record={"samples_per_period": 1, "variables": ENERGY},
+        )
     )
-    worst, swing = energy_residual(ds)
-    assert worst < 1e-4 * swing
-    res = (
-        ds.driver_work
-        - ds.dissipated_energy
-        - (ds.kinetic_energy - ds.kinetic_energy[0])
-        - (ds.potential_energy - ds.potential_energy[0])
-    )
-    half = res.sizes["time"] // 2
-    assert float(abs(res[half:]).max()) < 1e-4 * swing
+    residual = energy_residual(ds)[1:]  # after the first cycle (the first record is 0 J)
+    t = residual.time.values
+    drift = np.polyfit(t, residual.values, 1)[0] * (t[-1] - t[0])
+    dissipated = float(ds.dissipated_energy[-1])
+    assert dissipated > 10.0  # 200 cycles of impacts and friction: the check has a scale
+    assert abs(drift) < 1e-7 * dissipated, (drift, dissipated)
+    assert float(abs(residual).max()) < 1e-4 * float(abs(ds.driver_work).max())
 
 
 def test_penetration_beyond_bound_is_a_clear_error():
     with pytest.raises(workbench.SolverError, match=r"t = .*max_penetration") as info:
         run({"parameters": {"max_penetration": 1e-7}}, 1e-6, cycles=1, transient=0)
-    assert info.value.cause.startswith("model_")
+    assert info.value.status is workbench.Status.MODEL_FAILURE and info.value.model_code > 0

@@ -10,9 +10,9 @@ import pytest
 from workbench import load_scene
 from workbench.analysis import lle_from_equations, lyapunov_spectrum
 from workbench.models import get_model
+from workbench.solver import integrate
 from workbench.solver._compile import jacobian_for
 from workbench.solver._copies import copies_problem, split_copies
-from workbench.solver._simulate import integrate
 from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem
 
 LORENZ_SPECTRUM = (0.9056, 0.0, -14.5723)  # Sprott (2003), Appendix A (sigma 10, rho 28, 8/3)
@@ -246,9 +246,7 @@ def test_chaos_case_two_trajectory_and_variational_agree():
     29.473-29.483). Before the kernel applied simultaneous events together, a copy whose
     contact onset fell on the fiducial's double in time missed it, and the variants spread by
     20 %."""
-    scene = load_scene("studies/chaos/chaos.toml").replace(
-        run={"cycles": 3, "transient_cycles": 4}
-    )
+    scene = load_scene("studies/chaos/chaos.toml").replace(run={"cycles": 3, "transient_cycles": 4})
     r = lle_from_equations(scene)
     assert bool(r.converged), r.estimate.values
     assert float(r.method_difference) < 0.15

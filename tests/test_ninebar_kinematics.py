@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import IDEAL_SLIDER_PEAKS
 
 from workbench.models.ninebar import _kinematics as K
 from workbench.models.ninebar._geometry import (
@@ -123,15 +124,7 @@ def test_slider_stroke_and_its_extremes(cycle):
     assert s.min() == pytest.approx(0.0, abs=1e-4)  # S0 puts S9 = 0 at the +X dead centre
 
 
-@pytest.mark.parametrize(
-    ("omega", "vmax", "amax"),
-    [
-        (math.pi, 0.638, 3.39),
-        (2 * math.pi, 1.277, 13.56),
-        (2.5 * math.pi, 1.596, 21.19),
-        (4 * math.pi, 2.553, 54.25),
-    ],
-)
+@pytest.mark.parametrize(("omega", "vmax", "amax"), IDEAL_SLIDER_PEAKS)
 def test_ideal_slider_velocity_and_acceleration_peaks(cycle, omega, vmax, amax):
     # at constant crank speed v = J qd scales with omega and a = gam with omega^2
     assert np.abs(cycle["v"]).max() * omega == pytest.approx(vmax, rel=0.01)

@@ -3,7 +3,7 @@
 import pytest
 
 import workbench
-from workbench import SceneError, load_scene
+from workbench import SceneError, load_scene, scene_from_toml
 
 GOOD = {"model": {"name": "duffing"}, "run": {"cycles": 2}}
 
@@ -70,6 +70,19 @@ def test_toml_round_trip(tmp_path):
     assert again == scene
     assert again.sweep["gamma"] == (0.2, 0.25, 0.3)
     assert again.to_toml() == scene.to_toml()
+
+
+def test_load_scene_takes_a_scene_a_path_or_a_mapping_and_text_only_explicitly(tmp_path):
+    scene = load_scene(GOOD)
+    assert load_scene(scene) is scene
+    path = tmp_path / "omega=2.toml"  # a path with "=" is a path, not TOML text
+    path.write_text(scene.to_toml())
+    assert load_scene(path) == scene and load_scene(str(path)) == scene
+    assert scene_from_toml(scene.to_toml()) == scene
+    with pytest.raises(SceneError, match="looks like TOML text: read it with .*scene_from_toml"):
+        load_scene(scene.to_toml())
+    with pytest.raises(SceneError, match="a TOML file path or a mapping; got int"):
+        load_scene(3)
 
 
 def test_missing_file_and_bad_toml(tmp_path):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import ENERGY, energy_residual
 
 import workbench
 
@@ -61,10 +62,9 @@ def test_states_and_energy_balance(friction, n_states):
     ds = _run(
         effects,
         friction_coefficient=0.05,
-        variables=["driver_work", "dissipated_energy", "kinetic_energy", "potential_energy"],
+        variables=ENERGY,
     )
-    energy = ds.kinetic_energy + ds.potential_energy
-    residual = ds.driver_work - ds.dissipated_energy - (energy - energy[0])
+    residual = energy_residual(ds)
     scale = float(abs(ds.driver_work).max())
     assert float(abs(residual).max()) < 1e-4 * scale
     assert float(ds.dissipated_energy[-1]) > 0  # the impacts dissipate (c_e = 0.9)

@@ -102,6 +102,6 @@ def test_solver_statistics_recorded():
 def test_max_steps_raises_solver_error_with_time_and_state():
     with pytest.raises(workbench.SolverError, match=r"t = .* s.*max_steps") as info:
         workbench.simulate(_with(LORENZ, method="dop853", rtol=1e-10, atol=1e-10, max_steps=10))
-    assert info.value.cause == "max_steps"
+    assert info.value.status is workbench.Status.MAX_STEPS
     assert set(info.value.state) == {"x", "y", "z"}
     assert 0 < info.value.time < 5.0

@@ -13,7 +13,7 @@ import workbench
 
 exudyn = pytest.importorskip("exudyn", reason="the 'verify' extra (exudyn) is not installed")
 
-from workbench.verify import verify  # noqa: E402
+from workbench.verification import verify  # noqa: E402
 
 pytestmark = pytest.mark.verify
 
@@ -94,7 +94,7 @@ def test_slider_crank_ideal_and_first_impact_agree():
 
 
 def test_refusals_name_the_problem(tmp_path):
-    from workbench.verify import run_exudyn
+    from workbench.verification import run_exudyn
 
     lugre = _scene(friction="lugre")
     with pytest.raises(ValueError, match="effects.friction = 'lugre'"):

@@ -8,28 +8,57 @@ solver; :mod:`workbench.analysis` identifies chaos in them; runs are archived as
 >>> ds = workbench.simulate(scene)
 >>> float(ds.time[-1] - ds.time[0]) == 2 * ds.attrs["forcing_period"]
 True
+
+Layers (each imports only those before it; ``tests/test_layers.py`` checks it):
+solver -> models -> scene -> run -> archive, precision (``accuracy``), analysis, plot ->
+campaign -> verification (``verify``), study -> cli. ``workbench.analysis``, ``workbench.plot``
+and ``verify`` (which needs the optional extra exudyn when called) load on first use.
 """
 
-from workbench._cache import configure_numba_cache
+from workbench._cache import register_cache_locator
 
-configure_numba_cache()
+register_cache_locator()  # before any workbench module defines a cached compiled function
 
-from workbench._archive import open_run, save_run  # noqa: E402
-from workbench._errors import SceneError, SolverError  # noqa: E402
-from workbench._scene import Scene, load_scene  # noqa: E402
-from workbench.campaign import run_campaign  # noqa: E402
-from workbench.solver import simulate  # noqa: E402
+from workbench.archive import open_run, save_run  # noqa: E402
+from workbench.campaign import CampaignError, run_campaign  # noqa: E402
+from workbench.precision import Recommendation, accuracy, recommend  # noqa: E402
+from workbench.run import prepare, simulate  # noqa: E402
+from workbench.scene import Scene, SceneError, load_scene, scene_from_toml  # noqa: E402
+from workbench.solver import SolverError, Status  # noqa: E402
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "CampaignError",
+    "Recommendation",
     "Scene",
     "SceneError",
     "SolverError",
+    "Status",
+    "accuracy",
+    "analysis",
     "load_scene",
     "open_run",
+    "plot",
+    "prepare",
+    "recommend",
     "run_campaign",
     "save_run",
+    "scene_from_toml",
     "simulate",
+    "verify",
     "__version__",
 ]
+
+_LAZY_MODULES = ("analysis", "plot", "models", "verification")
+
+
+def __getattr__(name: str):
+    """The lazy names: subpackages that cost an import (matplotlib, nolds) and ``verify``."""
+    import importlib
+
+    if name in _LAZY_MODULES:
+        return importlib.import_module(f"workbench.{name}")
+    if name == "verify":
+        return importlib.import_module("workbench.verification").verify
+    raise AttributeError(f"module 'workbench' has no attribute {name!r}")

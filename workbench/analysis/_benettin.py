@@ -19,11 +19,9 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._scene import Scene
-from workbench.analysis._lyapunov import Prepared, prepare
-from workbench.solver._copies import copies_problem, split_copies
-from workbench.solver._simulate import integrate
-from workbench.solver._tangent import state_scale, tangent_problem
+from workbench.analysis._lyapunov import Window, batch_error, measurement_window
+from workbench.scene import SceneSource
+from workbench.solver import copies_problem, split_copies, state_scale, tangent_problem
 
 __all__ = ["lle_from_equations"]
 
@@ -42,7 +40,7 @@ MIN_RTOL = 1e-11
 
 
 def follow_copies(
-    prep: Prepared,
+    prep: Window,
     separations: np.ndarray,
     growth: np.ndarray,
     length: float,
@@ -85,15 +83,7 @@ def follow_copies(
     segments = np.array_split(np.arange(1, t_rec.size), _SEGMENTS if variational else 1)
     for seg in segments:
         t0 = t_rec[seg[0] - 1]
-        res = integrate(
-            dataclasses.replace(system, y0=y, aux0=aux, t0=t0),
-            t_rec[seg],
-            method=prep.method if prep.method != "ark548" else "dop853",
-            rtol=rtol,
-            atol=prep.atol * rtol / prep.rtol,
-            max_step=prep.max_step,
-            max_steps=prep.max_steps,
-        )
+        res = prep.solve(dataclasses.replace(system, y0=y, aux0=aux, t0=t0), t_rec[seg], rtol)
         for key in stats:
             stats[key] += res.stats[key]
         for j, r in enumerate(seg):
@@ -136,7 +126,7 @@ def _plateau(rates: np.ndarray) -> tuple[int, int]:
 
 
 def lle_from_equations(
-    scene: Scene | str | dict,
+    scene: SceneSource,
     *,
     cycles: int | None = None,
     duration: float | None = None,
@@ -203,7 +193,7 @@ def lle_from_equations(
     >>> abs(float(r.lle) - 0.9056) < 0.05, bool(r.converged)
     (True, True)
     """
-    prep = prepare(scene, cycles=cycles, duration=duration)
+    prep = measurement_window(scene, cycles=cycles, duration=duration)
     rtol = prep.rtol if rtol is None else float(rtol)
     if not growth > 0:
         raise ValueError(f"growth={growth!r}: must be a positive log growth")
@@ -234,11 +224,7 @@ def lle_from_equations(
             break
         rtol /= 100  # the variants part by the integration error: tighten, and say so
     start = times[0]
-    batches = np.array_split(np.arange(1, times.size), 10)
-    rates = [
-        (total[b[-1], 0] - total[b[0] - 1, 0]) / (times[b[-1]] - times[b[0] - 1]) for b in batches
-    ]
-    stderr = float(np.std(rates, ddof=1) / math.sqrt(len(rates)))
+    stderr = float(batch_error(times[1:], np.diff(total[:, :1], axis=0), start)[0])
     out = xr.Dataset(
         {
             "lle": ((), lle, {"units": "s-1", "long_name": "largest Lyapunov exponent"}),

@@ -9,15 +9,30 @@ from workbench.analysis._sections import poincare_section
 __all__ = ["bifurcation_diagram"]
 
 
-def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) -> xr.DataArray:
+def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) -> xr.Dataset:
     """Stroboscopic samples of ``var`` over the parameter ``param`` of a campaign.
 
-    ``runs`` is a campaign dataset (from :func:`workbench.run_campaign`) whose records are per
-    forcing period after the transient; ``param`` defaults to its only parameter dim. Returns a
-    DataArray with dims ``(param, strobe, ...)`` (NaN where a point failed), storable as netCDF
-    and drawn by :func:`workbench.plot.bifurcation_figure`.
+    Parameters
+    ----------
+    runs : xarray.Dataset
+        A campaign (from :func:`workbench.run_campaign`) whose records are per forcing period
+        after the transient.
+    var : str
+        The sampled variable.
+    param : str, optional
+        The parameter of the x axis; default the campaign's only parameter dim.
 
-    Raises ValueError if ``param`` is not a swept dim or the run has no strobe grid.
+    Returns
+    -------
+    xarray.Dataset
+        ``var`` with dims ``(param, strobe, ...)`` (NaN where a point failed) and its units;
+        attributes ``diagram_parameter`` and ``diagram_variable``. Storable as netCDF and drawn
+        by :func:`workbench.plot.bifurcation_figure`.
+
+    Raises
+    ------
+    ValueError
+        If ``param`` is not a swept dim, ``var`` is missing, or the runs have no strobe grid.
     """
     swept = [d for d in runs.dims if d in runs.coords and d not in ("time", "joint", "crank")]
     if param is None:
@@ -31,8 +46,6 @@ def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) ->
         raise ValueError(f"{param!r} is not a parameter dim of the campaign; dims: {swept!r}")
     if var not in runs:
         raise ValueError(f"no variable {var!r}; variables: {sorted(runs.data_vars)}")
-    samples = poincare_section(runs, var)
-    others = [d for d in samples.dims if d not in (param, "strobe")]
-    samples = samples.transpose(param, "strobe", *others)
-    samples.attrs.update(runs[var].attrs, diagram_parameter=param)
+    samples = poincare_section(runs, var).transpose(param, "strobe", ...)
+    samples.attrs.update(diagram_parameter=param, diagram_variable=var)
     return samples

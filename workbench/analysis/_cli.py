@@ -10,10 +10,11 @@ from pathlib import Path
 def _cmd_analyse(args: argparse.Namespace) -> int:
     import numpy as np
 
-    import workbench
     from workbench import analysis, plot
+    from workbench.archive import open_run
+    from workbench.scene import scene_from_toml
 
-    ds = workbench.open_run(args.run)
+    ds = open_run(args.run)
     if args.var not in ds:
         names = ", ".join(v for v in ds.data_vars if "time" in ds[v].dims)
         print(
@@ -63,7 +64,7 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
         "lle": plot.lle_figure(wolf, float(ros.lle), label),
     }
     if period is not None and ds.attrs.get("samples_per_period"):
-        strobe = analysis.poincare_section(ds.assign(_v=da), "_v")
+        strobe = analysis.poincare_section(ds.assign(_v=da), "_v")["_v"]
         if strobe.sizes["strobe"] >= 100:
             z = analysis.zero_one_test(strobe)
             print(f"  0-1 test on {strobe.sizes['strobe']} strobe samples: K = {float(z.K):.3f}")
@@ -71,9 +72,7 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
         else:
             print(f"  0-1 test: skipped ({strobe.sizes['strobe']} strobe samples, needs 100)")
     if args.equations:
-        bench = analysis.lle_from_equations(
-            workbench.load_scene(__import__("tomllib").loads(ds.attrs["scene"]))
-        )
+        bench = analysis.lle_from_equations(scene_from_toml(ds.attrs["scene"]))
         print(f"  LLE from the equations (Benettin): {float(bench.lle):.4g} 1/s")
     for name, fig in figures.items():
         path = out / f"{label.replace('[', '-').replace(']', '').replace('=', '')}-{name}.png"

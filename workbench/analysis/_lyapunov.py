@@ -11,13 +11,19 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._scene import COMPILED_METHODS, Scene, load_scene
-from workbench.models import get_model
-from workbench.models._base import Problem
-from workbench.solver._compile import jacobian_for
-from workbench.solver._grid import record_grid
-from workbench.solver._simulate import integrate
-from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem
+from workbench.run import Prepared, prepare
+from workbench.run import integrate as integrate_scene
+from workbench.scene import SceneSource
+from workbench.solver import (
+    COMPILED_METHODS,
+    Problem,
+    RunResult,
+    integrate,
+    jacobian_for,
+    state_scale,
+    tangent_columns,
+    tangent_problem,
+)
 
 __all__ = ["lyapunov_spectrum"]
 
@@ -29,88 +35,82 @@ _MIN_LOG_GROWTH = 2.0
 _BATCHES = 10
 
 
-@dataclasses.dataclass
-class Prepared:
-    """A scene's model problem at the start of the measurement (after the scene's transient)."""
+@dataclasses.dataclass(frozen=True)
+class Window:
+    """The measurement window of an exponent: a scene prepared at the end of its transient
+    (``prepared.problem`` starts there), the measured length (s) and the solver settings."""
 
-    scene: Scene
-    problem: Problem  # t0, y0 and aux0 at the start of the measurement
-    period: float | None  # forcing period, s
-    length: float  # measured time, s
+    prepared: Prepared
+    length: float
     method: str
     rtol: float
     atol: float
     max_step: float
     max_steps: int
 
+    @property
+    def problem(self) -> Problem:
+        return self.prepared.problem
 
-def prepare(
-    scene: Scene | str | dict,
+    @property
+    def period(self) -> float | None:
+        return self.prepared.period
+
+    def solve(self, problem: Problem, t_rec: np.ndarray, rtol: float) -> RunResult:
+        """Integrate a problem derived from this window's (a tangent system, copies) with the
+        window's explicit method (ARK548's implicit stages are the model's, not the derived
+        system's) at ``rtol`` (``atol`` in proportion); raises on a failed run."""
+        res = integrate(
+            problem,
+            t_rec,
+            method=self.method if self.method != "ark548" else "dop853",
+            rtol=rtol,
+            atol=self.atol * rtol / self.rtol,
+            max_step=self.max_step,
+            max_steps=self.max_steps,
+        )
+        res.raise_for_status()
+        return res
+
+
+def measurement_window(
+    scene: SceneSource,
     *,
     cycles: int | None = None,
     duration: float | None = None,
     method: str | None = None,
     rtol: float | None = None,
-) -> Prepared:
-    """The model problem of a scene, advanced through the scene's transient with its solver.
-
-    ``cycles`` (forced models) or ``duration`` (s) set the measured length (default: the
-    scene's); ``method`` and ``rtol`` override the scene's solver (``atol`` follows ``rtol``
-    in proportion).
-    """
-    scene = scene if isinstance(scene, Scene) else load_scene(scene)
-    model = get_model(scene.model)
-    params = dict(scene.resolved_parameters)
-    problem = model.problem(params, scene.effects, scene.initial, ())
-    s = scene.solver
+) -> Window:
+    """A scene's bare motion (no outputs, no energy quadratures) advanced through its transient
+    with its solver, and the measured length: ``cycles`` forcing periods (forced models) or
+    ``duration`` seconds, default the scene's. ``method`` and ``rtol`` override the scene's
+    solver for the measurement (``atol`` follows ``rtol`` in proportion)."""
+    prep = prepare(scene, variables=())
+    s = prep.scene.solver
     method = method or s["method"]
-    if method.startswith("scipy:") or method not in COMPILED_METHODS:
+    if method not in COMPILED_METHODS:
         raise ValueError(
             f"method={method!r}: Lyapunov exponents from the equations need a compiled method "
             f"{COMPILED_METHODS!r}"
         )
     rtol_used = float(rtol) if rtol is not None else float(s["rtol"])
     atol = float(s["atol"]) * rtol_used / float(s["rtol"])
-    period = model.forcing_period(params)
-    t_rec, _ = record_grid(scene, problem.t0, period)
-    start = float(t_rec[0])
-    if period is not None:
-        length = (cycles if cycles is not None else scene.run.get("cycles", 1)) * period
+    if prep.period is not None:
+        n = cycles if cycles is not None else prep.scene.run.get("cycles", 1)
+        length = n * prep.period
     else:
-        length = duration if duration is not None else float(scene.run["duration"])
+        length = duration if duration is not None else float(prep.scene.run["duration"])
     if not length > 0:
         raise ValueError(f"the measured length must be positive; got {length!r} s")
-    if start > problem.t0:
-        res = integrate(
-            problem,
-            np.array([start]),
-            method=s["method"],
-            rtol=s["rtol"],
-            atol=s["atol"],
-            max_step=s["max_step"],
-            max_steps=s["max_steps"],
-        )
-        problem = dataclasses.replace(problem, y0=res.Y[-1].copy(), aux0=res.AUX[-1].copy())
-        problem.t0 = start
-    return Prepared(
-        scene, problem, period, float(length), method, rtol_used, atol, s["max_step"],
-        s["max_steps"],
-    )  # fmt: skip
+    start = float(prep.times[0])
+    if start > prep.problem.t0:
+        res = integrate_scene(prep, [start])
+        res.raise_for_status()
+        prep = prep.restart(start, res.Y[-1].copy(), res.AUX[-1].copy())
+    return Window(prep, float(length), method, rtol_used, atol, s["max_step"], s["max_steps"])
 
 
-def _integrate(prep: Prepared, problem: Problem, t_rec: np.ndarray, rtol: float):
-    return integrate(
-        problem,
-        t_rec,
-        method=prep.method if prep.method != "ark548" else "dop853",
-        rtol=rtol,
-        atol=prep.atol * rtol / prep.rtol,
-        max_step=prep.max_step,
-        max_steps=prep.max_steps,
-    )
-
-
-def _time_scale(prep: Prepared) -> float:
+def _time_scale(prep: Window) -> float:
     return prep.period if prep.period is not None else 1.0
 
 
@@ -128,7 +128,7 @@ def _qr(V: np.ndarray, scale: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarra
 
 
 def tangent_run(
-    prep: Prepared,
+    prep: Window,
     m: int,
     *,
     rtol: float | None = None,
@@ -175,7 +175,7 @@ def tangent_run(
             dataclasses.replace(pb, y0=y, aux0=aux, t0=t), V, time_scale=_time_scale(prep),
             log_det=log_det,
         )  # fmt: skip
-        res = _integrate(prep, tp, t_rec, rtol)
+        res = prep.solve(tp, t_rec, rtol)
         for k in stats:
             stats[k] += res.stats[k]
         Yb = np.ascontiguousarray(res.Y[:, :n])
@@ -229,7 +229,7 @@ def batch_error(times: np.ndarray, contributions: np.ndarray, start: float) -> n
 
 
 def lyapunov_spectrum(
-    scene: Scene | str | dict,
+    scene: SceneSource,
     *,
     exponents: int | None = None,
     cycles: int | None = None,
@@ -282,7 +282,7 @@ def lyapunov_spectrum(
     >>> [round(float(v), 1) for v in r.exponent]
     [0.9, 0.0, -14.6]
     """
-    prep = prepare(scene, cycles=cycles, duration=duration)
+    prep = measurement_window(scene, cycles=cycles, duration=duration)
     n = prep.problem.y0.size
     m = n if exponents is None else int(exponents)
     run = tangent_run(prep, m, rtol=rtol, interval=interval, seed=seed)
@@ -307,7 +307,7 @@ def lyapunov_spectrum(
     return out
 
 
-def _spectrum_dataset(prep: Prepared, run: dict) -> xr.Dataset:
+def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
     times, growth, start = run["times"], run["log_growth"], run["start"]
     T = times[-1] - start
     lam = growth.sum(axis=0) / T

@@ -42,21 +42,40 @@ def phase_portrait(ds: xr.Dataset, var: str, *, rate: str | None = None) -> xr.D
 
 def poincare_section(
     ds: xr.Dataset, var: str | None = None, *, period: float | None = None
-) -> xr.Dataset | xr.DataArray:
+) -> xr.Dataset:
     """Stroboscopic samples at t0 + k T of a forced run (one per forcing period).
 
     The samples are read from the run's record grid, which lies exactly at ``t0 + k T /
     samples_per_period`` (no interpolation); ``period`` (s) defaults to the run's
-    ``forcing_period`` and must be a whole number of record steps. The result has dim
-    ``strobe`` (sample index) with coordinate ``strobe_time`` (s); for a campaign (parameter
-    dims) every point is sampled alike. Raises ValueError if the grid lacks the strobe times.
+    ``forcing_period`` and must be a whole number of record steps. For a campaign (parameter
+    dims) every point is sampled alike.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run of :func:`workbench.simulate` or a campaign of :func:`workbench.run_campaign`.
+    var : str, optional
+        Sample only this variable (default: every variable).
+    period : float, optional
+        Sampling period, s (default the forcing period).
+
+    Returns
+    -------
+    xarray.Dataset
+        The variables (with their units) over dim ``strobe`` (sample index) with coordinate
+        ``strobe_time`` (s).
+
+    Raises
+    ------
+    ValueError
+        If the record grid lacks the strobe times.
 
     Examples
     --------
     >>> import workbench
     >>> ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 5},
     ...                          "record": {"samples_per_period": 10}})
-    >>> poincare_section(ds, "x").sizes["strobe"]
+    >>> poincare_section(ds, "x").x.sizes["strobe"]
     6
     """
     spp = ds.attrs.get("samples_per_period")
@@ -81,7 +100,7 @@ def poincare_section(
             f"period={period!r} s is not a whole number of record steps ({forcing!r} s / {spp}): "
             "the record grid does not contain these strobe times"
         )
-    out = ds if var is None else ds[var]
+    out = ds if var is None else ds[[var]]
     out = out.isel(time=slice(None, None, int(round(step))))
     times = out["time"].values if "time" in out.coords else None
     out = out.rename(time="strobe")

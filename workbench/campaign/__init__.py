@@ -1,4 +1,4 @@
-"""Parameter campaigns: a scene's ``[sweep]`` grid run as dask tasks, resumable, one dataset.
+"""Parameter campaigns: a scene's ``[sweep]`` grid run in parallel, resumable, one dataset.
 
 >>> import workbench
 >>> scene = workbench.load_scene({
@@ -7,14 +7,18 @@
 ...     "record": {"samples_per_period": 1},
 ...     "sweep": {"gamma": [0.3, 0.5], "omega": [1.0, 1.2]},
 ... })
->>> from workbench.campaign import expand_grid
->>> expand_grid(scene).shape
+>>> from workbench.campaign import expand_sweep
+>>> expand_sweep(scene).shape
 (2, 2)
 
 :func:`run_campaign` expands the sweep into a grid over the named parameters (several at once),
-runs blocks of points as dask tasks (a local process pool by default, any
+runs blocks of points as tasks (on a local process pool by default, on any
 ``dask.distributed.Client`` when given) and returns one :class:`xarray.Dataset` with the
 parameter dims first, then ``time`` and the model's dims.
+
+Modules: ``_run`` (the orchestration), ``_store`` (the sweep grid and the store on disk),
+``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
+(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server).
 
 Store layout
 ------------
@@ -53,11 +57,16 @@ When every point has the same record times they are the 1-D coordinate ``time`` 
 ``k T / samples_per_period``), ``time`` is a dim without coordinate and ``record_time``
 (parameter dims, time; s) holds each point's times, NaN-padded if runs differ in length.
 
-The local pool is dask's multiprocessing scheduler on a fork server that imports workbench and
-loads the campaign's compiled kernel once; its workers (one thread each) start in milliseconds.
+Both executors run through one loop (``_execute``): as many blocks in flight as there are
+workers, the next one submitted, longest first, when one finishes, so the start order is the
+campaign's own whatever the scheduler. The local pool is a process pool on a fork server that
+imports workbench and loads the campaign's compiled kernel once; its workers (one thread each)
+start in milliseconds and stop with the campaign (on an error or Ctrl-C the blocks in flight are
+stopped at once).
 
-The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: 0 ok,
-1 solver_failed, 2 terminated_early, 3 invalid_parameters), ``failure`` (the message), solver
+The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: the
+codes of :class:`workbench.Status`, 0 ok, 1 terminated, 2 max_steps, 3 step_underflow,
+4 non_finite, 5 model_failure, and 6 invalid_parameters), ``failure`` (the message), solver
 statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluations``,
 ``solver_events``, ``solver_wall_time``) and ``point_wall_time``; and in its attributes the scene
 TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It
@@ -69,13 +78,13 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 
 from workbench.campaign._assemble import summary
 from workbench.campaign._run import run_campaign, store_paths
-from workbench.campaign._store import CampaignError, CampaignWarning, Grid, expand_grid
+from workbench.campaign._store import CampaignError, CampaignWarning, SweepGrid, expand_sweep
 
 __all__ = [
     "CampaignError",
     "CampaignWarning",
-    "Grid",
-    "expand_grid",
+    "SweepGrid",
+    "expand_sweep",
     "run_campaign",
     "store_paths",
     "summary",

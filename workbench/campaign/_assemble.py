@@ -7,51 +7,49 @@ import json
 import numpy as np
 import xarray as xr
 
-from workbench._archive import open_run
-from workbench._scene import Scene
+from workbench.archive import open_run
 from workbench.campaign._block import (
     FAILURE_ATTRS,
-    OK,
     POINT_WALL_ATTRS,
     STATS,
     STATUS,
     STATUS_ATTRS,
-    TERMINATED,
+    failed,
     stat_attrs,
 )
 from workbench.campaign._store import (
-    Grid,
     Store,
+    SweepGrid,
     forcing_period,
     format_point,
     parameter_attrs,
 )
 from workbench.models import get_model
-from workbench.solver._grid import record_grid
-from workbench.solver._simulate import provenance
+from workbench.run import provenance, record_times
+from workbench.scene import Scene
 
 __all__ = ["assemble", "summary"]
 
 _PER_POINT = ("status", "failure", *STATS, "point_wall_time")
 
 
-def _grid_attrs(scene: Scene, grid: Grid) -> tuple[dict, np.ndarray | None]:
+def _grid_attrs(scene: Scene, grid: SweepGrid) -> tuple[dict, np.ndarray | None]:
     """Attributes of the record grid shared by every point, and the per-point forcing period (s,
     None for an autonomous model)."""
     periods = [forcing_period(scene, grid, flat) for flat in range(grid.size)]
     if any(p is None for p in periods):
         periods_arr = None
-        variants = [record_grid(scene, 0.0, None)[1]]
+        variants = [record_times(scene, 0.0, None)[1]]
     else:
         periods_arr = np.array(periods, np.float64).reshape(grid.shape)
-        variants = [record_grid(scene, 0.0, p)[1] for p in sorted(set(periods))]
+        variants = [record_times(scene, 0.0, p)[1] for p in sorted(set(periods))]
     shared = {k: v for k, v in variants[0].items() if all(w.get(k) == v for w in variants)}
     return shared, periods_arr
 
 
 def assemble(
     scene: Scene,
-    grid: Grid,
+    grid: SweepGrid,
     store: Store,
     chunk: int,
     cid: str,
@@ -132,13 +130,12 @@ def assemble(
     data_vars["point_wall_time"] = (pdims, gather("point_wall_time", np.nan), POINT_WALL_ATTRS)
 
     ds = xr.Dataset(data_vars, coords=coords)
-    prov = provenance(scene)
-    prov["history"] = prov["history"].replace("workbench.simulate", "workbench.run_campaign")
+    prov = provenance(scene, by="workbench.run_campaign")
     if not scene.title:
         prov["title"] = f"workbench campaign of model {scene.model} over {', '.join(pdims)}"
     ds.attrs.update(prov)
     s = scene.solver
-    failed = int(((status != OK) & (status != TERMINATED)).sum())
+    n_failed = int(failed(status).sum())
     ds.attrs.update(
         model=scene.model,
         campaign_id=cid,
@@ -147,7 +144,7 @@ def assemble(
         campaign_points=n,
         campaign_chunk=chunk,
         campaign_blocks=len(blocks),
-        failed_points=failed,
+        failed_points=n_failed,
         solver_method=s["method"],
         solver_rtol=s["rtol"],
         solver_atol=s["atol"],
@@ -183,11 +180,11 @@ def summary(ds: xr.Dataset, *, limit: int = 20) -> str:
     lines = [head, "; ".join(f"{v} {k}" for k, v in counts.items() if v or k == "ok")]
     flags = status.transpose(*dims).values.reshape(-1)
     failure = ds["failure"].transpose(*dims).values.reshape(-1)
-    failed = np.flatnonzero((flags != OK) & (flags != TERMINATED))
-    for i in failed[:limit]:
+    bad = np.flatnonzero(failed(flags))
+    for i in bad[:limit]:
         idx = np.unravel_index(i, tuple(ds.sizes[d] for d in dims))
         point = {d: float(ds[d].values[j]) for d, j in zip(dims, idx, strict=True)}
         lines.append(f"  failed {format_point(point)}: {failure[i]}")
-    if len(failed) > limit:
-        lines.append(f"  ... and {len(failed) - limit} more failed points (see 'failure')")
+    if len(bad) > limit:
+        lines.append(f"  ... and {len(bad) - limit} more failed points (see 'failure')")
     return "\n".join(lines)

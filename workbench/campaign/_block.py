@@ -15,32 +15,28 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from workbench._archive import save_run
-from workbench._errors import SceneError, SolverError
-from workbench._scene import Scene, load_scene
+from workbench.archive import save_run
 from workbench.models import get_model
-from workbench.solver._grid import record_grid
-from workbench.solver._simulate import simulate
+from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
+from workbench.scene import Scene, SceneError, scene_from_toml
+from workbench.solver import Status
 
-__all__ = ["BlockTask", "STATUS", "STATS", "run_block"]
+__all__ = ["BlockTask", "INVALID", "STATUS", "STATS", "failed", "run_block", "worker_start"]
 
-# Per-point outcome (int8 ``status``). CF flag_values / flag_meanings.
-OK, SOLVER_FAILED, TERMINATED, INVALID = 0, 1, 2, 3
-STATUS = {
-    OK: "ok",
-    SOLVER_FAILED: "solver_failed",
-    TERMINATED: "terminated_early",
-    INVALID: "invalid_parameters",
-}
-STATUS_ATTRS = {
-    "long_name": "outcome of the point's run",
-    "units": "1",
-    "flag_values": np.array(list(STATUS), dtype=np.int8),
-    "flag_meanings": " ".join(STATUS.values()),
-    "comment": "ok: complete run; solver_failed: the solver raised workbench.SolverError (data "
-    "NaN, message in 'failure'); terminated_early: a terminal event ended the run (records after "
-    "it NaN); invalid_parameters: the model rejects this combination of parameters (data NaN)",
-}
+# Per-point outcome (int8 ``status``, CF flag_values / flag_meanings): the run's Status, or
+# INVALID for a point that did not run.
+INVALID = len(Status)
+STATUS_ATTRS = status_attrs("outcome of the point's run", {INVALID: "invalid_parameters"})
+STATUS_ATTRS["comment"] = (
+    "a workbench.Status of the point's run (ok; terminated: a terminal event ended the run, "
+    "records after it NaN; max_steps, step_underflow, non_finite, model_failure: the run failed, "
+    "data NaN, solver statistics up to the failure, message in 'failure'), or "
+    "invalid_parameters: the model rejects this combination of parameters (the point did not "
+    "run; data NaN)"
+)
+STATUS = dict(
+    zip(STATUS_ATTRS["flag_values"].tolist(), STATUS_ATTRS["flag_meanings"].split(), strict=True)
+)
 FAILURE_ATTRS = {"long_name": "failure message of the point (empty when none)", "units": "1"}
 # name in the dataset -> (attribute of simulate's dataset, dtype, missing value, attrs)
 STATS = {
@@ -59,12 +55,11 @@ POINT_WALL_ATTRS = {
     "long_name": "wall time of the point (scene, problem, integration, dataset)",
     "units": "s",
 }
-TIME_ATTRS = {"units": "s", "long_name": "time", "standard_name": "time"}
 
 _TASKS_IN_PROCESS = 0
 # A block dataset up to this size (bytes) also travels back to the client with the task's
-# summary, so that the client assembles it without reading its file again (~15 ms per block of
-# netCDF overhead); a larger one the client reads from the file.
+# summary, so that the client assembles it without reading its file again (netCDF's overhead
+# per block); a larger one the client reads from the file.
 RETURN_LIMIT = 32 * 2**20
 PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork server loads
 
@@ -82,10 +77,13 @@ class BlockTask:
     block: int
 
 
-def ignore_sigint() -> None:
-    """Initializer of a local pool's worker: Ctrl-C is the client's to handle (it stops the
-    workers), so that a terminal's interrupt does not print a traceback per worker."""
+def worker_start(pids) -> None:
+    """Initializer of a local pool's worker: report this process's id (``pids``, a
+    multiprocessing queue) so that the client can stop the blocks in flight, and leave Ctrl-C
+    to the client (it stops the workers), so that a terminal's interrupt does not print a
+    traceback per worker."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    pids.put(os.getpid())
 
 
 def stat_attrs(name: str) -> dict:
@@ -93,53 +91,39 @@ def stat_attrs(name: str) -> dict:
     units = "s" if dtype is np.float64 else "1"
     attrs = {"long_name": long_name, "units": units}
     if dtype is np.int64:
-        attrs["comment"] = f"{missing}: not available (the point failed)"
+        attrs["comment"] = f"{missing}: not available (the point did not run)"
     return attrs
 
 
-def planned_times(scene: Scene) -> np.ndarray:
-    """Record times (s) a run of a single-point scene would have had (empty if unknown)."""
-    try:
-        model = get_model(scene.model)
-        params = scene.resolved_parameters
-        problem = model.problem(params, scene.effects, scene.initial, scene.variables)
-        t, _ = record_grid(scene, problem.t0, model.forcing_period(params))
-        return np.asarray(t, dtype=np.float64)
-    except Exception:
-        return np.zeros(0)
+def failed(status: np.ndarray) -> np.ndarray:
+    """Which per-point flags are failures: a failed run or a point that did not run."""
+    status = np.asarray(status)
+    return (status != Status.OK) & (status != Status.TERMINATED)
 
 
 def _point(scene: Scene, params: dict[str, float]) -> dict:
-    """Run one point; SolverError and rejected parameters become data, anything else raises."""
+    """Run one point; a failed run and rejected parameters become data, anything else raises."""
     t0 = time.perf_counter()
-    out: dict = {"status": OK, "failure": "", "ds": None, "times": np.zeros(0)}
     try:
-        pscene = scene.with_parameters(**params)
+        ds = simulate(scene.with_parameters(**params), throw=False)
     except SceneError as exc:
-        out.update(status=INVALID, failure=f"invalid_parameters: {exc}")
-        out["wall"] = time.perf_counter() - t0
-        return out
-    try:
-        ds = simulate(pscene)
-    except SolverError as exc:
-        out.update(status=SOLVER_FAILED, failure=f"{exc.cause}: {exc}", times=planned_times(pscene))
-    except SceneError as exc:
-        out.update(status=INVALID, failure=f"invalid_parameters: {exc}")
+        wall = time.perf_counter() - t0
+        out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
+        return out | {"ds": None, "times": np.zeros(0)}
     except Exception as exc:
         shown = ", ".join(f"{k}={v:.6g}" for k, v in params.items())
         raise RuntimeError(
-            f"campaign point {shown} raised {type(exc).__name__}: {exc}. Only "
-            "workbench.SolverError is recorded as a failed point; anything else is a bug or a "
-            "broken setup. Finished blocks are kept: fix the cause and run the campaign again."
+            f"campaign point {shown} raised {type(exc).__name__}: {exc}. Only a failed run (a "
+            "workbench.Status) or invalid parameters are recorded as a point's outcome; anything "
+            "else is a bug or a broken setup. Finished blocks are kept: fix the cause and run "
+            "the campaign again."
         ) from exc
-    else:
-        out["ds"] = ds
-        out["times"] = ds["time"].values
-        if ds.attrs.get("run_status") == "terminated":
-            out["status"] = TERMINATED
-            out["failure"] = "terminated: a terminal event ended the run early"
-    out["wall"] = time.perf_counter() - t0
-    return out
+    status = run_status(ds)
+    failure = f"{status.label}: {ds.attrs['run_message']}" if status.failed else ""
+    if status is Status.TERMINATED:
+        failure = "terminated: a terminal event ended the run early"
+    out = {"status": int(status), "failure": failure, "ds": ds, "times": ds["time"].values}
+    return out | {"wall": time.perf_counter() - t0}
 
 
 def run_block(task: BlockTask) -> dict:
@@ -152,10 +136,9 @@ def run_block(task: BlockTask) -> dict:
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
-    scene = load_scene(task.scene_toml)
-    model = get_model(scene.model)
+    scene = scene_from_toml(task.scene_toml)
     runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
-    ds = _block_dataset(scene, model, task, runs)
+    ds = _block_dataset(scene, task, runs)
     ds.attrs.update(
         worker_pid=os.getpid(),
         worker_task_number=_TASKS_IN_PROCESS,
@@ -167,9 +150,7 @@ def run_block(task: BlockTask) -> dict:
         "block": task.block,
         "points": len(task.flat),
         "failures": [
-            (f, r["failure"])
-            for f, r in zip(task.flat, runs, strict=True)
-            if r["status"] != OK and r["status"] != TERMINATED
+            (f, r["failure"]) for f, r in zip(task.flat, runs, strict=True) if failed(r["status"])
         ],
         "wall": time.perf_counter() - wall0,
         "solver_wall": float(np.nansum(ds["solver_wall_time"].values)),
@@ -177,7 +158,8 @@ def run_block(task: BlockTask) -> dict:
     }
 
 
-def _block_dataset(scene: Scene, model, task: BlockTask, runs: list[dict]) -> xr.Dataset:
+def _block_dataset(scene: Scene, task: BlockTask, runs: list[dict]) -> xr.Dataset:
+    model = get_model(scene.model)
     n = len(runs)
     n_time = max([len(r["times"]) for r in runs] + [0])
     declared = model.variables(scene.effects)
@@ -195,7 +177,7 @@ def _block_dataset(scene: Scene, model, task: BlockTask, runs: list[dict]) -> xr
         arr = np.full((n, n_time) + tuple(msizes[d] for d in q.dims), np.nan)
         attrs = {"units": q.units, "long_name": q.long_name}
         for i, r in enumerate(runs):
-            if r["ds"] is not None:
+            if r["ds"] is not None and not failed(r["status"]):
                 v = r["ds"][name]
                 arr[i, : v.shape[0]] = v.values
                 attrs = dict(v.attrs)

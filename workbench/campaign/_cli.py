@@ -9,14 +9,18 @@ from pathlib import Path
 
 import xarray as xr
 
-__all__ = ["register_cli"]
+from workbench._exit_codes import EXIT_INVALID, exit_code
+from workbench.campaign._block import INVALID
+from workbench.solver import Status
+
+__all__ = ["campaign_exit_code", "register_cli"]
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    import workbench
     from workbench.campaign import CampaignError, run_campaign, summary
+    from workbench.scene import load_scene
 
-    scene = workbench.load_scene(args.scene)
+    scene = load_scene(args.scene)
     client = None
     try:
         if args.scheduler:
@@ -43,13 +47,20 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             )
     except CampaignError as exc:
         print(f"workbench campaign: error: {exc}", file=sys.stderr)
-        return 2
+        return exit_code(exc)
     finally:
         if client is not None:
             client.close()
     print(summary(ds))
     print(f"-> {Path(args.output)}")
-    return 0
+    return campaign_exit_code(ds["status"].values)
+
+
+def campaign_exit_code(flags) -> int:
+    """The largest exit code among a campaign's point flags (a run's Status, or
+    invalid_parameters: invalid input)."""
+    codes = [EXIT_INVALID if f == INVALID else exit_code(Status(f)) for f in set(flags.flat)]
+    return max(codes, default=0)
 
 
 def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple[xr.Dataset, str]:
@@ -86,9 +97,9 @@ def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple
 
 
 def _cmd_bifurcation(args: argparse.Namespace) -> int:
-    import workbench
+    from workbench.archive import open_run
 
-    ds = workbench.open_run(args.campaign)
+    ds = open_run(args.campaign)
     if "campaign_dims" not in ds.attrs:
         print(
             f"workbench bifurcation: error: {args.campaign!r} is not a campaign archive (no "
@@ -121,8 +132,8 @@ def register_cli(sub) -> None:
     """Add the ``campaign`` and ``bifurcation`` subcommands."""
     p = sub.add_parser(
         "campaign",
-        help="run a scene's [sweep] grid on dask into one netCDF campaign (resumable)",
-        description="Run every point of a scene's [sweep] grid as dask tasks (a local process "
+        help="run a scene's [sweep] grid in parallel into one netCDF campaign (resumable)",
+        description="Run every point of a scene's [sweep] grid as tasks (a local process "
         "pool, or a dask.distributed scheduler) and assemble one netCDF archive. Blocks go to "
         "OUTPUT.blocks/; running the same command again computes only missing blocks.",
     )

@@ -16,40 +16,32 @@ from workbench.campaign._block import PRELOAD_ENV
 
 
 def _load_kernel(scene_toml: str) -> None:
-    import numpy as np
+    """The provenance's package versions, then the compiled kernel of the scene's model."""
+    from workbench.run import integrate, prepare, provenance
+    from workbench.scene import scene_from_toml
 
-    from workbench._scene import load_scene
-    from workbench.models import get_model
-    from workbench.solver._simulate import integrate
-
-    scene = load_scene(scene_toml)
-    if scene.solver["method"].startswith("scipy:"):
+    prepared = prepare(scene_from_toml(scene_toml))
+    provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
+    if prepared.scene.solver["method"].startswith("scipy:"):
         return
-    model = get_model(scene.model)
-    problem = model.problem(
-        scene.resolved_parameters, scene.effects, scene.initial, scene.variables
-    )
     # An empty interval: every compiled entry point is loaded, nothing is integrated.
-    integrate(problem, np.array([problem.t0]), method=scene.solver["method"])
+    integrate(prepared, [prepared.problem.t0])
 
 
 def _warm_xarray() -> None:
-    """First-use costs, paid once here instead of once per worker: xarray's array backends, the
-    netCDF writers (netCDF-4 and the netCDF-3 one of the block files), and the package-version
-    look-ups of a run's provenance (~20 ms of importlib.metadata on a worker's first point)."""
+    """First-use costs, paid once here instead of once per worker: xarray's array backends and
+    the netCDF writers (netCDF-4 and the netCDF-3 one of the block files)."""
     import tempfile
 
     import numpy as np
     import xarray as xr
 
-    from workbench._archive import save_run
-    from workbench.solver._simulate import _versions
+    from workbench.archive import save_run
 
     ds = xr.Dataset({"a": ("t", np.zeros(2))}, coords={"t": ("t", np.arange(2.0))})
     with tempfile.TemporaryDirectory() as d:
         save_run(ds, os.path.join(d, "warm.nc"))
         save_run(ds, os.path.join(d, "warm3.nc"), classic=True)
-    _versions()
 
 
 if os.environ.get(PRELOAD_ENV):

@@ -26,13 +26,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench._archive import write_text_atomic
 from workbench._cache import package_digest
-from workbench._errors import SceneError
-from workbench._scene import Scene, load_scene
+from workbench.archive import write_text_atomic
 from workbench.models import get_model
+from workbench.scene import Scene, SceneError, scene_from_toml
 
-__all__ = ["CampaignError", "CampaignWarning", "Grid", "Store", "expand_grid", "scene_diff"]
+__all__ = ["CampaignError", "CampaignWarning", "Store", "SweepGrid", "expand_sweep", "scene_diff"]
 
 FORMAT = "workbench-campaign 1"
 _BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
@@ -49,8 +48,9 @@ class CampaignWarning(UserWarning):
 
 
 @dataclass(frozen=True)
-class Grid:
-    """The points of a campaign: the outer product of the swept values, in C order.
+class SweepGrid:
+    """The points of a campaign: the outer product of the swept values, in C order (not to be
+    confused with a run's record times, :func:`workbench.run.record_times`).
 
     Attributes
     ----------
@@ -86,7 +86,7 @@ class Grid:
         return {d: list(v) for d, v in zip(self.dims, self.values, strict=True)}
 
 
-def expand_grid(scene: Scene) -> Grid:
+def expand_sweep(scene: Scene) -> SweepGrid:
     """The grid of a scene's ``[sweep]`` (CampaignError if it has none)."""
     if not scene.sweep:
         raise CampaignError(
@@ -95,10 +95,10 @@ def expand_grid(scene: Scene) -> Grid:
             "(run a single scene with workbench.simulate)"
         )
     dims = tuple(scene.sweep)
-    return Grid(dims, tuple(tuple(float(x) for x in scene.sweep[d]) for d in dims))
+    return SweepGrid(dims, tuple(tuple(float(x) for x in scene.sweep[d]) for d in dims))
 
 
-def forcing_period(scene: Scene, grid: Grid, flat: int) -> float | None:
+def forcing_period(scene: Scene, grid: SweepGrid, flat: int) -> float | None:
     """Forcing period (s) of the grid point ``flat`` (None for an autonomous model)."""
     params = dict(scene.resolved_parameters)
     params.update(grid.point(flat))
@@ -187,7 +187,7 @@ class Store:
             )
         return data
 
-    def write_manifest(self, scene: Scene, grid: Grid, chunk: int, cid: str) -> dict:
+    def write_manifest(self, scene: Scene, grid: SweepGrid, chunk: int, cid: str) -> dict:
         data = {
             "format": FORMAT,
             "campaign_id": cid,
@@ -206,7 +206,7 @@ class Store:
     def check_scene(self, stored_toml: str, scene: Scene, where: str) -> None:
         """CampaignError naming the differences if ``stored_toml`` is not ``scene``."""
         try:
-            stored = load_scene(stored_toml)
+            stored = scene_from_toml(stored_toml)
         except SceneError as exc:
             raise CampaignError(
                 f"{where} holds a campaign whose scene no longer loads ({exc}); pass "

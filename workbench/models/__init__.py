@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+import importlib
+
 from workbench.models._base import Effect, Model, Parameter, Problem, Quantity
 
 __all__ = [
@@ -21,6 +23,16 @@ __all__ = [
 ]
 
 _REGISTRY: dict[str, type[Model]] = {}
+# The built-in models by name and the module that defines (and registers) each: imported on
+# first use, so that a run loads (and numba compiles) only the model it needs.
+_BUILTIN = {
+    "bouncing_ball": "workbench.models.bouncing_ball",
+    "duffing": "workbench.models.duffing",
+    "free_journal": "workbench.models.free_journal",
+    "lorenz": "workbench.models.lorenz",
+    "ninebar": "workbench.models.ninebar",
+    "slider_crank": "workbench.models.slider_crank",
+}
 
 
 def register(cls: type[Model]) -> type[Model]:
@@ -30,22 +42,12 @@ def register(cls: type[Model]) -> type[Model]:
 
 
 def available_models() -> tuple[str, ...]:
-    _load_builtin()
-    return tuple(sorted(_REGISTRY))
+    """Names of the registered and built-in models."""
+    return tuple(sorted(set(_REGISTRY) | set(_BUILTIN)))
 
 
 def get_model(name: str) -> Model:
     """An instance of the model registered as ``name`` (KeyError if unknown)."""
-    _load_builtin()
+    if name not in _REGISTRY and name in _BUILTIN:
+        importlib.import_module(_BUILTIN[name])
     return _REGISTRY[name]()
-
-
-def _load_builtin() -> None:
-    from workbench.models import (  # noqa: F401
-        bouncing_ball,
-        duffing,
-        free_journal,
-        lorenz,
-        ninebar,
-        slider_crank,
-    )

@@ -1,20 +1,25 @@
 """What a model declares: its parameters, effects, state, outputs and compiled hooks.
 
-A model is a small object (one per system) that the scene validates against and the solver
-integrates. Everything it can put in a dataset is declared once as a :class:`Quantity` with
-units and a description, so that what comes out is self-described.
+A model is a small object (one per system) that the scene validates against and that builds the
+solver's :class:`~workbench.solver.Problem` for a run. Everything it can put in a dataset is
+declared once as a :class:`Quantity` with units and a description, so that what comes out is
+self-described.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["Effect", "Model", "Parameter", "Problem", "Quantity"]
+# The solver's protocol, which models build: re-exported so that a model module imports its
+# vocabulary from one place.
+from workbench.solver import EVENT_INSIDE_STEP, Problem
+
+__all__ = ["EVENT_INSIDE_STEP", "Effect", "Model", "Parameter", "Problem", "Quantity"]
 
 
 @dataclass(frozen=True)
@@ -66,90 +71,6 @@ class Effect:
     kind: str
     description: str
     allowed: tuple = ()
-
-
-# Hook protocol: besides 0 (fine) and positive model failure codes, ``rhs`` may return
-# EVENT_INSIDE_STEP after filling ``dydt`` completely, to say that this (trial) state lies beyond
-# an event surface whose event has not fired (e.g. a journal in contact whose onset was not
-# located). The compiled loop then keeps the step only if the step's end also lies beyond that
-# surface, so that the event is located; otherwise the whole event happened between the step's
-# ends, where the sign test on g cannot see it, and the step is retried at half the size.
-EVENT_INSIDE_STEP = -1
-
-
-@dataclass
-class Problem:
-    """Everything the solver needs for one run of a model (built by :meth:`Model.problem`).
-
-    Attributes
-    ----------
-    hooks : str
-        Module that defines the compiled ``rhs``, ``event_values`` and ``apply_event``.
-    states : tuple[Quantity, ...]
-        The integrated state, in the order of ``y0``.
-    y0 : ndarray
-        Initial state (state units).
-    p, ip : ndarray
-        Float and integer parameter arrays passed to the hooks.
-    aux0 : ndarray
-        Initial discrete state (changed only by events; recorded with the state).
-    event_direction : ndarray of int64
-        Per event: +1 fires on a rising zero, -1 on a falling one, 0 on both.
-    atol_scale : ndarray
-        Per state: the scene's ``atol`` is multiplied by this (a characteristic size of the
-        state), so that one number means the same for states of very different magnitude.
-    t0 : float
-        Initial time, s.
-    work_size : int
-        Length of the scratch array passed to the hooks (allocated once per run).
-    failure : callable
-        ``failure(code) -> str``: explains a model failure code returned by ``rhs``.
-    stiff_states, stiff_slots, implicit_slot : ndarray of int64, int
-        Optional stiff states for the implicit–explicit method ``ark548``: indices k of states
-        whose rate is ``r_k(y) - a_k(y) y_k`` with a decay rate ``a_k >= 0`` (s-1) independent
-        of every stiff state, the ``work`` slots where ``rhs`` writes ``a_k``, and the slot
-        where the solver puts ``h gamma`` (s) for which ``rhs`` replaces ``y[k]`` by
-        ``(y[k] + h gamma r_k) / (1 + h gamma a_k)`` (0 outside implicit stages); see
-        :mod:`workbench.solver._kernel`.
-    data : dict
-        Model-private values needed later by :meth:`Model.derive`.
-    """
-
-    hooks: str
-    states: tuple[Quantity, ...]
-    y0: np.ndarray
-    p: np.ndarray
-    ip: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    aux0: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    event_direction: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    atol_scale: np.ndarray | None = None
-    t0: float = 0.0
-    work_size: int = 0
-    failure: Callable[[int], str] = lambda code: f"model failure code {code}"
-    data: dict = field(default_factory=dict)
-    stiff_states: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    stiff_slots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    implicit_slot: int = -1
-
-    def __post_init__(self) -> None:
-        self.y0 = np.ascontiguousarray(self.y0, dtype=np.float64)
-        self.p = np.ascontiguousarray(self.p, dtype=np.float64)
-        self.ip = np.ascontiguousarray(self.ip, dtype=np.int64)
-        self.aux0 = np.ascontiguousarray(self.aux0, dtype=np.float64)
-        self.event_direction = np.ascontiguousarray(self.event_direction, dtype=np.int64)
-        if self.atol_scale is None:
-            self.atol_scale = np.ones_like(self.y0)
-        self.atol_scale = np.ascontiguousarray(self.atol_scale, dtype=np.float64)
-        self.stiff_states = np.ascontiguousarray(self.stiff_states, dtype=np.int64)
-        self.stiff_slots = np.ascontiguousarray(self.stiff_slots, dtype=np.int64)
-        if self.stiff_states.shape != self.stiff_slots.shape or (
-            self.stiff_states.size > 0 and not 0 <= self.implicit_slot < self.work_size
-        ):
-            raise ValueError(
-                f"stiff_states {self.stiff_states!r}, stiff_slots {self.stiff_slots!r} and "
-                f"implicit_slot {self.implicit_slot!r}: one slot per stiff state, and an "
-                f"implicit slot inside work (size {self.work_size!r}) when there are any"
-            )
 
 
 class Model:

@@ -13,7 +13,8 @@ from workbench.plot._analysis import (
     poincare_figure,
     zero_one_figure,
 )
-from workbench.plot._runs import register_overview, run_figures
+from workbench.plot._base import register_overview
+from workbench.plot._runs import run_figures
 from workbench.plot._verify import verification_figure
 
 __all__ = [

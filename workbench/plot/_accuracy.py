@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._runs import plt
+from workbench.plot._base import plt
 
 
 def work_precision_figure(wp: xr.Dataset, error: str = "short_error") -> plt.Figure:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._runs import axis_label, plt
+from workbench.plot._base import axis_label, plt
 
 __all__ = [
     "phase_figure",
@@ -112,10 +112,11 @@ def zero_one_figure(result: xr.Dataset) -> plt.Figure:
     return fig
 
 
-def bifurcation_figure(samples: xr.DataArray, *, scale: float = 1.0, xlabel: str | None = None):
+def bifurcation_figure(diagram: xr.Dataset, *, scale: float = 1.0, xlabel: str | None = None):
     """The familiar scatter of a bifurcation diagram (from
     :func:`workbench.analysis.bifurcation_diagram`): strobe samples over the parameter."""
-    param = samples.attrs.get("diagram_parameter", samples.dims[0])
+    param = diagram.attrs["diagram_parameter"]
+    samples = diagram[diagram.attrs["diagram_variable"]]
     other = [d for d in samples.dims if d != param]
     da = samples.transpose(param, *other)
     x = np.broadcast_to(da[param].values.reshape((-1,) + (1,) * len(other)), da.shape)

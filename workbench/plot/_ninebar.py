@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._runs import axis_label, plt, register_overview, run_parameters
+from workbench.plot._base import axis_label, plt, register_overview, run_parameters
 
 
 def _clearances(ds: xr.Dataset) -> dict[str, float]:

@@ -2,44 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
-import matplotlib
+import xarray as xr
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import xarray as xr  # noqa: E402
+from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
+from workbench.plot._base import axis_label, overview, plt
 
-__all__ = ["axis_label", "run_figures", "timeseries_figure", "register_overview"]
-
-_OVERVIEWS: dict[str, Callable[[xr.Dataset], plt.Figure]] = {}
-
-
-def register_overview(model: str):
-    """Decorator: a function ``f(ds) -> Figure`` drawn by :func:`run_figures` for ``model``."""
-
-    def deco(f):
-        _OVERVIEWS[model] = f
-        return f
-
-    return deco
-
-
-def run_parameters(ds: xr.Dataset) -> dict[str, float]:
-    """The resolved parameters (model defaults and the scene's values, SI) of a stored run."""
-    import tomllib
-
-    from workbench import load_scene
-
-    return load_scene(tomllib.loads(ds.attrs["scene"])).resolved_parameters
-
-
-def axis_label(da: xr.DataArray) -> str:
-    """``long_name [units]`` of a variable or coordinate."""
-    name = da.attrs.get("long_name", da.name)
-    units = da.attrs.get("units")
-    return f"{name} [{units}]" if units else str(name)
+__all__ = ["run_figures", "timeseries_figure"]
 
 
 def timeseries_figure(ds: xr.Dataset, variables: list[str] | None = None) -> plt.Figure:
@@ -74,12 +44,9 @@ def run_figures(ds: xr.Dataset, directory: Path) -> list[Path]:
     written = []
     figures = {"timeseries": timeseries_figure(ds)}
     model = ds.attrs.get("model")
-    if model == "ninebar":
-        import workbench.plot._ninebar  # noqa: F401  (registers the overview)
-    elif model == "slider_crank":
-        import workbench.plot._slider_crank  # noqa: F401  (registers the overview)
-    if model in _OVERVIEWS:
-        figures["overview"] = _OVERVIEWS[model](ds)
+    draw = overview(model)
+    if draw is not None:
+        figures["overview"] = draw(ds)
     for name, fig in figures.items():
         path = directory / f"{model or 'run'}_{name}.png"
         fig.savefig(path, dpi=120)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._runs import axis_label, plt
+from workbench.plot._base import axis_label, plt
 
 
 def verification_figure(ds: xr.Dataset) -> plt.Figure:

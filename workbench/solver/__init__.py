@@ -1,6 +1,34 @@
 """Solvers: compiled embedded Runge–Kutta pairs with dense output and events, and scipy's
-``solve_ivp`` as the independent reference backend."""
+``solve_ivp`` as the independent reference backend.
 
-from workbench.solver._simulate import RunResult, integrate, simulate
+The solver knows only its own protocol: a :class:`Problem` (compiled hooks, initial state,
+tolerance scales, stiff states) goes in, a :class:`RunResult` with a :class:`Status` comes out.
+It imports neither scenes nor models; :mod:`workbench.run` turns a scene into a Problem.
+Derived systems of a problem are problems too: its tangent (variational) system with
+saltation at events (:func:`tangent_problem`), copies integrated side by side in one step
+sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled Jacobian.
+"""
 
-__all__ = ["RunResult", "integrate", "simulate"]
+from workbench.solver._compile import jacobian_for
+from workbench.solver._copies import copies_problem, split_copies
+from workbench.solver._integrate import COMPILED_METHODS, METHODS, integrate
+from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
+from workbench.solver._result import RunResult, SolverError, Status
+from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem
+
+__all__ = [
+    "COMPILED_METHODS",
+    "EVENT_INSIDE_STEP",
+    "METHODS",
+    "Problem",
+    "RunResult",
+    "SolverError",
+    "Status",
+    "copies_problem",
+    "integrate",
+    "jacobian_for",
+    "split_copies",
+    "state_scale",
+    "tangent_columns",
+    "tangent_problem",
+]

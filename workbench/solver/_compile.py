@@ -7,7 +7,8 @@ closes over them (its cache then recompiles every process, seconds each time). I
 :mod:`workbench.solver._tangent_template`, side-by-side copies
 :mod:`workbench.solver._copies_template`) is written once per model into the cache directory
 with its hook imports pointing at the model's module, and imported from there as a module of the
-package ``workbench_kernels``: an ordinary module whose functions call global compiled functions,
+package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an ordinary module
+whose functions call global compiled functions,
 which numba caches on disk. Every process after the first (a CLI call, a dask worker) loads
 machine code instead of compiling.
 """
@@ -23,7 +24,7 @@ from functools import cache
 from pathlib import Path
 from types import ModuleType
 
-from workbench._cache import cache_root, package_digest
+from workbench._cache import KERNEL_PACKAGE, kernel_directory
 
 _HERE = Path(__file__).parent
 # read at import, like the package digest that keys the cache, so that both describe one source
@@ -31,18 +32,17 @@ _SOURCES = {
     name: (_HERE / f"{name}.py").read_text()
     for name in ("_kernel", "_jacobian_template", "_tangent_template", "_copies_template")
 }
-PACKAGE = "workbench_kernels"
 _PLACEHOLDER = "workbench.solver._hooks_template"
 
 
 def _directory() -> Path:
-    directory = cache_root() / "kernels" / package_digest()
+    directory = kernel_directory()
     directory.mkdir(parents=True, exist_ok=True)
-    if PACKAGE not in sys.modules:
+    if KERNEL_PACKAGE not in sys.modules:
         # a namespace for the generated modules, so that they import each other by name
-        package = types.ModuleType(PACKAGE)
+        package = types.ModuleType(KERNEL_PACKAGE)
         package.__path__ = [str(directory)]
-        sys.modules[PACKAGE] = package
+        sys.modules[KERNEL_PACKAGE] = package
     return directory
 
 
@@ -75,7 +75,7 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_text(source)
         os.replace(tmp, path)  # atomic: concurrent workers never see a half-written file
-    return importlib.import_module(f"{PACKAGE}.{name}")
+    return importlib.import_module(f"{KERNEL_PACKAGE}.{name}")
 
 
 @cache

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from workbench.models._base import Problem
 from workbench.solver._compile import copies_for
+from workbench.solver._problem import Problem
 from workbench.solver._tangent import state_scale
 
 __all__ = ["copies_problem", "split_copies"]

@@ -47,8 +47,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.solver._hooks_template import apply_event, event_values, rhs  # @@HOOKS@@
+from workbench.solver._problem import EVENT_INSIDE_STEP
 from workbench.solver._tableaux import (
     ARK_AE,
     ARK_AI,

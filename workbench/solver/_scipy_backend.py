@@ -4,6 +4,12 @@ It shares nothing with the compiled loop but the model's hooks: scipy's own step
 output and event location (Brent's method), so agreement between the two is an independent check.
 Events that change the state stop scipy's integration (``terminal=True``); the update is applied
 and a new ``solve_ivp`` call continues. Rejected steps are not reported by scipy (stored as -1).
+
+A failed ``solve_ivp`` (status -1: its step size fell below the spacing of floating-point
+numbers near t) ends the run with :attr:`Status.STEP_UNDERFLOW`, or with
+:attr:`Status.MODEL_FAILURE` when the model rejected a trial state beyond the last accepted
+step (scipy retries smaller after the NaN derivative that a model failure becomes here, so a
+persistent model failure ends in scipy's step-size failure too).
 """
 
 from __future__ import annotations
@@ -15,14 +21,21 @@ import time as _time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from workbench._errors import SolverError
-from workbench.models._base import EVENT_INSIDE_STEP
+from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
+from workbench.solver._result import RunResult, Status, solver_stats
+
+METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")  # of solve_ivp
 
 
-def integrate(problem, t_rec, name, rtol, atol, max_step):
+def integrate(
+    problem: Problem,
+    t_rec: np.ndarray,
+    name: str,
+    rtol: float,
+    atol: np.ndarray,
+    max_step: float,
+) -> RunResult:
     """Integrate ``problem`` with ``solve_ivp(method=name)`` and record at ``t_rec`` (s)."""
-    from workbench.solver._simulate import RunResult, _state
-
     hooks = importlib.import_module(problem.hooks)
     p, ip = problem.p, problem.ip
     aux = problem.aux0.copy()
@@ -64,7 +77,7 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
     i_rec = 0
     steps = events = 0
     guard: dict[int, tuple[float, float]] = {}
-    status = "done"
+    status, failure = Status.OK, None
     wall0 = _time.perf_counter()
     while True:
         while i_rec < t_rec.size and t_rec[i_rec] <= t:
@@ -86,15 +99,11 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
         )
         steps += len(sol.t) - 1
         if sol.status == -1:
-            why = sol.message
-            if last_failure[0]:
-                why += f"; last model failure: {problem.failure(int(last_failure[0]))}"
-            raise SolverError(
-                f"scipy:{name} failed after t = {sol.t[-1]:.9g} s: {why}",
-                time=float(sol.t[-1]),
-                state=_state(problem, sol.y[:, -1]),
-                cause="scipy_failure",
-            )
+            failure = sol
+            # the model's fault if it rejected a trial state past the last accepted step
+            beyond = last_failure[0] and last_failure[1] >= sol.t[-1]
+            status = Status.MODEL_FAILURE if beyond else Status.STEP_UNDERFLOW
+            break
         t_seg = float(sol.t[-1])
         while i_rec < t_rec.size and t_rec[i_rec] <= t_seg:
             Y[i_rec], AUX[i_rec] = sol.sol(t_rec[i_rec]), aux
@@ -113,20 +122,29 @@ def integrate(problem, t_rec, name, rtol, atol, max_step):
             if post:
                 guard[k] = (t + 1e-12 * max(1.0, abs(t)), post)
             if stop:
-                status = "terminated"
+                status = Status.TERMINATED
                 break
-    stats = {
-        "method": f"scipy:{name}",
-        "rtol": rtol,
-        "atol": float(np.max(atol)) if np.ndim(atol) else atol,
-        "max_step": max_step,
-        "steps": steps,
-        "rejected_steps": -1,
-        "rhs_evaluations": nfev[0],
-        "events": events,
-        "event_retries": 0,  # scipy has no check for events inside a step
-        "wall_time": _time.perf_counter() - wall0,
-    }
-    if status == "terminated":
+    stats = solver_stats(
+        f"scipy:{name}",
+        rtol,
+        float(np.max(atol)) if np.ndim(atol) else atol,
+        max_step,
+        steps=steps,
+        rejected_steps=-1,
+        rhs_evaluations=nfev[0],
+        events=events,
+        event_retries=0,  # scipy has no check for events inside a step
+        wall_time=_time.perf_counter() - wall0,
+    )
+    if status is Status.TERMINATED:
         t_rec, Y, AUX = t_rec[:i_rec], Y[:i_rec], AUX[:i_rec]
-    return RunResult(t_rec, Y, AUX, stats, status)
+    if failure is None:
+        return RunResult(t_rec, Y, AUX, stats, status, "", i_rec, t)
+    why = failure.message
+    if last_failure[0]:
+        why += f"; last model failure: {problem.failure(int(last_failure[0]))}"
+    code = int(last_failure[0]) if status is Status.MODEL_FAILURE else 0
+    t_fail = float(failure.t[-1])
+    message = f"scipy:{name} failed after t = {t_fail:.9g} s: {why}"
+    state = problem.state_dict(failure.y[:, -1])
+    return RunResult(t_rec, Y, AUX, stats, status, message, i_rec, t_fail, state, code)

@@ -6,14 +6,25 @@ events, the saltation matrix at events) and the layout of the arrays built here.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from workbench.models._base import Problem, Quantity
 from workbench.solver._compile import tangent_for
+from workbench.solver._problem import Problem
 
 __all__ = ["tangent_problem", "tangent_columns", "state_scale", "N_META"]
 
 N_META = 7
+
+
+@dataclass(frozen=True)
+class _State:
+    """An internal state of a derived system (the solver's view of a declared state)."""
+
+    name: str
+    units: str = "1"
+    long_name: str = ""
 
 
 def state_scale(problem: Problem) -> np.ndarray:
@@ -52,11 +63,11 @@ def tangent_problem(
     hooks = tangent_for(problem.hooks).__name__
     scale = state_scale(problem)
     states = tuple(problem.states) + tuple(
-        Quantity(f"_tangent_{c}_{i}", "1", "tangent vector component")
+        _State(f"_tangent_{c}_{i}", "1", "tangent vector component")
         for c in range(m)
         for i in range(n + na)
     )
-    states += (Quantity("_log_det_saltation", "1", "sum of log |det S_yy| at events"),)
+    states += (_State("_log_det_saltation", "1", "sum of log |det S_yy| at events"),)
     vscale = np.concatenate([scale, np.ones(na)])
     atol_scale = np.concatenate([scale, np.tile(vscale, m), [1.0]])
     meta = [n, na, m, problem.event_direction.size, problem.p.size, problem.ip.size]

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench._scene import Scene
 from workbench.models import get_model
+from workbench.scene import Scene
 
 __all__ = [
     "select",
@@ -55,7 +55,7 @@ def strobe(ds: xr.Dataset, da: xr.DataArray) -> xr.DataArray:
     from workbench.analysis import poincare_section
 
     name = da.name or "value"
-    return poincare_section(xr.Dataset({name: da}, attrs=ds.attrs), name)
+    return poincare_section(xr.Dataset({name: da}, attrs=ds.attrs), name)[name]
 
 
 def clearance_of(scene: Scene, joint: str) -> float:

@@ -9,7 +9,7 @@ import platform
 from datetime import UTC, datetime
 from pathlib import Path
 
-from workbench._archive import write_text_atomic
+from workbench.archive import write_text_atomic
 from workbench.study._spec import STUDIES_DIR, available_studies
 
 __all__ = ["write_report"]

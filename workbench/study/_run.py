@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from workbench._archive import save_run, write_text_atomic
-from workbench.solver import simulate
+from workbench.archive import save_run, write_text_atomic
+from workbench.run import simulate
 from workbench.study._claims import _key, evaluate_claim
 from workbench.study._measure import peak, seconds_per_cycle, select, strobe, strobe_spread
 from workbench.study._spec import Study, load_study, quick_scene

@@ -20,7 +20,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from workbench._scene import Scene, load_scene
+from workbench.scene import Scene, load_scene
 
 __all__ = ["Study", "available_studies", "load_study", "quick_scene", "STUDIES_DIR"]
 

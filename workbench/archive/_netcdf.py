@@ -61,10 +61,9 @@ def save_run(
     A reader never sees a half-written file, and an interrupted write leaves any previous file
     at ``path`` intact. Float variables are zlib-compressed (level 4, lossless) when ``compress``.
     ``classic`` writes the netCDF-3 64-bit-offset format instead (no compression, 64-bit
-    integers stored as 32-bit where their values fit) with scipy's writer: a third of the time
-    of netCDF-4 for a small file, whose cost is mostly HDF5's per-variable overhead (campaign
-    block files of 5 Duffing points: 4.0 ms against 8.0 ms with the netCDF library's netCDF-3
-    writer and 11.8 ms for netCDF-4; the files read back identical).
+    integers stored as 32-bit where their values fit) with scipy's writer: faster than netCDF-4
+    for a small file, whose cost is mostly HDF5's per-variable overhead (the campaign's block
+    files; measured in the README, "Campaigns"); the files read back identical.
 
     Returns the path written.
     """

@@ -7,9 +7,10 @@ from pathlib import Path
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
-    from workbench import load_scene, save_run
-    from workbench._accuracy import DEFAULT_METHODS, DEFAULT_TOLERANCES, accuracy, recommend
-    from workbench.plot._accuracy import work_precision_figure
+    from workbench.archive import save_run
+    from workbench.plot import work_precision_figure
+    from workbench.precision import DEFAULT_METHODS, DEFAULT_TOLERANCES, accuracy, recommend
+    from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
     methods = args.methods.split(",") if args.methods else list(DEFAULT_METHODS)
@@ -26,9 +27,9 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     try:
         r = recommend(wp, args.target)
         print(
-            f"recommended for errors < {args.target:g}: method {r['method']}, rtol = atol = "
-            f"{r['tolerance']:.0e} ({r['wall_time']:.3g} s; short-horizon error "
-            f"{r['short_error']:.2e}, peak error {r['peak_error']:.2e})"
+            f"recommended for errors < {args.target:g}: method {r.method}, rtol = atol = "
+            f"{r.rtol:.0e} ({r.wall_time:.3g} s; short-horizon error "
+            f"{r.errors['short_error']:.2e}, peak error {r.errors['peak_error']:.2e})"
         )
     except ValueError as exc:
         print(f"no recommendation: {exc}")

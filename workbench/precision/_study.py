@@ -11,9 +11,8 @@ work-precision diagrams; for non-smooth systems e.g. Acary & Brogliato 2008, Ch.
     trajectories separate at ~200 1/s, a whole crank cycle would measure chaos, not accuracy.
     It is cut further where the reference itself stops being exact: where it and a twin run
     10x tighter separate by REFERENCE_FLOOR (1e-6) of a range (impacts amplify the reference's
-    own error too: on the default nine-bar scene 1e-11 and 1e-12 differ by 3e-6 after the
-    impacts near 20 ms and by 2.4e-4 at 34 ms, which made errors below ~1e-4 a matter of luck).
-    The largest twin separation over the horizon is stored as ``reference_error``;
+    own error too, which would make small errors a matter of luck; README, "Accuracy and
+    cost"). The largest twin separation over the horizon is stored as ``reference_error``;
 (b) ``peak_error``: the relative error of the peak of each variable over that horizon (e.g.
     the peak force of the first impacts), and ``events_error``: the relative error of the
     number of events (e.g. contact onsets and ends) per forcing period over the whole run;
@@ -27,16 +26,34 @@ from __future__ import annotations
 
 import math
 import time as _time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
 
-from workbench._errors import SolverError
-from workbench._scene import Scene, load_scene
-from workbench.solver import simulate
+from workbench.run import (
+    divergence_time,
+    provenance,
+    run_status,
+    separation,
+    short_scene,
+    simulate,
+    status_attrs,
+    with_solver,
+)
+from workbench.scene import SceneSource, load_scene
 
-__all__ = ["accuracy", "recommend", "DEFAULT_METHODS", "DEFAULT_TOLERANCES"]
+__all__ = [
+    "DEFAULT_METHODS",
+    "DEFAULT_TOLERANCES",
+    "REFERENCE_FLOOR",
+    "Recommendation",
+    "accuracy",
+    "recommend",
+    "short_horizon",
+]
 
 DEFAULT_METHODS = ("dop853", "dopri5", "scipy:DOP853", "scipy:Radau", "scipy:LSODA")
 DEFAULT_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
@@ -46,49 +63,9 @@ _ERRORS = ("short_error", "peak_error", "events_error", "statistic_error")
 REFERENCE_FLOOR = 1e-6
 
 
-def _solver(scene: Scene, method: str, tol: float, atol: float | None = None) -> dict:
-    atol = tol if atol is None else atol
-    return {**scene.solver, "method": method, "rtol": tol, "atol": atol, "check": False}
-
-
-def _short_scene(scene: Scene, method: str, tol: float, atol: float | None = None) -> Scene:
-    """The first forcing period from t0 (or the first 10 % of the run), densely recorded."""
-    if "cycles" in scene.run:
-        run, record = {"cycles": 1, "transient_cycles": 0}, {"samples_per_period": 400}
-    else:
-        horizon = 0.1 * (scene.run["duration"] + scene.run["transient"])
-        run, record = {"duration": horizon, "transient": 0.0}, {"dt": horizon / 400}
-    record["variables"] = list(scene.variables)
-    return scene.replace(solver=_solver(scene, method, tol, atol), run=run, record=record, sweep={})
-
-
-def _long_scene(scene: Scene, method: str, tol: float) -> Scene:
-    return scene.replace(solver=_solver(scene, method, tol), sweep={})
-
-
 def _strobe(ds: xr.Dataset) -> xr.Dataset:
     spp = int(ds.attrs.get("samples_per_period", 1))
     return ds.isel(time=slice(None, None, spp))
-
-
-def _separation(a: xr.Dataset, b: xr.Dataset) -> np.ndarray:
-    """Per record: the largest |a - b| over the variables, relative to each variable's range."""
-    worst = np.zeros(b.sizes["time"])
-    for name in b.data_vars:
-        r = b[name].values.reshape(b.sizes["time"], -1)
-        span = float(np.nanmax(r) - np.nanmin(r)) or 1.0
-        d = np.abs(a[name].values.reshape(r.shape) - r) / span
-        worst = np.maximum(worst, np.nan_to_num(np.nanmax(d, axis=1), nan=np.inf))
-    return worst
-
-
-def divergence_time(a: xr.Dataset, b: xr.Dataset, threshold: float = 1e-2) -> float:
-    """Time (s, from the record start) at which two runs first differ by ``threshold`` of a
-    variable's range; ``inf`` if they never do within the record."""
-    over = np.flatnonzero(_separation(a, b) > threshold)
-    if over.size == 0:
-        return math.inf
-    return float(b.time.values[over[0]] - b.time.values[0])
 
 
 def short_horizon(
@@ -101,7 +78,7 @@ def short_horizon(
     limit = 0.5 * divergence_time(probe, ref_short)
     if twin is not None:
         # the last record before the twin's separation exceeds the floor
-        over = np.flatnonzero(_separation(twin, ref_short) > REFERENCE_FLOOR)
+        over = np.flatnonzero(separation(twin, ref_short) > REFERENCE_FLOOR)
         if over.size:
             limit = min(limit, t[max(over[0] - 1, 0)])
     return float(min(t[-1], max(limit, t[min(10, t.size - 1)])))
@@ -123,7 +100,7 @@ def _measure(
     peak_err, stat_err = 0.0, 0.0
     n = _records_within(ref_short, horizon)
     short, ref_short = short.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))
-    short_err = float(np.max(_separation(short, ref_short)))
+    short_err = float(np.max(separation(short, ref_short)))
     for name in ref_short.data_vars:
         r = ref_short[name].values
         peak_ref = float(np.nanmax(np.abs(r)))
@@ -147,7 +124,7 @@ def _measure(
 
 
 def accuracy(
-    scene: Scene | str,
+    scene: SceneSource,
     *,
     methods: Sequence[str] = DEFAULT_METHODS,
     tolerances: Sequence[float] = DEFAULT_TOLERANCES,
@@ -159,8 +136,8 @@ def accuracy(
 
     Parameters
     ----------
-    scene : Scene or path
-        The scene studied (no sweep).
+    scene : Scene, path or mapping
+        The scene studied (its sweep, if any, is dropped).
     methods : sequence of str
         Solver methods (``"dop853"``, ``"dopri5"``, ``"ark548"``, ``"scipy:<name>"``).
     tolerances : sequence of float
@@ -180,7 +157,9 @@ def accuracy(
         Dims ``solver_method`` (not ``method``, a keyword of ``Dataset.sel``) and
         ``rtol`` (= atol; not ``tolerance``, a keyword of ``Dataset.sel`` too); variables
         ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
-        the errors (dimensionless, see the module docstring) and ``status`` (0 ok, 1 failed);
+        the errors (dimensionless, see the module docstring), ``status`` (int8 flags of
+        :class:`workbench.Status`: the first failed run's, 0 if both ran) and ``failure`` (its
+        message);
         the reference in the attributes, with ``reference_error``: its separation from the
         twin over the horizon (errors below it are not resolved; NaN without a twin).
 
@@ -191,20 +170,20 @@ def accuracy(
     >>> bool(wp.short_error.sel(rtol=1e-8) < wp.short_error.sel(rtol=1e-4))
     True
     """
-    scene = scene if isinstance(scene, Scene) else load_scene(scene)
+    scene = load_scene(scene)
     ref_method, ref_tol = reference or ("dop853", max(min(tolerances) / 10, 1e-13))
-    ref_short = simulate(_short_scene(scene, ref_method, ref_tol))
-    ref_long = simulate(_long_scene(scene, ref_method, ref_tol))
+    ref_short = simulate(short_scene(scene, ref_method, ref_tol))
+    ref_long = simulate(with_solver(scene, ref_method, ref_tol))
     twin_tol = max(ref_tol / 10, 1e-13)
-    twin = simulate(_short_scene(scene, ref_method, twin_tol)) if twin_tol < ref_tol else None
+    twin = simulate(short_scene(scene, ref_method, twin_tol)) if twin_tol < ref_tol else None
     if horizon is None:
-        probe = simulate(_short_scene(scene, ref_method, ref_tol * 100))
+        probe = simulate(short_scene(scene, ref_method, ref_tol * 100))
         horizon = short_horizon(ref_short, probe, twin)
     ref_error = math.nan
     if twin is not None:
         n = _records_within(ref_short, horizon)
         ref_error = float(
-            np.max(_separation(twin.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))))
+            np.max(separation(twin.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))))
         )
     period = ref_long.attrs.get("forcing_period")
     total = float(ref_long.time[-1])
@@ -216,12 +195,15 @@ def accuracy(
     for i, method in enumerate(methods):
         for j, tol in enumerate(tolerances):
             t0 = _time.perf_counter()
-            try:
-                short = simulate(_short_scene(scene, method, tol))
-                long = simulate(_long_scene(scene, method, tol))
-            except SolverError as exc:
-                status[i, j] = 1
-                failures[i, j] = str(exc)
+            short = simulate(short_scene(scene, method, tol), throw=False)
+            if run_status(short).failed:
+                long = short  # the long run would fail as well: not worth its time
+            else:
+                long = simulate(with_solver(scene, method, tol), throw=False)
+            failed = next((r for r in (short, long) if run_status(r).failed), None)
+            if failed is not None:
+                status[i, j] = run_status(failed)
+                failures[i, j] = failed.attrs["run_message"]
                 continue
             out["wall_time"][i, j] = long.attrs["solver_wall_time"]
             out["steps"][i, j] = long.attrs["solver_steps"]
@@ -250,16 +232,7 @@ def accuracy(
         k: (dims, v, {"units": units.get(k, "1"), "long_name": long_names[k]})
         for k, v in out.items()
     }
-    data["status"] = (
-        dims,
-        status,
-        {
-            "units": "1",
-            "long_name": "run status",
-            "flag_values": np.array([0, 1], np.int8),
-            "flag_meanings": "ok solver_failed",
-        },
-    )
+    data["status"] = (dims, status, status_attrs("outcome of the setting's runs"))
     data["failure"] = (dims, failures.astype(str), {"long_name": "failure message"})
     ds = xr.Dataset(
         data,
@@ -276,9 +249,7 @@ def accuracy(
             ),
         },
     )
-    from workbench.solver._simulate import provenance
-
-    ds.attrs.update(provenance(scene))
+    ds.attrs.update(provenance(scene, by="workbench.accuracy"))
     ds.attrs["statistic_noise_floor"] = 1.0 / math.sqrt(_strobe(ref_long).sizes["time"])
     ds.attrs.update(
         reference_method=ref_method,
@@ -292,17 +263,79 @@ def accuracy(
     return ds
 
 
+@dataclass(frozen=True)
+class Recommendation:
+    """The setting :func:`recommend` picks: a value, not a study (the evidence is the study).
+
+    Attributes
+    ----------
+    method : str
+        Solver method.
+    rtol : float
+        rtol = atol of the setting.
+    wall_time : float
+        Solver wall time of the study's long run at this setting, s.
+    errors : Mapping[str, float]
+        The errors that decided (dimensionless; see :func:`accuracy`).
+    target : float
+        The target every one of them is below.
+
+    The repr is one line that reads as the choice, e.g.
+    ``Recommendation(method='dop853', rtol=1e-08, wall_time=0.0123 s, short_error=2.1e-09,
+    peak_error=3.4e-10, target=1e-06)``.
+    """
+
+    method: str
+    rtol: float
+    wall_time: float
+    errors: Mapping[str, float] = field(hash=False)
+    target: float
+
+    def __repr__(self) -> str:
+        errors = ", ".join(f"{k}={v:.2g}" for k, v in self.errors.items())
+        return (
+            f"Recommendation(method={self.method!r}, rtol={self.rtol:g}, "
+            f"wall_time={self.wall_time:.3g} s, {errors}, target={self.target:g})"
+        )
+
+
 def recommend(
     wp: xr.Dataset, target: float, *, errors: Sequence[str] = ("short_error", "peak_error")
-) -> dict:
-    """The cheapest (method, tolerance) whose errors are all below ``target``.
+) -> Recommendation:
+    """The cheapest (method, tolerance) of a work-precision study whose errors are all below
+    ``target``.
 
     By default the deterministic errors (a) and (b) decide; the long-run statistic and the event
     count of a chaotic run have a sampling-noise floor (about ``statistic_noise_floor`` in the
     study's attributes) that no tolerance removes.
 
-    Returns a dict with ``method``, ``tolerance``, ``wall_time`` (s) and the errors; raises
-    ValueError naming the best error reached if no setting meets the target.
+    Parameters
+    ----------
+    wp : xarray.Dataset
+        From :func:`accuracy`.
+    target : float
+        Largest acceptable error (dimensionless).
+    errors : sequence of str
+        The error variables that must all be below ``target``.
+
+    Returns
+    -------
+    Recommendation
+        A frozen dataclass rather than a Dataset: it is one choice read off the study, whose
+        evidence (every error and cost) is ``wp`` itself.
+
+    Raises
+    ------
+    ValueError
+        If no setting meets the target, naming the best error reached.
+
+    Examples
+    --------
+    >>> wp = accuracy({"model": {"name": "duffing"}, "run": {"cycles": 5}},
+    ...               methods=["dop853"], tolerances=[1e-4, 1e-8])
+    >>> r = recommend(wp, 1e-6)
+    >>> r.method, r.rtol
+    ('dop853', 1e-08)
     """
     worst = wp[list(errors)].to_array("error").max("error")
     ok = (worst < target) & (wp.status == 0)
@@ -315,33 +348,10 @@ def recommend(
     cost = wp.wall_time.where(ok)
     idx = np.unravel_index(int(np.nanargmin(cost.values)), cost.shape)
     pick = wp.isel(solver_method=idx[0], rtol=idx[1])
-    return {
-        "method": str(pick.solver_method.values),
-        "tolerance": float(pick.rtol),
-        "wall_time": float(pick.wall_time),
-        **{e: float(pick[e]) for e in errors},
-    }
-
-
-def check_error(scene: Scene) -> dict[str, float]:
-    """Self-check of a run (``solver.check = true``): the first period (or the first 10 % of the
-    run) at the scene's tolerances against a run 100x tighter in both rtol and atol.
-
-    Returns ``check_error``, the largest difference relative to each recorded variable's range
-    (dimensionless), ``check_divergence_time`` (s, when the two first differ by 1 % of a range;
-    ``inf`` if never: for a chaotic impacting run the error over a whole period is O(1) at any
-    tolerance, and this time is what the tolerance buys), ``check_tolerance`` (the reference
-    rtol) and ``check_horizon`` (s).
-    :func:`workbench.simulate` stores them as ``solver_check_*`` attributes.
-    """
-    s = scene.solver
-    factor = max(s["rtol"] / 100, 1e-13) / s["rtol"]
-    tight, tight_atol = s["rtol"] * factor, s["atol"] * factor
-    a = simulate(_short_scene(scene, s["method"], s["rtol"], s["atol"]))
-    b = simulate(_short_scene(scene, s["method"], tight, tight_atol))
-    return {
-        "check_error": float(np.max(_separation(a, b))),
-        "check_divergence_time": divergence_time(a, b),
-        "check_tolerance": tight,
-        "check_horizon": float(a.time[-1] - a.time[0]),
-    }
+    return Recommendation(
+        method=str(pick.solver_method.values),
+        rtol=float(pick.rtol),
+        wall_time=float(pick.wall_time),
+        errors=MappingProxyType({e: float(pick[e]) for e in errors}),
+        target=float(target),
+    )

@@ -17,14 +17,14 @@ which the workbench's difference is judged.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from workbench._scene import Scene, load_scene
-from workbench.solver import simulate
-from workbench.verify._exudyn import check_scene, run_exudyn
+from workbench.run import simulate
+from workbench.scene import SceneSource, load_scene
+from workbench.verification._exudyn import run_exudyn
+from workbench.verification._mechanisms import check_scene
 
 _SERIES = (
     "torque",
@@ -81,7 +81,7 @@ def _statistics(ds: xr.Dataset) -> dict[str, np.ndarray]:
 
 
 def verify(
-    scene: Scene | str | Path,
+    scene: SceneSource,
     *,
     horizon: float | None = None,
     steps: Sequence[float] = (4e-6, 2e-6, 1e-6),
@@ -95,7 +95,7 @@ def verify(
     ----------
     scene : Scene or path
         A ``ninebar`` or ``slider_crank`` scene with friction "none" or "coulomb" (see
-        :mod:`workbench.verify._exudyn` for what each side models).
+        :mod:`workbench.verification._exudyn` for what each side models).
     horizon : float, optional
         Simulated time from t = 0, s (default: one crank period).
     steps : sequence of float
@@ -120,13 +120,12 @@ def verify(
 
     Examples
     --------
-    >>> from workbench.verify import verify                               # doctest: +SKIP
+    >>> from workbench.verification import verify                               # doctest: +SKIP
     >>> ds = verify("studies/ninebar.toml", horizon=0.02, steps=(2e-6,))  # doctest: +SKIP
     >>> ds.first_impact_time.sel(joint="A").values                         # doctest: +SKIP
     array([0.011782, 0.011782])
     """
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
+    scene = load_scene(scene)
     if scene.sweep:
         raise ValueError("verify runs one scene; drop its [sweep] (scene.replace(sweep={}))")
     check_scene(scene)  # before the workbench's own (possibly long) run

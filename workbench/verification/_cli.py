@@ -10,7 +10,7 @@ from pathlib import Path
 def _cmd_verify(args: argparse.Namespace) -> int:
     from workbench import load_scene, save_run
     from workbench.plot import verification_figure
-    from workbench.verify import STATISTICS, verify
+    from workbench.verification import STATISTICS, verify
 
     scene = load_scene(args.scene)
     steps = [float(h) for h in args.steps.split(",")]

@@ -1,0 +1,41 @@
+"""The layers of the package, lowest first: each module imports only modules of its own layer or
+of a layer before it (``tests/test_layers.py`` checks every import, at module level or inside a
+function, and that the imports form no cycle).
+
+A module belongs to the layer of the longest prefix below that names it; every ``_cli`` module
+and the package's own ``__init__`` (the public facade) belong to ``cli``.
+"""
+
+from __future__ import annotations
+
+__all__ = ["LAYERS", "layer_of"]
+
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("base", ("workbench._cache", "workbench._layers")),
+    ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators
+    ("models", ("workbench.models", "workbench._errors")),  # build Problems
+    ("scene", ("workbench.scene",)),  # validated against the models
+    ("run", ("workbench.run",)),  # scene -> problem -> result -> dataset
+    ("archive", ("workbench.archive",)),
+    ("precision", ("workbench.precision",)),  # workbench.accuracy, recommend
+    ("analysis", ("workbench.analysis",)),
+    ("plot", ("workbench.plot",)),
+    ("campaign", ("workbench.campaign",)),
+    ("verification", ("workbench.verification",)),  # workbench.verify
+    ("study", ("workbench.study",)),
+    ("cli", ("workbench.cli", "workbench._exit_codes")),
+)
+
+
+def layer_of(module: str) -> int:
+    """Index in :data:`LAYERS` of a workbench module (dotted name)."""
+    if module == "workbench" or module.endswith("._cli"):
+        return len(LAYERS) - 1
+    best, rank = -1, None
+    for i, (_, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if (module == prefix or module.startswith(prefix + ".")) and len(prefix) > best:
+                best, rank = len(prefix), i
+    if rank is None:
+        raise KeyError(f"module {module!r} is in no layer of workbench._layers.LAYERS; add it")
+    return rank

@@ -1,0 +1,170 @@
+"""Running a campaign's block tasks: one dispatch loop for a local process pool and for a
+``dask.distributed`` cluster.
+
+Both are executors in the sense of :mod:`concurrent.futures` (``submit`` returns a future; a
+``wait`` returns the finished ones): the stdlib :class:`~concurrent.futures.ProcessPoolExecutor`
+on a fork server, or a :class:`distributed.Client`. The loop keeps as many tasks in flight as
+there are workers and submits the next one, in the list's (longest-first) order, when one
+finishes: the start order is the campaign's own on either executor, whatever the scheduler's
+tie-breaking among independent tasks.
+
+The local pool is not a ``distributed.LocalCluster``, which costs seconds to import and to start
+its workers (README, "Campaigns"), against milliseconds for workers forked from a server that
+has already imported workbench and loaded the campaign's compiled kernel (``_preload``).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import contextlib
+import os
+import signal
+import sys
+import uuid
+from collections.abc import Callable, Iterator
+
+from workbench.campaign._block import PRELOAD_ENV, BlockTask, run_block, worker_start
+from workbench.scene import scene_from_toml
+
+__all__ = ["available_workers", "execute"]
+
+
+def available_workers(client, workers: int | None) -> int:
+    """Tasks that can run at once: the client's threads, else ``workers``, else the CPUs."""
+    if client is not None:
+        info = client.scheduler_info()
+        return max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()))
+    if workers is not None:
+        return workers
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - macOS, Windows
+        return os.cpu_count() or 1
+
+
+def execute(
+    tasks: list[BlockTask],
+    *,
+    client=None,
+    workers: int,
+    cid: str,
+    bar=None,
+) -> list[dict]:
+    """Run the block tasks, starting them in list order, ``workers`` at a time.
+
+    Parameters
+    ----------
+    tasks : list of BlockTask
+        In the order they should start (longest first).
+    client : distributed.Client, optional
+        Run on this cluster; default a local pool of ``workers`` processes.
+    workers : int
+        Tasks in flight at once (the cluster's threads for a client).
+    cid : str
+        Campaign id (names the cluster's tasks).
+    bar : tqdm, optional
+        Advanced by each finished block's points.
+
+    Returns
+    -------
+    list of dict
+        The tasks' summaries (:func:`run_block`), in completion order.
+
+    Raises
+    ------
+    RuntimeError
+        A local worker process died (killed, out of memory); the finished blocks are kept.
+    Exception
+        The first error a task raised, after the tasks in flight were stopped.
+    """
+    if client is not None:
+        if bar is not None and getattr(client, "dashboard_link", None):
+            print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
+        from distributed import wait
+
+        token = uuid.uuid4().hex[:8]
+
+        def submit(t: BlockTask):
+            key = f"campaign-{cid}-block-{t.block:05d}-{token}"
+            return client.submit(run_block, t, key=key, pure=False)
+
+        return _dispatch(submit, wait, tasks, workers, bar)
+    with _local_pool(workers, _first_point(tasks[0])) as pool:
+        return _dispatch(
+            lambda t: pool.submit(run_block, t), concurrent.futures.wait, tasks, workers, bar
+        )
+
+
+def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, bar) -> list[dict]:
+    """Keep ``window`` tasks in flight, submitting them in list order; cancel the rest on error."""
+    queue = list(reversed(tasks))  # pop() takes them in list order
+    running: set = set()
+    results: list[dict] = []
+    try:
+        while queue or running:
+            while queue and len(running) < window:
+                running.add(submit(queue.pop()))
+            done, running = wait(running, return_when="FIRST_COMPLETED")
+            for fut in done:
+                results.append(fut.result())  # re-raises the task's error
+                if bar is not None:
+                    bar.update(results[-1]["points"])
+    finally:
+        for fut in running:
+            fut.cancel()
+    return results
+
+
+def _first_point(task: BlockTask) -> str:
+    """Scene TOML of a task's first point: the local pool's fork server loads its kernel once."""
+    point = dict(zip(task.dims, task.values[0], strict=True))
+    return scene_from_toml(task.scene_toml).with_parameters(**point).to_toml()
+
+
+@contextlib.contextmanager
+def _local_pool(workers: int, preload: str) -> Iterator[concurrent.futures.ProcessPoolExecutor]:
+    """A process pool whose workers stop with the campaign: on an error or Ctrl-C the blocks in
+    flight are stopped at once (each worker reported its pid when it started)."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    ctx = _mp_context(preload)
+    pids = ctx.SimpleQueue()
+    pool = concurrent.futures.ProcessPoolExecutor(
+        workers, mp_context=ctx, initializer=worker_start, initargs=(pids,)
+    )
+    try:
+        yield pool
+    except BaseException as exc:
+        while not pids.empty():
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pids.get(), signal.SIGTERM)
+        if isinstance(exc, BrokenProcessPool):
+            raise RuntimeError(
+                "a worker process of the local pool died (killed, out of memory, or the calling "
+                "script lacks the `if __name__ == '__main__':` guard that process pools need); "
+                "the finished blocks are kept: run the campaign again to compute the rest"
+            ) from exc
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        os.environ.pop(PRELOAD_ENV, None)
+
+
+def _mp_context(preload: str):
+    """The multiprocessing context of the local pool: dask's ``multiprocessing.context`` if set,
+    else a fork server (else spawn). The fork server imports workbench once and, when this call
+    starts it, loads the campaign's compiled kernel once (see ``_preload``): workers forked from
+    it start in milliseconds with the machine code in memory, and exit as fast."""
+    import multiprocessing
+
+    import dask
+
+    name = dask.config.get("multiprocessing.context", None)
+    if name is not None:
+        return multiprocessing.get_context(name)
+    if "forkserver" not in multiprocessing.get_all_start_methods():  # pragma: no cover
+        return multiprocessing.get_context("spawn")
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["workbench.campaign._block", "workbench.campaign._preload"])
+    os.environ[PRELOAD_ENV] = preload  # read by the server if this run starts it
+    return ctx

@@ -1,0 +1,23 @@
+"""What accuracy costs in time: work-precision studies of a scene (:func:`accuracy`) and the
+cheapest setting under a target error (:func:`recommend`). Above the run layer: every run here
+is a :func:`workbench.simulate` of a variant of the scene."""
+
+from workbench.precision._study import (
+    DEFAULT_METHODS,
+    DEFAULT_TOLERANCES,
+    REFERENCE_FLOOR,
+    Recommendation,
+    accuracy,
+    recommend,
+    short_horizon,
+)
+
+__all__ = [
+    "DEFAULT_METHODS",
+    "DEFAULT_TOLERANCES",
+    "REFERENCE_FLOOR",
+    "Recommendation",
+    "accuracy",
+    "recommend",
+    "short_horizon",
+]

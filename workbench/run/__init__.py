@@ -1,0 +1,44 @@
+"""The run layer: the one place where a scene becomes a problem, is integrated, and becomes a
+dataset with its provenance.
+
+``prepare(scene)`` builds the model's problem and the record times once; ``integrate`` runs it
+with the scene's solver settings; ``derive`` and ``to_dataset`` label the result;
+``simulate(scene)`` does all of it. Everything that runs a scene (campaign blocks, accuracy,
+Benettin's exponent, verification, studies) goes through these functions.
+
+>>> from workbench.run import prepare, integrate
+>>> p = prepare({"model": {"name": "duffing"}, "run": {"cycles": 1}})
+>>> integrate(p).status.label
+'ok'
+"""
+
+from workbench.run._compare import divergence_time, separation, short_scene, with_solver
+from workbench.run._dataset import (
+    TIME_ATTRS,
+    derive,
+    provenance,
+    run_status,
+    status_attrs,
+    to_dataset,
+)
+from workbench.run._prepare import Prepared, prepare, record_times
+from workbench.run._simulate import check_error, integrate, simulate
+
+__all__ = [
+    "TIME_ATTRS",
+    "Prepared",
+    "check_error",
+    "derive",
+    "divergence_time",
+    "integrate",
+    "prepare",
+    "provenance",
+    "record_times",
+    "run_status",
+    "separation",
+    "short_scene",
+    "simulate",
+    "status_attrs",
+    "to_dataset",
+    "with_solver",
+]

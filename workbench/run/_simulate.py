@@ -1,0 +1,154 @@
+"""``simulate``: one scene -> one labelled xarray.Dataset (prepare, integrate, dataset)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import xarray as xr
+
+from workbench.run._compare import divergence_time, separation, short_scene
+from workbench.run._dataset import derive, to_dataset
+from workbench.run._prepare import Prepared, prepare
+from workbench.scene import Scene, SceneSource
+from workbench.solver import RunResult
+from workbench.solver import integrate as _integrate
+
+__all__ = ["check_error", "integrate", "simulate"]
+
+
+def integrate(
+    prepared: Prepared,
+    times: Sequence[float] | np.ndarray | None = None,
+    *,
+    progress: Callable[[float], None] | None = None,
+) -> RunResult:
+    """Integrate a prepared scene with its ``[solver]`` settings.
+
+    Parameters
+    ----------
+    prepared : Prepared
+        From :func:`prepare` (or :meth:`Prepared.restart`).
+    times : array_like, optional
+        Record times, s, ascending, at or after the problem's ``t0``; default the scene's
+        (``prepared.times``).
+    progress : callable, optional
+        ``progress(t)`` between chunks of simulated time.
+
+    Returns
+    -------
+    RunResult
+        Its ``status`` says how the run ended; :meth:`RunResult.raise_for_status` raises
+        :class:`workbench.SolverError` for a failure.
+
+    Examples
+    --------
+    >>> from workbench.run import integrate, prepare
+    >>> p = prepare({"model": {"name": "lorenz"}, "run": {"duration": 1.0}})
+    >>> r = integrate(p, [0.5, 1.0])
+    >>> r.status.label, r.Y.shape
+    ('ok', (2, 3))
+    """
+    s = prepared.scene.solver
+    return _integrate(
+        prepared.problem,
+        prepared.times if times is None else np.asarray(times, dtype=np.float64),
+        method=s["method"],
+        rtol=s["rtol"],
+        atol=s["atol"],
+        max_step=s["max_step"],
+        max_steps=s["max_steps"],
+        progress=progress,
+    )
+
+
+def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) -> xr.Dataset:
+    """Run one scene and return its records as a labelled dataset.
+
+    Parameters
+    ----------
+    scene : Scene, path or mapping
+        Loaded with :func:`workbench.load_scene`. A scene with a ``[sweep]`` is a campaign:
+        use :func:`workbench.run_campaign`.
+    progress : bool
+        Show a progress bar over simulated time.
+    throw : bool
+        Raise :class:`workbench.SolverError` if the run fails (default). With ``throw=False`` a
+        failed run returns its dataset: the records before the failure, NaN after it, and the
+        failure in ``run_status`` and ``run_message``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dim ``time`` (the records after the transient), one variable per requested state and
+        output, ``units`` and ``long_name`` on everything, provenance, solver statistics and
+        ``run_status`` (a :class:`workbench.Status` label) in the global attributes.
+
+    Raises
+    ------
+    SolverError
+        With ``throw=True``, when the run fails (the error's ``status`` says how).
+    SceneError, ValueError
+        For an invalid scene, or a scene with a sweep.
+
+    Examples
+    --------
+    >>> import workbench
+    >>> ds = workbench.simulate({"model": {"name": "lorenz"}, "run": {"duration": 1.0}})
+    >>> ds.x.attrs["units"], ds.sizes["time"], ds.attrs["run_status"]
+    ('1', 1001, 'ok')
+    """
+    prepared = prepare(scene)
+    result = _with_progress_bar(prepared) if progress else integrate(prepared)
+    derived, result = derive(prepared, result)
+    if throw:
+        result.raise_for_status()
+    ds = to_dataset(prepared, result, derived)
+    if prepared.scene.solver["check"] and not result.status.failed:
+        ds.attrs.update({f"solver_{k}": v for k, v in check_error(prepared.scene).items()})
+    return ds
+
+
+def _with_progress_bar(prepared: Prepared) -> RunResult:
+    from tqdm.auto import tqdm
+
+    t0 = prepared.problem.t0
+    bar = tqdm(
+        total=float(prepared.times[-1] - t0),
+        unit="s",
+        desc="simulated time",
+        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]",
+    )
+
+    def callback(t: float) -> None:
+        bar.n = t - t0
+        bar.refresh()
+
+    try:
+        return integrate(prepared, progress=callback)
+    finally:
+        bar.close()
+
+
+def check_error(scene: Scene) -> dict[str, float]:
+    """Self-check of a run (``solver.check = true``): the first period (or the first 10 % of the
+    run) at the scene's tolerances against a run 100x tighter in both rtol and atol.
+
+    Returns ``check_error``, the largest difference relative to each recorded variable's range
+    (dimensionless), ``check_divergence_time`` (s, when the two first differ by 1 % of a range;
+    ``inf`` if never: for a chaotic impacting run the error over a whole period is O(1) at any
+    tolerance, and this time is what the tolerance buys), ``check_tolerance`` (the reference
+    rtol) and ``check_horizon`` (s). :func:`simulate` stores them as ``solver_check_*``
+    attributes.
+    """
+    s = scene.solver
+    factor = max(s["rtol"] / 100, 1e-13) / s["rtol"]
+    tight, tight_atol = s["rtol"] * factor, s["atol"] * factor
+    a = simulate(short_scene(scene, s["method"], s["rtol"], s["atol"]))
+    b = simulate(short_scene(scene, s["method"], tight, tight_atol))
+    return {
+        "check_error": float(np.max(separation(a, b))),
+        "check_divergence_time": divergence_time(a, b),
+        "check_tolerance": tight,
+        "check_horizon": float(a.time[-1] - a.time[0]),
+    }

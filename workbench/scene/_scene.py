@@ -1,0 +1,262 @@
+"""Scenes: the declarative description of a run (TOML), validated and frozen.
+
+A scene has the tables ``[model]``, ``[effects]``, ``[parameters]``, ``[initial]``, ``[solver]``,
+``[run]``, ``[record]`` and ``[sweep]`` (and optional top-level ``title`` and ``description``).
+Every error names the offending key as a dotted path, shows the value and says what is allowed.
+
+>>> from workbench.scene import load_scene, scene_from_toml
+>>> s = load_scene({"model": {"name": "duffing"}, "parameters": {"gamma": 0.3}})
+>>> s.parameters["gamma"], s.solver["method"]
+(0.3, 'dop853')
+>>> scene_from_toml(s.to_toml()) == s and load_scene(s) is s
+True
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, TypeAlias
+
+import tomli_w
+
+from workbench._errors import SceneError
+from workbench.models import available_models, get_model
+from workbench.scene._tables import (
+    number,
+    table,
+    unknown_keys,
+    validate_effects,
+    validate_parameters,
+    validate_record,
+    validate_run,
+    validate_solver,
+    validate_sweep,
+)
+
+__all__ = ["Scene", "SceneSource", "load_scene", "scene_from_toml"]
+
+_TABLES = (
+    "title",
+    "description",
+    "model",
+    "effects",
+    "parameters",
+    "initial",
+    "solver",
+    "run",
+    "record",
+    "sweep",
+)
+
+
+def _frozen(d: Mapping) -> Mapping:
+    return MappingProxyType(dict(d))
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A validated scene. Build it with :func:`load_scene`; it is immutable.
+
+    Attributes
+    ----------
+    model : str
+        Registered model name.
+    effects : Mapping
+        Every effect of the model, defaults filled in.
+    parameters : Mapping[str, float]
+        The parameters the scene overrides (SI units); :attr:`resolved_parameters` adds defaults.
+    initial : Mapping[str, float]
+        Initial-state overrides (state units).
+    solver, run, record : Mapping
+        Solver settings, run length, what and how often to record (defaults filled in).
+    sweep : Mapping[str, tuple[float, ...]]
+        Parameter name -> the values of that campaign dimension (empty for a single run).
+    """
+
+    model: str
+    effects: Mapping[str, Any]
+    parameters: Mapping[str, float]
+    initial: Mapping[str, float]
+    solver: Mapping[str, Any]
+    run: Mapping[str, Any]
+    record: Mapping[str, Any]
+    sweep: Mapping[str, tuple[float, ...]] = field(default_factory=lambda: _frozen({}))
+    title: str = ""
+    description: str = ""
+
+    # -- derived views --------------------------------------------------------------------------
+    @property
+    def resolved_parameters(self) -> dict[str, float]:
+        """Model defaults overridden by this scene's parameters."""
+        params = get_model(self.model).default_parameters()
+        params.update(self.parameters)
+        return params
+
+    @property
+    def variables(self) -> tuple[str, ...]:
+        """The variables a run of this scene computes and stores."""
+        return tuple(self.record["variables"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as plain TOML-ready data (explicit, defaults included)."""
+        d: dict[str, Any] = {}
+        if self.title:
+            d["title"] = self.title
+        if self.description:
+            d["description"] = self.description
+        d["model"] = {"name": self.model}
+        for key in ("effects", "parameters", "initial", "solver", "run", "record"):
+            values = {
+                k: (list(v) if isinstance(v, tuple) else v) for k, v in getattr(self, key).items()
+            }
+            if key == "solver" and math.isinf(values.get("max_step", 0.0)):
+                values.pop("max_step")
+            if values:
+                d[key] = values
+        if self.sweep:
+            d["sweep"] = {k: list(v) for k, v in self.sweep.items()}
+        return d
+
+    def to_toml(self) -> str:
+        """TOML text that :func:`scene_from_toml` reads back to an equal scene."""
+        return tomli_w.dumps(self.to_dict())
+
+    def replace(self, **tables: Mapping) -> Scene:
+        """A new validated scene with whole tables replaced, e.g. ``replace(sweep={})``."""
+        d = self.to_dict()
+        for k, v in tables.items():
+            if k not in _TABLES:
+                raise SceneError(k, f"unknown table; allowed: {', '.join(_TABLES)}")
+            d[k] = dict(v) if isinstance(v, Mapping) else v
+        return load_scene(d)
+
+    def with_parameters(self, **values: float) -> Scene:
+        """A single-run scene (no sweep) with some parameters changed."""
+        params = dict(self.parameters)
+        params.update({k: float(v) for k, v in values.items()})
+        return self.replace(parameters=params, sweep={})
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Scene) and self.to_dict() == other.to_dict()
+
+    def __hash__(self) -> int:
+        return hash(self.to_toml())
+
+
+SceneSource: TypeAlias = "Scene | str | os.PathLike | Mapping[str, Any]"
+
+
+# -- loading and validation ----------------------------------------------------------------------
+def load_scene(source: SceneSource) -> Scene:
+    """A validated scene from a Scene (returned as it is), a TOML file or a mapping.
+
+    Parameters
+    ----------
+    source : Scene, str, PathLike or Mapping
+        A scene; the path of a TOML file (any name, e.g. ``omega=2.toml``); or a mapping with
+        the TOML structure. TOML *text* goes through :func:`scene_from_toml`.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Naming the offending key (dotted path), its value and what is allowed; or the file
+        that does not exist or is not TOML.
+    """
+    if isinstance(source, Scene):
+        return source
+    if isinstance(source, Mapping):
+        return _validate(dict(source))
+    if not isinstance(source, str | os.PathLike):
+        raise SceneError(
+            "", f"a scene is a Scene, a TOML file path or a mapping; got {type(source).__name__}"
+        )
+    path = Path(source)
+    try:
+        found = path.is_file()
+    except OSError:  # e.g. a name too long for a file: TOML text given by mistake
+        found = False
+    if not found:
+        hint = (
+            "; this looks like TOML text: read it with workbench.scene_from_toml(text)"
+            if isinstance(source, str) and "\n" in source
+            else ""
+        )
+        raise SceneError("", f"scene file {str(source)!r} does not exist{hint}")
+    return _parse(path.read_text(), repr(str(path)))
+
+
+def scene_from_toml(text: str) -> Scene:
+    """A validated scene from TOML text (e.g. a stored run's ``scene`` attribute).
+
+    Raises
+    ------
+    SceneError
+        If the text is not TOML or the scene is invalid (naming the key).
+    """
+    return _parse(text, "the scene text")
+
+
+def _parse(text: str, where: str) -> Scene:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError("", f"{where} is not valid TOML: {exc}") from None
+    return _validate(data)
+
+
+def _validate(data: Mapping[str, Any]) -> Scene:
+    unknown_keys("", data, _TABLES)
+    for key in ("title", "description"):
+        if key in data and not isinstance(data[key], str):
+            raise SceneError(key, f"must be a string, got {data[key]!r}")
+    model_t = table(data, "model")
+    unknown_keys("model", model_t, ("name",))
+    name = model_t.get("name")
+    if name is None:
+        raise SceneError(
+            "model.name", "is required; available models: " + ", ".join(available_models())
+        )
+    if name not in available_models():
+        raise SceneError(
+            "model.name", f"unknown model {name!r}; available: {', '.join(available_models())}"
+        )
+    model = get_model(name)
+
+    effects = validate_effects(model, table(data, "effects"))
+    parameters = validate_parameters(model, table(data, "parameters"), "parameters")
+    resolved = model.default_parameters()
+    resolved.update(parameters)
+    model.validate(resolved, effects)
+
+    states = {q.name for q in model.states(effects)}
+    initial_t = table(data, "initial")
+    unknown_keys("initial", initial_t, states)
+    initial = {k: number(f"initial.{k}", v) for k, v in initial_t.items()}
+
+    solver = validate_solver(table(data, "solver"))
+    period = model.forcing_period(resolved)
+    run = validate_run(table(data, "run"), period is not None)
+    record = validate_record(table(data, "record"), model, effects, period is not None, run)
+    sweep = validate_sweep(model, table(data, "sweep"), effects)
+    return Scene(
+        model=name,
+        effects=_frozen(effects),
+        parameters=_frozen(parameters),
+        initial=_frozen(initial),
+        solver=_frozen(solver),
+        run=_frozen(run),
+        record=_frozen(record),
+        sweep=_frozen(sweep),
+        title=data.get("title", ""),
+        description=data.get("description", ""),
+    )

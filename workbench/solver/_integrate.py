@@ -1,0 +1,252 @@
+"""``integrate``: a :class:`Problem` and record times -> a :class:`RunResult` with its status."""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from collections.abc import Callable
+
+import numpy as np
+
+from workbench.solver import _scipy_backend
+from workbench.solver._compile import kernel_for
+from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
+from workbench.solver._result import RunResult, Status, solver_stats
+
+__all__ = ["COMPILED_METHODS", "METHODS", "integrate"]
+
+_METHOD_IDS = {"dop853": 1, "dopri5": 0, "ark548": 2}  # the kernel's DOP853, DOPRI5, ARK548
+COMPILED_METHODS = tuple(_METHOD_IDS)
+# every method a scene may name
+METHODS = COMPILED_METHODS + tuple(f"scipy:{m}" for m in _scipy_backend.METHODS)
+
+
+def integrate(
+    problem: Problem,
+    t_rec: np.ndarray,
+    *,
+    method: str = "dop853",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    max_step: float = math.inf,
+    max_steps: int = 50_000_000,
+    progress: Callable[[float], None] | None = None,
+) -> RunResult:
+    """Integrate a problem and record its state at ``t_rec``.
+
+    Parameters
+    ----------
+    problem : Problem
+    t_rec : array_like
+        Record times, s, ascending, the first at or after ``problem.t0``.
+    method : str
+        ``"dop853"``, ``"dopri5"``, ``"ark548"`` (compiled) or ``"scipy:<solve_ivp method>"``.
+    rtol, atol : float
+        Tolerances; ``atol`` is multiplied per state by ``problem.atol_scale``.
+    max_step : float
+        Largest step, s.
+    max_steps : int
+        Accepted steps after which the run stops with :attr:`Status.MAX_STEPS`.
+    progress : callable, optional
+        ``progress(t)`` is called between chunks of simulated time (1 % of the run each).
+
+    Returns
+    -------
+    RunResult
+        Never raises for a failed integration: the result's ``status`` and ``message`` say how
+        the run ended (:meth:`RunResult.raise_for_status` turns a failure into a
+        :class:`SolverError`).
+
+    Raises
+    ------
+    ValueError
+        For record times before ``t0`` or an unknown method.
+    """
+    t_rec = np.ascontiguousarray(t_rec, dtype=np.float64)
+    if t_rec.size == 0 or t_rec[0] < problem.t0:
+        raise ValueError(
+            f"record times must be non-empty and start at or after t0={problem.t0!r}; got "
+            f"{t_rec.size} times from {t_rec[0] if t_rec.size else None!r}"
+        )
+    atol_arr = atol * problem.atol_scale
+    if method.startswith("scipy:"):
+        result = _scipy_backend.integrate(problem, t_rec, method[6:], rtol, atol_arr, max_step)
+        result.stats["atol"] = atol
+        return result
+    if method not in METHODS:
+        raise ValueError(f"method={method!r}; allowed: {', '.join(METHODS)}")
+    stats0 = solver_stats(method, rtol, atol, max_step)
+    if problem.y0.size == 0:  # nothing to integrate (e.g. a mechanism with ideal joints)
+        AUX = np.tile(problem.aux0, (t_rec.size, 1))
+        return RunResult(t_rec, np.empty((t_rec.size, 0)), AUX, stats0, time=float(t_rec[-1]))
+    k = kernel_for(problem.hooks)
+    mid = _METHOD_IDS[method]
+    n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
+    y = problem.y0.copy()
+    aux = problem.aux0.copy()
+    work = np.zeros(max(problem.work_size, 1))
+    f = np.empty(n)
+    g = np.empty(ne)
+    stats = np.zeros(k.N_STATS, np.int64)
+    ctrl = np.zeros(k.N_CTRL + problem.stiff_states.size)
+    Y = np.full((t_rec.size, n), np.nan)
+    AUX = np.full((t_rec.size, na), np.nan)
+    t_end = float(t_rec[-1])
+    _compiled(k, mid, problem, rtol, atol_arr, max_step)
+    wall0 = _time.perf_counter()
+    code = k.start(
+        problem.t0, y, problem.p, problem.ip, aux, work, f, g, stats, problem.stiff_slots, ctrl
+    )
+    ctrl[k.CT_F_INSIDE] = 1.0 if code == EVENT_INSIDE_STEP else 0.0
+    if code != 0 and code != EVENT_INSIDE_STEP:
+        message = f"the model cannot start at t = {problem.t0:g} s: {problem.failure(code)}"
+        state = problem.state_dict(y)
+        return RunResult(
+            t_rec, Y, AUX, stats0, Status.MODEL_FAILURE, message, 0, problem.t0, state, code
+        )
+    h0 = k.initial_step(
+        mid,
+        problem.t0,
+        y,
+        f,
+        problem.p,
+        problem.ip,
+        aux,
+        work,
+        rtol,
+        atol_arr,
+        max_step,
+        t_end,
+        stats,
+    )
+    ctrl[k.CT_T] = problem.t0
+    ctrl[k.CT_H] = h0
+    chunk = (t_end - problem.t0) / 100.0 if progress is not None else math.inf
+    t_pause = problem.t0 + chunk
+    while True:
+        code = k.advance(
+            mid,
+            t_end,
+            t_pause,
+            t_rec,
+            problem.p,
+            problem.ip,
+            rtol,
+            atol_arr,
+            max_step,
+            max_steps,
+            problem.event_direction,
+            ctrl,
+            y,
+            f,
+            aux,
+            work,
+            g,
+            stats,
+            Y,
+            AUX,
+            problem.stiff_states,
+            problem.stiff_slots,
+            problem.implicit_slot,
+        )
+        if progress is not None:
+            progress(float(ctrl[k.CT_T]))
+        if code != k.PAUSED:
+            break
+        t_pause += chunk
+    st = solver_stats(
+        method,
+        rtol,
+        atol,
+        max_step,
+        steps=int(stats[k.ST_STEPS]),
+        rejected_steps=int(stats[k.ST_REJECTED]),
+        rhs_evaluations=int(stats[k.ST_RHS]),
+        events=int(stats[k.ST_EVENTS]),
+        event_retries=int(stats[k.ST_EVENT_RETRIES]),
+        wall_time=_time.perf_counter() - wall0,
+    )
+    status = {
+        k.DONE: Status.OK,
+        k.TERMINATED: Status.TERMINATED,
+        k.MAX_STEPS: Status.MAX_STEPS,
+        k.STEP_UNDERFLOW: Status.STEP_UNDERFLOW,
+        k.NON_FINITE: Status.NON_FINITE,
+        k.MODEL_FAILURE: Status.MODEL_FAILURE,
+    }[code]
+    t_now = float(ctrl[k.CT_T])
+    n_rec = int(stats[k.ST_RECORDED])
+    if status is Status.TERMINATED:
+        t_rec, Y, AUX = t_rec[:n_rec], Y[:n_rec], AUX[:n_rec]
+    if not status.failed:
+        return RunResult(t_rec, Y, AUX, st, status, "", n_rec, t_now)
+    model_code = int(stats[k.ST_MODEL_CODE]) if status is Status.MODEL_FAILURE else 0
+    explanation = problem.failure(model_code) if model_code else ""
+    state = problem.state_dict(y)
+    message = failure_message(
+        status, t_now, state, h=float(ctrl[k.CT_H]), max_steps=max_steps, explanation=explanation
+    )
+    return RunResult(t_rec, Y, AUX, st, status, message, n_rec, t_now, state, model_code)
+
+
+def failure_message(
+    status: Status, t: float, state: dict[str, float], *, h: float, max_steps: int, explanation: str
+) -> str:
+    """What a failed compiled run reports: where, in which state, and what to change."""
+    shown = ", ".join(f"{n}={v:.6g}" for n, v in state.items())
+    if status is Status.MODEL_FAILURE:
+        return f"integration failed at t = {t:.9g} s: {explanation} (state: {shown})"
+    if status is Status.NON_FINITE:
+        return (
+            f"integration failed at t = {t:.9g} s: the state became non-finite (NaN or inf) and "
+            f"smaller steps did not help (state: {shown}); likely an overflow in the model or an "
+            "unphysical parameter"
+        )
+    if status is Status.MAX_STEPS:
+        return (
+            f"integration stopped at t = {t:.9g} s after solver.max_steps = {max_steps} steps "
+            f"(state: {shown}); raise solver.max_steps or loosen solver.rtol"
+        )
+    return (
+        f"integration failed at t = {t:.9g} s: step size underflow (h = {h:.3g} s) (state: "
+        f"{shown}); the problem is stiff or discontinuous here, or the tolerances are too tight"
+    )
+
+
+def _compiled(k, mid, problem, rtol, atol_arr, max_step) -> None:
+    """Compile (or load from cache) every kernel entry point before the clock starts, so that
+    the recorded wall time is integration only."""
+    n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
+    y, f, aux = problem.y0.copy(), np.empty(n), problem.aux0.copy()
+    g, stats = np.empty(ne), np.zeros(k.N_STATS, np.int64)
+    ctrl = np.zeros(k.N_CTRL + problem.stiff_states.size)
+    work = np.zeros(max(problem.work_size, 1))
+    p, ip, t0 = problem.p, problem.ip, problem.t0
+    ctrl[k.CT_T] = t0
+    k.start(t0, y, p, ip, aux, work, f, g, stats, problem.stiff_slots, ctrl)
+    k.initial_step(mid, t0, y, f, p, ip, aux, work, 1e-3, atol_arr, max_step, t0 + 1.0, stats)
+    k.advance(
+        mid,
+        t0,
+        t0,
+        np.zeros(0),
+        p,
+        ip,
+        1e-3,
+        atol_arr,
+        max_step,
+        1,
+        problem.event_direction,
+        ctrl,
+        y,
+        f,
+        aux,
+        work,
+        g,
+        stats,
+        np.empty((0, n)),
+        np.empty((0, na)),
+        problem.stiff_states,
+        problem.stiff_slots,
+        problem.implicit_slot,
+    )

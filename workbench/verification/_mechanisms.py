@@ -1,0 +1,190 @@
+"""The mechanisms as an independent multibody engine sees them: bodies with their initial
+placement, ideal joints, clearance joints, drives and the slider (:class:`Mechanism`), one
+description per model, and which scenes can be rebuilt at all.
+
+Only the initial placement and velocities come from the workbench's kinematics; the engine then
+holds the bodies to its own constraints. The nine-bar's placement reads its position analysis
+(``workbench.models.ninebar._kinematics``) and its geometry block: the one place where the
+verification reaches into a model's private modules, until the nine-bar exports its body
+placement (noted in the issue-19 hand-over).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from workbench.models import get_model
+from workbench.models._clearance import stiffness as joint_stiffness
+from workbench.scene import Scene
+
+__all__ = ["MECHANISMS", "Body", "Mechanism", "Point", "check_scene"]
+
+Point = tuple[float, float]
+
+
+@dataclass
+class Body:
+    """A planar rigid body: mass (kg), centroidal inertia (kg m2), initial centroid placement
+    (x, y, phi) (m, m, rad) and its rates (m s-1, m s-1, rad s-1)."""
+
+    name: str
+    mass: float
+    inertia: float
+    placement: tuple[float, float, float]
+    rates: tuple[float, float, float]
+
+
+@dataclass
+class Mechanism:
+    """A mechanism as exudyn sees it. Bodies are indices into ``bodies``; None is the ground.
+
+    ``revolutes``: ideal pins (body0, body1, point); ``clearances``: joint name -> (bearing
+    body, journal body, point, clearance m, contact stiffness N m^-n), ideal pins when the scene
+    has no clearance there; ``drives``: (body, angular rate rad s-1) per driven crank, in the
+    order of the model's ``crank`` coordinate; ``slider``: the body on the guide (the x axis of
+    its initial placement), ``slider_position``: the map x_body -> slider position (m) and
+    ``slider_sign``: the sign of the slider's velocity against x_body.
+    """
+
+    bodies: list[Body]
+    revolutes: list[tuple[int | None, int, Point]]
+    clearances: dict[str, tuple[int, int, Point, float, float]]
+    drives: list[tuple[int, float]]
+    slider: int
+    slider_position: Callable[[np.ndarray], np.ndarray]
+    slider_sign: float
+
+
+def ninebar_mechanism(scene: Scene) -> Mechanism:
+    """The nine-bar mechanism at t = 0 (placement from the workbench's position analysis)."""
+    from workbench.models.ninebar._dynamics import N_GEO
+    from workbench.models.ninebar._geometry import BODY_NAMES
+    from workbench.models.ninebar._kinematics import (
+        CRANK1,
+        CRANK4,
+        G_L5,
+        G_O6X,
+        G_O6Y,
+        G_S0,
+        LINK2,
+        LINK3,
+        LINK8,
+        N_POINTS,
+        PANEL7,
+        PT_A,
+        PT_B,
+        PT_C,
+        PT_D,
+        PT_E,
+        PT_P,
+        ROCKER6,
+        SLIDER9,
+        jacobian,
+        positions,
+    )
+
+    params = scene.resolved_parameters
+    model = get_model("ninebar")
+    geo = model.problem(params, scene.effects, {}, ("torque",)).p[:N_GEO]
+    omega = params["omega"]
+    q = np.array([params["theta10"], params["theta40"], 0.0, 0.0, 0.0, 0.0])
+    qd = np.array([-omega, omega, 0.0, 0.0, 0.0, 0.0])
+    pos = np.empty((8, 3))
+    pts = np.empty((N_POINTS, 2))
+    J = np.empty((8, 3, 6))
+    Jp = np.empty((N_POINTS, 2, 6))
+    if positions(q, geo, pos, pts) or jacobian(q, geo, J, Jp):
+        raise ValueError("the nine-bar mechanism does not assemble at its initial angles")
+    vel = J @ qd
+    bodies = [
+        Body(
+            name,
+            params[f"mass_{name}"],
+            params.get(f"inertia_{name}", 0.0) or 1e-6,  # the slider's rotation is locked
+            tuple(pos[b]),
+            tuple(vel[b]),
+        )
+        for b, name in enumerate(BODY_NAMES)
+    ]
+    A, B, P, C, D, E = (tuple(pts[i]) for i in (PT_A, PT_B, PT_P, PT_C, PT_D, PT_E))
+    o6 = (float(geo[G_O6X]), float(geo[G_O6Y]))
+    c = model.clearances(params)
+    s0 = float(geo[G_S0])
+    return Mechanism(
+        bodies=bodies,
+        revolutes=[
+            (None, CRANK1, (0.0, 0.0)),
+            (None, CRANK4, (float(geo[G_L5]), 0.0)),
+            (LINK2, LINK3, P),
+            (LINK2, PANEL7, P),
+            (None, ROCKER6, o6),
+            (ROCKER6, PANEL7, C),
+            (PANEL7, LINK8, D),
+            (LINK8, SLIDER9, E),
+        ],
+        clearances={
+            "A": (CRANK1, LINK2, A, c["A"], joint_stiffness(params, c["A"])),
+            "B": (CRANK4, LINK3, B, c["B"], joint_stiffness(params, c["B"])),
+        },
+        drives=[(CRANK1, -omega), (CRANK4, omega)],
+        slider=SLIDER9,
+        slider_position=lambda x: s0 - (x - o6[0]),  # S9 = S0 - (x_E - x_O6)
+        slider_sign=-1.0,
+    )
+
+
+def slider_crank_mechanism(scene: Scene) -> Mechanism:
+    """The slider-crank at t = 0: crank at theta10, rod on the +x branch, journal centred."""
+    params = scene.resolved_parameters
+    c = get_model("slider_crank").clearances(params)["B"]
+    l1, l2 = params["crank_length"], params["rod_length"]
+    lc1, lc2 = params["crank_centroid"], params["rod_centroid"]
+    th1, w1 = params["theta10"], params["omega"]
+    c1, s1 = math.cos(th1), math.sin(th1)
+    s2 = -l1 * s1 / l2
+    c2 = math.sqrt(1.0 - s2 * s2)
+    w2 = -l1 * c1 * w1 / (l2 * c2)
+    a = (l1 * c1, l1 * s1)
+    va = (-l1 * s1 * w1, l1 * c1 * w1)
+    b = (a[0] + l2 * c2, 0.0)
+    vb = va[0] - l2 * s2 * w2
+    bodies = [
+        Body("crank", params["mass_crank"], params["inertia_crank"], (lc1 * c1, lc1 * s1, th1),
+             (-lc1 * s1 * w1, lc1 * c1 * w1, w1)),
+        Body("rod", params["mass_rod"], params["inertia_rod"],
+             (a[0] + lc2 * c2, a[1] + lc2 * s2, math.atan2(s2, c2)),
+             (va[0] - lc2 * s2 * w2, va[1] + lc2 * c2 * w2, w2)),
+        Body("slider", params["mass_slider"], 1e-6, (b[0], 0.0, 0.0), (vb, 0.0, 0.0)),
+    ]  # fmt: skip
+    return Mechanism(
+        bodies=bodies,
+        revolutes=[(None, 0, (0.0, 0.0)), (0, 1, a)],
+        clearances={"B": (2, 1, b, c, joint_stiffness(params, c))},
+        drives=[(0, w1)],
+        slider=2,
+        slider_position=lambda x: x,
+        slider_sign=1.0,
+    )
+
+
+MECHANISMS: dict[str, Callable[[Scene], Mechanism]] = {
+    "ninebar": ninebar_mechanism,
+    "slider_crank": slider_crank_mechanism,
+}
+
+
+def check_scene(scene: Scene) -> None:
+    """Raise ValueError unless exudyn can rebuild this scene (model and friction law)."""
+    if scene.model not in MECHANISMS:
+        raise ValueError(
+            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}"
+        )
+    if scene.effects["friction"] == "lugre":
+        raise ValueError(
+            "effects.friction = 'lugre' has no counterpart in exudyn's contact; verify a scene "
+            "with friction 'none' or 'coulomb'"
+        )
