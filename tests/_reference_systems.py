@@ -168,8 +168,8 @@ def flow_series(
     """``n`` samples, ``dt`` apart, of the first state component of flow ``name`` after its
     transient, with the finite-time largest Lyapunov exponent (1/s) of the same window: the
     state and a tangent vector are integrated together and the vector is renormalised after
-    every block of samples (Benettin et al. 1980). For the forced Duffing oscillator pass ``dt`` = its
-    period 2 pi / 1.2 for the stroboscopic section (the sampling starts at a whole period)."""
+    every block of samples (Benettin et al. 1980). For the forced Duffing oscillator pass
+    ``dt`` = its period 2 pi / 1.2 for the stroboscopic section (sampled at whole periods)."""
     rhs, m, (lo, hi), transient = FLOWS[name]
     rng = np.random.default_rng(seed)
     u = np.concatenate([rng.uniform(lo, hi), np.ones(m) / math.sqrt(m)])
