@@ -25,7 +25,7 @@ import xarray as xr
 from _reference_systems import PUBLISHED, flow_series, map_series
 
 import workbench
-from workbench.analysis import wolf_lle
+from workbench.analysis import embedding_cao, wolf_lle
 
 DUFFING_PERIOD = 2 * math.pi / 1.2  # s, omega = 1.2
 
@@ -97,6 +97,8 @@ def test_heldout_flows(flow_window):
     assert float(r.lle_per_sample) == pytest.approx(float(r.lle) * ref.dt, rel=1e-12)
     # the reference itself is the system's exponent to within the scatter of a window
     assert ref.lle == pytest.approx(PUBLISHED[name], rel=0.15)
+    if name == "rossler":  # Cao (1997): m = 3 for the Rossler attractor
+        assert int(embedding_cao(ref.x, delay=int(r.delay)).dim) == 3
 
 
 def test_coarse_sampling_is_flagged():
