@@ -15,7 +15,7 @@ from workbench.analysis._delay import delay_ami
 from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
 from workbench.analysis._series import Series, as_series, require_samples
 
-__all__ = ["wolf_lle", "mean_period", "smoothness"]
+__all__ = ["wolf_lle", "mean_period", "smoothness", "correlation_dimension"]
 
 #: a series is a resolved sampled flow when the lag-1 autocorrelation of its successive
 #: differences (:func:`smoothness`) is at least this: a sinusoid sampled at n points per cycle
@@ -37,10 +37,14 @@ MAX_LAMBDA_DT = 0.1
 MIN_SAMPLES_PER_PERIOD = 10
 #: fewest samples for any estimate at all
 MIN_SAMPLES = 100
-#: points per dimension: at least 10**dim points (Wolf et al. 1985, Sec. 7: "10^D to 30^D
-#: points" for an attractor of dimension D; Eckmann & Ruelle 1992, Physica D 56, 185: N >
-#: 10^D for a neighbourhood a tenth of the attractor), with the embedding dimension for D
+#: fewest points for an attractor of (correlation) dimension D: 10**D (Eckmann & Ruelle 1992,
+#: Physica D 56, 185: a neighbourhood a tenth of the attractor's size must hold points; Wolf
+#: et al. 1985, Sec. 7: "10^D to 30^D points"). D is measured on the embedded points at the
+#: scales the neighbours are taken from (the embedding dimension would overstate it: Ikeda
+#: x needs dim 4 for an attractor of dimension 1.7)
 POINTS_BASE = 10
+#: fewest mean periods a sampled flow must span: its neighbours come from other passes
+MIN_PERIODS = 20
 #: the sampled-flow scale: this fraction of the median distance to the 50th nearest point
 #: (development set: Lorenz and Rossler x, 30 series of 10 000 points; 0.5 and 1.0 scattered
 #: more), and the map scale: the median distance to the 20th nearest point (Henon)
@@ -92,6 +96,28 @@ def _angle(u: np.ndarray, w: np.ndarray) -> np.ndarray:
     nw = np.linalg.norm(w)
     c = np.abs(u @ w) / np.maximum(nu * nw, 1e-300)
     return np.arccos(np.clip(c, 0.0, 1.0))
+
+
+def correlation_dimension(
+    Y: np.ndarray, tree: cKDTree, theiler: int, r_hi: float, ratio: float = 4.0
+) -> float:
+    """Local slope of the correlation sum C(r) between ``r_hi / ratio`` and ``r_hi``
+    (Grassberger & Procaccia 1983, Physica D 9, 189), over up to 500 reference points and with
+    the pairs within ``theiler`` samples in time left out (Theiler 1986, Phys. Rev. A 34,
+    2427). NaN if either count is zero."""
+    n = Y.shape[0]
+    ref = np.unique(np.linspace(0, n - 1, min(n, 500)).astype(np.int64))
+    offsets = np.arange(-theiler, theiler + 1)
+    near = ref[:, None] + offsets
+    inside = (near >= 0) & (near < n)
+    gap = np.linalg.norm(Y[np.clip(near, 0, n - 1)] - Y[ref][:, None, :], axis=2)
+    counts = []
+    for r in (r_hi / ratio, r_hi):
+        total = np.asarray(tree.query_ball_point(Y[ref], r, return_length=True)).sum()
+        counts.append(float(total - np.sum(inside & (gap <= r))))
+    if min(counts) <= 0:
+        return math.nan
+    return math.log(counts[1] / counts[0]) / math.log(ratio)
 
 
 class _Follower:
@@ -322,9 +348,11 @@ def wolf_lle(
     a sampled flow (too coarse a sampling of a flow, or a map given a time step: pass
     ``flow=False`` for a map); a flow's smoothness is below 0.9 (coarse sampling, or fast
     events between samples), its lambda dt above 0.1 per sample or it has fewer than 10
-    samples per mean period; the series has fewer than 10**dim points (Wolf et al. 1985,
-    Sec. 7; Eckmann & Ruelle 1992); Cao's E2 is within 0.1 of 1 at every dimension (noise: a
-    positive exponent is then no evidence of chaos).
+    samples per mean period, or spans fewer than 20 mean periods; the series has fewer than
+    10**D points, D the correlation dimension (Grassberger & Procaccia 1983) of the embedded
+    points at the neighbours' scales (Eckmann & Ruelle 1992; Wolf et al. 1985, Sec. 7); or
+    Cao's E2 is within 0.1 of 1 at every dimension (noise: a positive exponent is then no
+    evidence of chaos).
 
     Parameters
     ----------
@@ -358,7 +386,7 @@ def wolf_lle(
         ``delay``, ``evolve``, ``theiler``, ``scale_min``, ``scale_max`` (units of x),
         ``max_angle`` (rad); and ``replacements``, ``kept`` (steps that kept their neighbour
         for want of a replacement), ``steps``, ``points`` (embedded points) and
-        ``min_points`` (10**dim).
+        ``correlation_dimension`` D and ``min_points`` (10**D).
 
     Raises
     ------
@@ -484,12 +512,19 @@ def wolf_lle(
     msgs = _sampling_messages(
         s, flow=flow, chosen_flow=chosen_flow, smooth=smooth, per_sample=per_sample, spp=spp
     )
-    min_points = POINTS_BASE**dim
+    d2 = correlation_dimension(Y, follower.tree, theiler, scale_max)
+    min_points = int(math.ceil(POINTS_BASE ** (d2 if np.isfinite(d2) else dim)))
     if n < min_points:
         msgs.append(
-            f"{n} embedded points are fewer than 10^dim = {min_points} for dim = {dim} (Wolf "
-            "et al. 1985: 10^D to 30^D points for an attractor of dimension D; Eckmann & "
-            "Ruelle 1992): record a longer series"
+            f"{n} embedded points are fewer than 10^D = {min_points} for the correlation "
+            f"dimension D = {d2:.2f} at the scales of the neighbours (Eckmann & Ruelle 1992; "
+            "Wolf et al. 1985: 10^D to 30^D points): record a longer series"
+        )
+    periods = v.size / spp
+    if flow and periods < MIN_PERIODS:
+        msgs.append(
+            f"the series spans {periods:.1f} mean periods (< {MIN_PERIODS}): too few passes "
+            "for neighbours from other parts of the orbit; record a longer series"
         )
     if stochastic:
         msgs.append(
@@ -583,7 +618,12 @@ def wolf_lle(
             "kept": ((), kept, {"units": "1", "long_name": "old neighbour kept (none found)"}),
             "steps": ((), logs.size, {"units": "1", "long_name": "evolution steps"}),
             "points": ((), n, {"units": "1", "long_name": "embedded points"}),
-            "min_points": ((), min_points, {"units": "1", "long_name": "10^dim points"}),
+            "correlation_dimension": (
+                (),
+                d2,
+                {"units": "1", "long_name": "correlation dimension at the neighbours' scales"},
+            ),
+            "min_points": ((), min_points, {"units": "1", "long_name": "10^D points"}),
         },
         coords={
             "elapsed": (
