@@ -49,6 +49,9 @@ MIN_PERIODS = 20
 #: (development set: Lorenz and Rossler x, 30 series of 10 000 points; 0.5 and 1.0 scattered
 #: more), and the map scale: the median distance to the 20th nearest point (Henon)
 FLOW_SCALE_FRACTION, FLOW_SCALE_POINTS, MAP_SCALE_POINTS = 0.7, 50, 20
+#: the widened neighbour search (2-4 x scale_max) looks at this many nearest points at most: a
+#: ball 4 x wider holds 4^D times as many points, most of the data in many dimensions (noise)
+WIDE_CANDIDATES = 512
 #: reference points of the false-neighbour statistics (FNN, Cao) behind the dimension: a
 #: fraction to about +-1.3 % (binomial error)
 EVIDENCE_POINTS = 1500
@@ -169,44 +172,55 @@ class _Follower:
                 j, dj = j + step, dn
         return j
 
+    def _candidates(self, i: int, radius: float, wide: bool) -> tuple[np.ndarray, ...]:
+        """Candidate neighbours of Y[i] within ``radius``: indices, separations, their lengths
+        and the full distances. More than theiler samples away in time, ``evolve`` samples
+        ahead in the data, for a flow one per passing strand (its closest approach), none with
+        a separation below scale_min. ``wide``: the nearest WIDE_CANDIDATES points only (a
+        wide ball in many dimensions holds most of the data)."""
+        Y, lo, hi = self.Y, self.lo, self.hi
+        if wide:
+            full, cand = self.tree.query(
+                Y[i], k=min(WIDE_CANDIDATES, Y.shape[0]), distance_upper_bound=radius
+            )
+            cand = np.asarray(cand[np.isfinite(full)], dtype=np.int64)
+        else:
+            cand = np.asarray(self.tree.query_ball_point(Y[i], radius), dtype=np.int64)
+        cand = cand[(np.abs(cand - i) > self.theiler) & (cand >= lo)]
+        cand = cand[cand + self.evolve <= hi]
+        full2 = np.sum((Y[cand] - Y[i]) ** 2, axis=1)
+        if self.flow and cand.size:
+            before = np.sum((Y[cand - 1] - Y[i]) ** 2, axis=1)
+            after = np.sum((Y[cand + 1] - Y[i]) ** 2, axis=1)
+            keep = (full2 <= before) & (full2 <= after)
+            cand, full2 = cand[keep], full2[keep]
+        sep = self.separation(i, cand)
+        d = np.linalg.norm(sep, axis=1)
+        ok = d >= self.scale_min
+        return cand[ok], sep[ok], d[ok], np.sqrt(full2[ok])
+
     def replace(self, i: int, direction: np.ndarray | None) -> tuple[int, float]:
         """A neighbour of Y[i] within scale_max (more than theiler samples away in time) whose
         separation lies within max_angle of ``direction``: for a flow the nearest such, for a
-        map the one at the smallest angle (FET); the search widens the scale (up to 4 x), then
-        the angle (up to 4 x). (-1, nan) if none."""
-        Y, lo, hi = self.Y, self.lo, self.hi
-        smax, amax = self.scale_max, self.max_angle
-        for widen in range(5):
-            cand = np.asarray(self.tree.query_ball_point(Y[i], smax), dtype=np.int64)
-            cand = cand[(np.abs(cand - i) > self.theiler) & (cand >= lo)]
-            cand = cand[cand + self.evolve <= hi]
-            if self.flow and cand.size:  # one candidate per passing strand: its closest approach
-                d2 = np.sum((Y[cand] - Y[i]) ** 2, axis=1)
-                before = np.sum((Y[cand - 1] - Y[i]) ** 2, axis=1)
-                after = np.sum((Y[cand + 1] - Y[i]) ** 2, axis=1)
-                cand = cand[(d2 <= before) & (d2 <= after)]
-            if cand.size:
-                sep = self.separation(i, cand)
-                d = np.linalg.norm(sep, axis=1)
-                ok = d >= self.scale_min
-                cand, sep, d = cand[ok], sep[ok], d[ok]
-            if cand.size:
-                if direction is None:  # the first neighbour: the nearest point
-                    k = int(np.argmin(d))
+        map the one at the smallest angle (FET); the search widens the scale (2 x, 4 x), then
+        the angle (2 x, 4 x). (-1, nan) if none. The ball is searched at scale_max and, if that
+        fails, once at 4 x scale_max for all the wider stages."""
+        stages = [(1.0, 1.0), (2.0, 1.0), (4.0, 1.0), (4.0, 2.0), (4.0, 4.0)]
+        for first, last in ((0, 1), (1, len(stages))):
+            radius = stages[last - 1][0] * self.scale_max
+            cand, sep, d, full = self._candidates(i, radius, wide=first > 0)
+            if not cand.size:
+                continue
+            if direction is None:  # the first neighbour: the nearest point
+                k = int(np.argmin(d))
+                return int(cand[k]), float(d[k])
+            ang = _angle(sep, direction)
+            for widen, turn in stages[first:last]:
+                amax = min(turn * self.max_angle, math.pi / 2)
+                ok = np.flatnonzero((full <= widen * self.scale_max) & (ang <= amax))
+                if ok.size:
+                    k = int(ok[np.argmin(d[ok] if self.flow else ang[ok])])
                     return int(cand[k]), float(d[k])
-                ang = _angle(sep, direction)
-                if self.flow:
-                    ok = np.flatnonzero(ang <= amax)
-                    k = int(ok[np.argmin(d[ok])]) if ok.size else -1
-                else:
-                    k = int(np.argmin(ang))
-                    k = k if ang[k] <= amax else -1
-                if k >= 0:
-                    return int(cand[k]), float(d[k])
-            if widen < 2:
-                smax *= 2.0
-            else:
-                amax = min(2 * amax, math.pi / 2)
         return -1, math.nan
 
     def run(self) -> tuple[np.ndarray, int, int]:
