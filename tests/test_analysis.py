@@ -164,7 +164,7 @@ def test_mechanism_coarse_sampling_is_flagged():
     from pathlib import Path
 
     scene = tomllib.loads((Path(__file__).parents[1] / "studies/chaos/chaos.toml").read_text())
-    scene["run"] = {"cycles": 12, "transient_cycles": 3}
+    scene["run"] = {"cycles": 6, "transient_cycles": 2}
     ds = workbench.simulate(scene)
     r = wolf_lle(ds.clearance_x.sel(joint="A"))
     assert ds.attrs["samples_per_period"] == 100
