@@ -399,7 +399,7 @@ def wolf_lle(
         ``cao_E2`` over ``dimension``, ``cao_dim``, ``stochastic``; the settings ``dim``,
         ``delay``, ``evolve``, ``theiler``, ``scale_min``, ``scale_max`` (units of x),
         ``max_angle`` (rad); and ``replacements``, ``kept`` (steps that kept their neighbour
-        for want of a replacement), ``steps``, ``points`` (embedded points) and
+        for want of a replacement), ``steps``, ``points`` (embedded points), the
         ``correlation_dimension`` D and ``min_points`` (10**D).
 
     Raises
