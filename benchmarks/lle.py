@@ -1,12 +1,15 @@
 """Largest Lyapunov exponent of Lorenz x: workbench's Wolf estimate against nolds.
 
 Lorenz (10, 28, 8/3), x sampled at dt = 0.01 after a 20 s transient, 10 000 and 20 000 points.
-For each: ``workbench.analysis.wolf_lle`` with every choice automatic, ``nolds.lyap_r`` with its
+For each: ``workbench.analysis.wolf_lle`` with every choice automatic (map or flow detected,
+delay, dimension, evolution time, scales, the reliability checks), ``nolds.lyap_r`` with its
 defaults, and ``nolds.lyap_r`` tuned (emb_dim 5, lag 16, min_tsep 100, fit over samples
 100-400), all in the same run: wall time (an untraced call), peak memory (tracemalloc: Python
-allocations, numpy included; a second call) and the error against 0.9056 1/s. Target: within
-3 % in under 0.5 s for 10 000 points, under 100 MB for 20 000, at least 10x faster than nolds
-at better accuracy.
+allocations, numpy included; a second call) and the error against 0.9056 1/s. Target: under
+0.5 s for 10 000 points, under 100 MB for 20 000, at least 10x faster than nolds. (The error
+against the exponent of each window is what tests/test_wolf_heldout.py judges; a 100-s window's
+own exponent scatters by several % about 0.9056.) Then wolf_lle's verdict on the same run
+sampled every 20th point (dt = 0.2 s): flagged.
 
 Run: ``python benchmarks/lle.py``.
 """
@@ -85,6 +88,17 @@ def main() -> None:
             )
         ratio = results["nolds.lyap_r tuned"] / results["wolf_lle (automatic)"]
         print(f"{'':7} wolf_lle is {ratio:.1f}x faster than tuned nolds")
+        r = wolf_lle(x)
+        print(
+            f"{'':7} wolf_lle: {r.attrs['series_kind']}, dim {int(r.dim)}, delay {int(r.delay)}, "
+            f"evolve {int(r.evolve)}, {int(r.replacements)} replacements, lambda dt "
+            f"{float(r.lle_per_sample):.4f}, reliable {bool(r.reliable)}"
+        )
+    coarse = wolf_lle(ds.x[::20])
+    print(
+        f"dt = 0.2 s ({coarse.sizes['elapsed']} steps): LLE {float(coarse.lle):.3f} 1/s, reliable "
+        f"{bool(coarse.reliable)}: {coarse.reliable.attrs['message'][:110]}..."
+    )
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.analysis._series import as_series
+from workbench.analysis._series import as_series, require_samples
 
 __all__ = ["delay_ami", "delay_acf", "mutual_information"]
 
@@ -38,7 +38,9 @@ def _ami_curve(cells: np.ndarray, lags: np.ndarray, bins: int) -> np.ndarray:
     return out
 
 
-def delay_ami(x, *, dt: float | None = None, max_lag: int | None = None, bins: int | None = None):
+def delay_ami(
+    x, *, dt: float | None = None, max_lag: int | None = None, bins: int | None = None
+) -> xr.Dataset:
     """Embedding delay at the first local minimum of the average mutual information.
 
     Fraser & Swinney (1986), Phys. Rev. A 33, 1134. The AMI ``I(lag)`` is estimated from a
@@ -49,16 +51,22 @@ def delay_ami(x, *, dt: float | None = None, max_lag: int | None = None, bins: i
     Parameters
     ----------
     x : array or DataArray
-        Scalar series (a DataArray with ``time`` gives dt).
+        Scalar series (a DataArray with ``time`` gives dt), at least 20 samples.
+    dt : float, optional
+        Sampling step (s) of a plain array.
     max_lag : int, optional
-        Largest lag tried (samples); default N // 10.
+        Largest lag tried (samples), 1 <= max_lag < N; default N // 10.
+    bins : int, optional
+        Histogram cells per axis (>= 2).
 
     Returns
     -------
     xarray.Dataset
         ``delay`` (samples) and ``delay_time`` (s, or samples without dt); the curve ``ami``
-        (nats) over ``lag`` (samples); ``found`` is 0 when no minimum lies within ``max_lag``
-        (then the delay is where the AMI first falls below 1/e of I(0)).
+        (nats) over ``lag`` (samples), computed lag by lag until its first minimum and shown
+        up to twice the delay (at least 32 lags, at most ``max_lag``); ``found`` is 0 when no
+        minimum lies within ``max_lag`` (then the delay is where the AMI first falls below 1/e
+        of I(0)).
 
     Examples
     --------
@@ -70,18 +78,35 @@ def delay_ami(x, *, dt: float | None = None, max_lag: int | None = None, bins: i
     True
     """
     s = as_series(x, dt)
+    require_samples(s, 20, "delay_ami")
     n = s.values.size
-    max_lag = max_lag or max(n // 10, 2)
-    bins = bins or int(np.clip(np.sqrt(n / 5), 16, 128))
-    lags = np.arange(max_lag + 1)
-    ami = _ami_curve(_cells(s.values, bins), lags, bins)
-    minima = np.flatnonzero((ami[1:-1] < ami[:-2]) & (ami[1:-1] <= ami[2:])) + 1
+    max_lag = max(n // 10, 2) if max_lag is None else int(max_lag)
+    if not 1 <= max_lag < n:
+        raise ValueError(f"max_lag={max_lag!r}; allowed: 1 <= max_lag < {n} (the series length)")
+    bins = int(np.clip(np.sqrt(n / 5), 16, 128)) if bins is None else int(bins)
+    if bins < 2:
+        raise ValueError(f"bins={bins!r}; allowed: at least 2 cells per axis")
+    cells = _cells(s.values, bins)
+    # lag by lag in blocks until the first local minimum: the curve beyond it is not needed
+    ami = np.empty(0)
+    minima = np.empty(0, dtype=np.int64)
+    while ami.size <= max_lag:
+        lags = np.arange(ami.size, min(max(2 * ami.size, 32), max_lag + 1))
+        ami = np.concatenate([ami, _ami_curve(cells, lags, bins)])
+        minima = np.flatnonzero((ami[1:-1] < ami[:-2]) & (ami[1:-1] <= ami[2:])) + 1
+        if minima.size:
+            break
     found = minima.size > 0
     if found:
         delay = int(minima[0])
+        shown = min(max(2 * delay + 1, 33), max_lag + 1)
+        if shown > ami.size:
+            ami = np.concatenate([ami, _ami_curve(cells, np.arange(ami.size, shown), bins)])
+        ami = ami[:shown]
     else:
         below = np.flatnonzero(ami < ami[0] / np.e)
         delay = int(below[0]) if below.size else int(max_lag)
+    lags = np.arange(ami.size)
     return xr.Dataset(
         {
             "delay": ((), delay, {"units": "1", "long_name": "embedding delay (samples)"}),

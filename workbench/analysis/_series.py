@@ -7,13 +7,17 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-__all__ = ["Series", "as_series"]
+__all__ = ["Series", "as_series", "require_samples"]
 
 
 @dataclass(frozen=True)
 class Series:
     """A uniformly sampled scalar series: values, step ``dt`` (in ``time_units``: "s", or
-    "sample" for a plain array given without ``dt``), name, units, forcing period (s) if known."""
+    "sample" for a plain array given without ``dt``), name, units, forcing period (s) if known,
+    and how it was sampled (``sampling``): "time" (a record in time: a ``time`` coordinate or
+    an explicit ``dt``), "strobe" (one sample per forcing period, as
+    :func:`~workbench.analysis.poincare_section` returns it: dim ``strobe`` with coordinate
+    ``strobe_time``) or "index" (a plain array without ``dt``)."""
 
     values: np.ndarray
     dt: float
@@ -21,16 +25,40 @@ class Series:
     units: str
     period: float | None
     time_units: str
+    sampling: str = "index"
+
+
+def _uniform_step(name: str, t: np.ndarray, coordinate: str) -> float | None:
+    steps = np.diff(t)
+    if steps.size and not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
+        raise ValueError(
+            f"{name!r} is not uniformly sampled ({coordinate} steps {steps.min():g} .. "
+            f"{steps.max():g} s); analyses need a uniform record (record.dt or "
+            "record.samples_per_period)"
+        )
+    return float(steps[0]) if steps.size else None
 
 
 def as_series(x, dt: float | None = None) -> Series:
-    """A :class:`Series` from a 1-D array or a DataArray with a ``time`` coordinate (s).
+    """A :class:`Series` from a 1-D array or a DataArray with a ``time`` coordinate (s) or a
+    ``strobe_time`` coordinate (s, a stroboscopic section).
 
     The DataArray gives ``dt`` itself (its records must be uniform to 1e-6 relative) and its
     ``units``; a forcing period is read from ``forcing_period`` in its attributes. Raises
-    ValueError for non-1-D input, non-finite values or a non-uniform time axis.
+    ValueError for non-1-D input, non-finite values, a non-positive ``dt`` or a non-uniform
+    time axis.
+
+    Examples
+    --------
+    >>> as_series([1.0, 2.0, 3.0], dt=0.1).sampling
+    'time'
+    >>> as_series([1.0, 2.0, 3.0]).time_units
+    'sample'
     """
     name, units, period = "x", "1", None
+    sampling = "time" if dt is not None else "index"
+    if dt is not None and not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt={dt!r}: the sampling step must be a positive number of seconds")
     if isinstance(x, xr.DataArray):
         name = str(x.name or "x")
         units = str(x.attrs.get("units", "1"))
@@ -41,15 +69,12 @@ def as_series(x, dt: float | None = None) -> Series:
                 "the other dims first, e.g. da.sel(joint='A')"
             )
         if dt is None and "time" in x.coords:
-            t = np.asarray(x["time"].values, dtype=float)
-            steps = np.diff(t)
-            if steps.size and not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
-                raise ValueError(
-                    f"{name!r} is not uniformly sampled (steps {steps.min():g} .. "
-                    f"{steps.max():g} s); analyses need a uniform record (record.dt or "
-                    "record.samples_per_period)"
-                )
-            dt = float(steps[0]) if steps.size else None
+            dt = _uniform_step(name, np.asarray(x["time"].values, dtype=float), "time")
+            sampling = "time"
+        elif "strobe_time" in x.coords and x.dims == ("strobe",):
+            step = _uniform_step(name, np.asarray(x["strobe_time"].values, dtype=float), "strobe")
+            dt = dt if dt is not None else step
+            sampling = "strobe"
         x = x.values
     values = np.asarray(x, dtype=float)
     if values.ndim != 1:
@@ -64,4 +89,14 @@ def as_series(x, dt: float | None = None) -> Series:
         units,
         float(period) if period else None,
         "s" if dt is not None else "sample",
+        sampling if dt is not None else "index",
     )
+
+
+def require_samples(s: Series, minimum: int, what: str) -> None:
+    """Raise ValueError naming the series, its length and the ``minimum`` that ``what`` needs."""
+    if s.values.size < minimum:
+        raise ValueError(
+            f"x ({s.name!r}) has {s.values.size} samples; {what} needs at least {minimum}: "
+            "record a longer series"
+        )
