@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 import tomli_w
 
+from workbench._ensemble import MAX_PERTURBATION
 from workbench._errors import SceneError
 from workbench.models import available_models, get_model
 
@@ -44,6 +45,8 @@ _TABLES = (
     "record",
     "sweep",
 )
+_ENSEMBLE = ("realisation", "perturbation")  # [run] keys of an ensemble (workbench._ensemble)
+RUN_SWEEP_KEYS = ("realisation",)  # [run] keys a [sweep] may list (see workbench._ensemble)
 _SOLVER_DEFAULTS = {
     "method": "dop853",
     "rtol": 1e-8,
@@ -136,10 +139,13 @@ class Scene:
         return load_scene(d)
 
     def with_parameters(self, **values: float) -> Scene:
-        """A single-run scene (no sweep) with some parameters changed."""
+        """A single-run scene (no sweep) with some parameters changed: one point of a campaign
+        grid. A swept ``[run]`` key (``realisation``) goes to ``[run]``."""
+        run = dict(self.run)
+        run.update({k: int(values.pop(k)) for k in list(values) if k in RUN_SWEEP_KEYS})
         params = dict(self.parameters)
         params.update({k: float(v) for k, v in values.items()})
-        return self.replace(parameters=params, sweep={})
+        return self.replace(parameters=params, run=run, sweep={})
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Scene) and self.to_dict() == other.to_dict()
@@ -255,7 +261,9 @@ def _validate(data: Mapping[str, Any]) -> Scene:
 
     solver = _validate_solver(_table(data, "solver"))
     period = model.forcing_period(resolved)
-    run = _validate_run(_table(data, "run"), period is not None)
+    run_t = _table(data, "run")
+    ensemble = _validate_ensemble(run_t)  # takes its keys out of run_t
+    run = _validate_run(run_t, period is not None) | ensemble
     record = _validate_record(_table(data, "record"), model, effects, period is not None, run)
     sweep = _validate_sweep(model, _table(data, "sweep"), effects)
     return Scene(
@@ -336,7 +344,7 @@ def _validate_solver(given: dict) -> dict:
 
 def _validate_run(given: dict, forced: bool) -> dict:
     if forced:
-        _unknown("run", given, ("cycles", "transient_cycles", "duration", "transient"))
+        _unknown("run", given, ("cycles", "transient_cycles", "duration", "transient", *_ENSEMBLE))
         if "cycles" in given or "transient_cycles" in given or not given:
             if "duration" in given or "transient" in given:
                 raise SceneError(
@@ -354,7 +362,7 @@ def _validate_run(given: dict, forced: bool) -> dict:
                 raise SceneError(
                     f"run.{k}", "this model has no forcing period; use run.duration (s) instead"
                 )
-        _unknown("run", given, ("duration", "transient"))
+        _unknown("run", given, ("duration", "transient", *_ENSEMBLE))
     if "duration" not in given:
         raise SceneError("run.duration", "is required (simulated time to record, s)")
     transient = _number("run.transient", given.get("transient", 0.0))
@@ -399,9 +407,35 @@ def _validate_record(given: dict, model, effects, forced: bool, run: dict) -> di
     return rec
 
 
+def _validate_ensemble(run: dict) -> dict:
+    """Take the ensemble keys ``realisation`` and ``perturbation`` out of the ``[run]`` table
+    ``run`` and validate them (see :mod:`workbench._ensemble`); returns those given."""
+    out: dict[str, Any] = {}
+    if "realisation" in run:
+        out["realisation"] = _integer("run.realisation", run.pop("realisation"), 0)
+    if "perturbation" in run:
+        size = run.pop("perturbation")
+        x = _number("run.perturbation", size)
+        if not 0 < x <= MAX_PERTURBATION:
+            raise SceneError(
+                "run.perturbation",
+                f"got {size!r}; must lie in (0, {MAX_PERTURBATION:g}] (relative to each state's "
+                "characteristic size, e.g. the clearance c for positions)",
+            )
+        out["perturbation"] = x
+    return out
+
+
+def _sweep_realisations(key: str, values: np.ndarray) -> None:
+    """SceneError unless every value of a ``realisation`` sweep is an integer >= 0."""
+    for i, v in enumerate(values):
+        if not (math.isfinite(v) and v >= 0 and v == round(v)):
+            raise SceneError(f"{key}[{i}]", f"got {float(v)!r}; a realisation is an integer >= 0")
+
+
 def _validate_sweep(model, given: dict, effects) -> dict[str, tuple[float, ...]]:
     declared = {p.name: p for p in model.parameters}
-    _unknown("sweep", given, declared)
+    _unknown("sweep", given, {*declared, *RUN_SWEEP_KEYS})
     out = {}
     for k, spec in given.items():
         key = f"sweep.{k}"
@@ -432,6 +466,10 @@ def _validate_sweep(model, given: dict, effects) -> dict[str, tuple[float, ...]]
             raise SceneError(key, f"must be a list of values or {{start, stop, num}}, got {spec!r}")
         if len(np.unique(values)) != len(values):
             raise SceneError(key, f"repeats a value: {list(values)!r}")
+        if k in RUN_SWEEP_KEYS:
+            _sweep_realisations(key, values)
+            out[k] = tuple(float(v) for v in values)
+            continue
         for i, v in enumerate(values):
             problem = declared[k].check(float(v))
             if problem:

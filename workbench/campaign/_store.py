@@ -28,8 +28,9 @@ import xarray as xr
 
 from workbench._archive import write_text_atomic
 from workbench._cache import package_digest
+from workbench._ensemble import REALISATION_ATTRS
 from workbench._errors import SceneError
-from workbench._scene import Scene, load_scene
+from workbench._scene import RUN_SWEEP_KEYS, Scene, load_scene
 from workbench.models import get_model
 
 __all__ = ["CampaignError", "CampaignWarning", "Grid", "Store", "expand_grid", "scene_diff"]
@@ -106,7 +107,10 @@ def forcing_period(scene: Scene, grid: Grid, flat: int) -> float | None:
 
 
 def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a model parameter (from its declaration)."""
+    """``units`` and ``long_name`` of a model parameter (from its declaration), or of a swept
+    ``[run]`` key (``realisation``)."""
+    if name in RUN_SWEEP_KEYS:
+        return dict(REALISATION_ATTRS)
     p = get_model(scene.model).parameter(name)
     return {"units": p.units, "long_name": p.long_name}
 

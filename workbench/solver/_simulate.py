@@ -12,6 +12,7 @@ from importlib.metadata import version
 import numpy as np
 import xarray as xr
 
+from workbench._ensemble import perturb_initial_state, scene_perturbation
 from workbench._errors import SolverError
 from workbench._scene import Scene, load_scene
 from workbench.models import Problem, get_model
@@ -286,6 +287,7 @@ def simulate(scene: Scene | str, *, progress: bool = False) -> xr.Dataset:
     params = scene.resolved_parameters
     requested = scene.variables
     problem = model.problem(params, scene.effects, scene.initial, requested)
+    problem = perturb_initial_state(problem, *scene_perturbation(scene.run))
     period = model.forcing_period(params)
     t_rec, grid_attrs = record_grid(scene, problem.t0, period)
     s = scene.solver
