@@ -227,22 +227,32 @@ def _lle(spec, ctx):
     m = ctx["measures"]
     fig, axes = _grid4(
         spec,
-        "largest Lyapunov exponent, Wolf et al. (1985): running estimate of realisation 0, "
-        f"band: IQR of the final values over {len(ds.realisation)} realisations",
+        "largest Lyapunov exponent, Wolf et al. (1985): running estimate of realisation 0;\n"
+        f"band: interquartile range of the final values over {len(ds.realisation)} realisations",
     )
     bench = m.get("lle_from_equations")
     period = ds.attrs.get("forcing_period")
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
         w = analysis.wolf_lle(select(ds, var, where).isel(realisation=0), period=period)
         run = w["running"]
-        ax.plot(run[run.dims[0]], run, lw=0.8, label=f"realisation 0: {float(w['lle']):.3g} 1/s")
+        x = run[run.dims[0]]
+        ax.plot(x, run, lw=0.8, label=f"realisation 0: {float(w['lle']):.3g} 1/s")
+        shown = list(run.values[x.values >= 0.05 * float(x.max())])
         values = np.asarray(m.get("wolf_lle", {}).get(label, []), float)
-        if values.size:
+        if np.isfinite(values).any():
             q25, med, q75 = np.nanpercentile(values, [25, 50, 75])
             ax.axhspan(q25, q75, color="C1", alpha=0.3, lw=0, label=f"median {med:.3g} 1/s")
-        if bench is not None:
-            ax.axhline(bench, color="k", ls="--", lw=0.8, label=f"equations: {bench:.3g} 1/s")
-        ax.set_xlabel(axis_label(run[run.dims[0]]), fontsize=8)
+            shown += [q25, q75]
+        low, high = np.nanmin(shown + [0.0]), np.nanmax(shown + [0.0])
+        pad = 0.1 * (high - low) or 1.0
+        ax.set_ylim(low - pad, high + pad)
+        if bench is not None:  # Benettin's LLE is often far above Wolf's: noted if off scale
+            off = not low - pad <= bench <= high + pad
+            ax.axhline(bench, color="k", ls="--", lw=0.8)
+            ax.plot(
+                [], [], "k--", lw=0.8, label=f"equations: {bench:.3g} 1/s" + off * " (off scale)"
+            )
+        ax.set_xlabel(axis_label(x), fontsize=8)
         ax.set_ylabel(f"{label}: LLE [1/s]", fontsize=8)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)

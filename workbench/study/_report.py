@@ -23,8 +23,10 @@ _CAUSES = """\
    (`../shared/spec/ninebar-parameters.md`, doubt 1). The figures can be matched in trend and
    order of magnitude, not value by value.
 2. **Chaotic impacts.** With clearances the motion is chaotic (Sec. 5 of the paper and our
-   LLEs): a peak over two crank cycles depends on where the transient ends and on round-off; any
-   single peak is one sample of a wide distribution. The paper's run conditions (initial state,
+   LLEs): a perturbation of 1e-9 c of the initial state grows to a sizeable part of c within a
+   crank cycle, so a peak of one run is one sample of a wide distribution. Every case is
+   therefore an ensemble, and a claim is decided only beyond the realisations' scatter; the
+   paper's figures are single runs, one sample each. The paper's run conditions (initial state,
    transient, output step) are not stated beyond an "integration step 0.001 s", which can only
    be its output step (spec, doubt 3): a 1 ms output step under-samples contact peaks that last
    1e-5 to 1e-3 s, so the paper's peaks are probably lower than the true ones.
@@ -35,6 +37,13 @@ _CAUSES = """\
    fixed parameters of the bifurcation diagrams) are not stated; we use those of Sec. 4.3
    (c = 0.1 mm, omega = 2 pi, c_f = 0.01), and the unit of the paper's LLEs is not stated: we
    report 1/s and per crank period.
+6. **Friction and the sliding contact.** In our model a larger friction coefficient does not
+   calm the journals: the Sec. 4.6 tables give, against c_f, the share of time in contact, the
+   contact-force percentiles and the energy balance (driver work against dissipation per
+   cycle). Where the journals leave their sliding contact and impact, force peaks and
+   stroboscopic spreads grow, the opposite of Sec. 4.6 and Fig. 33. A first look found a
+   friction-induced (mode-coupling, flutter) instability of the sliding contact; its eigenvalue
+   evidence will be added to Sec. 4.6. The model is not tuned to agree with the paper.
 """
 
 

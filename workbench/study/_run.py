@@ -40,6 +40,7 @@ CLEARANCE_COORDINATES = {
     "y2": ("clearance_y", {"joint": "B"}),
 }
 PEAK_PERIODS = 2  # paper values: peaks over the first two recorded crank cycles, as in a plot
+_PER_CASE = ("peak", "peak_ratio_near_one", "strobe_spread")  # statistics measured per case
 
 # Why a paper value may lie outside our ensemble's range (the report's known causes).
 _CAUSE_TORQUE = (
@@ -209,16 +210,18 @@ def _measures(study: Study, runs: dict, members: dict, scenes: dict) -> dict:
         m["seconds_per_cycle"][name] = {"": [seconds_per_cycle(w, scene) for w in walls]}
         for entry in entries:
             var = entry.get("var")
-            if var is None or var not in ds:
+            stat = entry.get("statistic", "peak")
+            if var is None or var not in ds or stat not in _PER_CASE:
                 continue
             where = entry.get("select", {})
             key = _key(entry)
             da = select(ds, var, where)
             m["units"][key] = ds[var].attrs.get("units", "")
-            reals = [da.sel(realisation=r) for r in ds["realisation"].values]
-            m["peak"].setdefault(name, {})[key] = [peak(x, PEAK_PERIODS, ds) for x in reals]
-            m["peak_record"].setdefault(name, {})[key] = [peak(x) for x in reals]
-            if "joint" in where and var.startswith("clearance_") and where["joint"] in ds.joint:
+            if stat != "strobe_spread":
+                reals = [da.sel(realisation=r) for r in ds["realisation"].values]
+                m["peak"].setdefault(name, {})[key] = [peak(x, PEAK_PERIODS, ds) for x in reals]
+                m["peak_record"].setdefault(name, {})[key] = [peak(x) for x in reals]
+            elif where.get("joint") in ds.joint:
                 samples = strobe(ds, da)
                 spread = samples.std("strobe", skipna=True) / clearance_of(scene, where["joint"])
                 m["strobe_spread"].setdefault(name, {})[key] = [float(x) for x in spread.values]
@@ -262,7 +265,10 @@ def _chaos_measures(ds: xr.Dataset, scene: Scene) -> dict:
             w = analysis.wolf_lle(x, period=period)
             lle.append(float(w["lle"]))
             per_period.append(float(w["lle_per_period"]) if "lle_per_period" in w else math.nan)
-            k.append(float(analysis.zero_one_test(strobe(ds, x))["K"]))
+            samples = strobe(ds, x)
+            # the 0-1 test needs 100 stroboscopic samples (a --quick run has fewer)
+            enough = samples.sizes["strobe"] >= 100
+            k.append(float(analysis.zero_one_test(samples)["K"]) if enough else math.nan)
             if not out["wolf_choices"].get(label):
                 out["wolf_choices"][label] = {
                     n: float(w[n]) for n in ("delay", "dim", "evolve", "theiler") if n in w
