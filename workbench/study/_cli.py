@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import time as _time
 
 
@@ -39,9 +40,10 @@ def _cmd_study(args: argparse.Namespace) -> int:
         )
     if args.name == "all":
         print(f"report: {write_report(args.output)}")
+    workers = args.workers or os.cpu_count()
     print(
-        f"{len(names)} stud{'y' if len(names) == 1 else 'ies'}, {runs} runs, "
-        f"{_time.perf_counter() - t_all:.1f} s"
+        f"{len(names)} stud{'y' if len(names) == 1 else 'ies'}: {runs} runs on {workers} "
+        f"workers, {_time.perf_counter() - t_all:.1f} s"
     )
     return 0
 

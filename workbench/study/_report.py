@@ -90,7 +90,7 @@ def write_report(
     body: list[str] = []
     timing_rows = []
     totals = {v: 0 for v in _VERDICT_STYLE}
-    runs = wall = 0.0
+    runs = wall = study_wall = 0.0
     for name in sorted(available_studies(), key=_section_order):
         f = out / name / "summary.json"
         if not f.is_file():
@@ -100,11 +100,13 @@ def write_report(
         body += _study_section(s)
         for c in s["claims"]:
             totals[c["verdict"]] += 1
+        study_wall += s.get("wall_time", 0.0)
         for case, v in s["cases"].items():
             runs += v["runs"]
             wall += v["wall_time"]
             timing_rows.append(
-                f"| {name}/{case} | {v['runs']} | {_stats(v['seconds_per_cycle'])} | "
+                f"| {name}/{case} | {v['runs']} ({v.get('failed_runs', 0)} failed) | "
+                f"{_stats(v['seconds_per_cycle'])} | "
                 f"{_fmt(v['paper_seconds_per_cycle'])} | {_fmt(v['wall_time'])} |"
             )
     lines = [
@@ -145,8 +147,9 @@ def write_report(
         *body,
         "## Computing time",
         "",
-        f"All cases: {int(runs)} runs, {wall:.0f} s of wall time (sum over the cases, "
-        "campaigns on the local process pool).",
+        f"All studies: {int(runs)} runs; {study_wall / 60:.1f} min of wall time in total "
+        f"({wall / 60:.1f} min in the ensemble campaigns on the local process pool, the rest "
+        "in the analyses and figures).",
         "",
         "| case | runs | ours [s per crank cycle]: median (IQR) | paper's MATLAB [s per cycle] "
         "| whole ensemble [s] |",
@@ -165,7 +168,8 @@ def _study_section(s: dict) -> list[str]:
     cycles = "; ".join(f"`{c}` {n} + {t} transient" for c, (n, t) in s.get("cycles", {}).items())
     lines += [
         f"Ensemble: {s['realisations']} realisation(s) per case, perturbation "
-        f"{s['perturbation']:g}; crank cycles recorded per realisation: {cycles}.",
+        f"{s['perturbation']:g}; crank cycles recorded per realisation: {cycles}."
+        + (f" {s['note']}" if s.get("note") else ""),
         "",
         "Cases: " + "; ".join(f"`{c}` ({v['title']})" for c, v in s["cases"].items()),
         "",

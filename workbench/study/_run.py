@@ -118,6 +118,7 @@ def run_study(
         study = quick_study(study)
     directory = Path(out) / study.name
     directory.mkdir(parents=True, exist_ok=True)
+    study_wall0 = _time.perf_counter()
     runs: dict[str, xr.Dataset] = {}
     cases = {}
     for case, scene in study.cases.items():
@@ -151,6 +152,7 @@ def run_study(
         "section": study.section,
         "paper_figures": study.paper_figures,
         "quick": quick,
+        "note": study.note,
         "realisations": study.realisations,
         "perturbation": study.perturbation,
         "cycles": _cycles(study),
@@ -161,6 +163,7 @@ def run_study(
         "measures": measures,
         "flutter": _flutter(study),
         "figures": [str(p) for p in figures],
+        "wall_time": _time.perf_counter() - study_wall0,
     }
     _write_json(summary, directory / "summary.json")
     result = summary_dataset(study, members, measures, claims, paper_rows, sweeps)
@@ -168,7 +171,7 @@ def run_study(
         summary_json=str(directory / "summary.json"),
         archives=json.dumps({c: v["archive"] for c, v in cases.items()}),
         runs=sum(v["runs"] for v in cases.values()),
-        wall_time=sum(v["wall_time"] for v in cases.values()),
+        wall_time=summary["wall_time"],
         quick=int(quick),
     )
     save_run(result, directory / "summary.nc")

@@ -4,7 +4,8 @@ Layout of ``studies/<name>/``: one scene per case (``<case>.toml``; a scene with
 run as a campaign) and ``study.toml`` with
 
 - ``title``, ``section`` (of the paper), ``paper_figures``, optional ``paper_seconds_per_cycle``
-  (case -> s, the paper's MATLAB time per crank cycle);
+  (case -> s, the paper's MATLAB time per crank cycle) and ``note`` (a sentence the report
+  shows under the study's heading, e.g. why its runs are shorter);
 - ``realisations`` (integer >= 1, default 1): every case runs as an ensemble of this many
   realisations, a campaign dimension ``realisation`` (:mod:`workbench._ensemble`), and
   ``perturbation`` (relative size of the initial-state perturbation, default 1e-9);
@@ -68,6 +69,7 @@ _KEYS = {
     "paper_value",
     "claim",
     "flutter",
+    "note",
 }
 
 
@@ -89,6 +91,7 @@ class Study:
     perturbation: float = DEFAULT_PERTURBATION
     views: dict[str, dict] = field(default_factory=dict)
     flutter: dict = field(default_factory=dict)
+    note: str = ""
 
     @property
     def members(self) -> list[str]:
@@ -182,6 +185,7 @@ def load_study(name: str | Path, root: Path = STUDIES_DIR) -> Study:
         perturbation=float(perturbation),
         views={name: {"case": v["case"], "select": v["select"]} for name, v in views.items()},
         flutter=dict(meta.get("flutter", {})),
+        note=str(meta.get("note", "")),
     )
 
 
