@@ -87,7 +87,8 @@ def _first_cycles(ds: xr.Dataset, da: xr.DataArray) -> xr.DataArray:
 
 
 def _realisations_note(ctx) -> str:
-    return f"{ctx['study'].realisations} realisations"
+    n = ctx["study"].realisations
+    return f"{n} realisation{'s' if n != 1 else ''}"
 
 
 def _envelope(da: xr.DataArray, samples_per_period: int) -> tuple[xr.DataArray, xr.DataArray]:
