@@ -29,7 +29,8 @@ import xarray as xr
 from workbench._cache import package_digest
 from workbench.archive import write_text_atomic
 from workbench.models import get_model
-from workbench.scene import Scene, SceneError, scene_from_toml
+from workbench.run import REALISATION_ATTRS
+from workbench.scene import RUN_SWEEP_KEYS, Scene, SceneError, scene_from_toml
 
 __all__ = ["CampaignError", "CampaignWarning", "Store", "SweepGrid", "expand_sweep", "scene_diff"]
 
@@ -106,7 +107,10 @@ def forcing_period(scene: Scene, grid: SweepGrid, flat: int) -> float | None:
 
 
 def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a model parameter (from its declaration)."""
+    """``units`` and ``long_name`` of a model parameter (from its declaration), or of a swept
+    ``[run]`` key (``realisation``)."""
+    if name in RUN_SWEEP_KEYS:
+        return dict(REALISATION_ATTRS)
     p = get_model(scene.model).parameter(name)
     return {"units": p.units, "long_name": p.long_name}
 

@@ -21,13 +21,23 @@ from workbench.run._dataset import (
     status_attrs,
     to_dataset,
 )
+from workbench.run._ensemble import (
+    DEFAULT_PERTURBATION,
+    REALISATION_ATTRS,
+    perturb_initial_state,
+    scene_perturbation,
+)
 from workbench.run._prepare import Prepared, prepare, record_times
 from workbench.run._simulate import check_error, integrate, simulate
 
 __all__ = [
+    "DEFAULT_PERTURBATION",
+    "REALISATION_ATTRS",
     "TIME_ATTRS",
     "Prepared",
     "check_error",
+    "perturb_initial_state",
+    "scene_perturbation",
     "derive",
     "divergence_time",
     "integrate",

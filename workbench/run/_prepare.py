@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.models import Model, get_model
+from workbench.run._ensemble import perturb_initial_state, scene_perturbation
 from workbench.scene import Scene, SceneSource, load_scene
 from workbench.solver import Problem
 
@@ -97,6 +98,7 @@ def prepare(scene: SceneSource, *, variables: Iterable[str] | None = None) -> Pr
     params = scene.resolved_parameters
     variables = scene.variables if variables is None else tuple(variables)
     problem = model.problem(params, scene.effects, scene.initial, variables)
+    problem = perturb_initial_state(problem, *scene_perturbation(scene.run))
     period = model.forcing_period(params)
     times, attrs = record_times(scene, problem.t0, period)
     return Prepared(scene, model, params, variables, problem, period, times, attrs)

@@ -28,10 +28,12 @@ import tomli_w
 from workbench._errors import SceneError
 from workbench.models import available_models, get_model
 from workbench.scene._tables import (
+    RUN_SWEEP_KEYS,
     number,
     table,
     unknown_keys,
     validate_effects,
+    validate_ensemble,
     validate_parameters,
     validate_record,
     validate_run,
@@ -137,10 +139,13 @@ class Scene:
         return load_scene(d)
 
     def with_parameters(self, **values: float) -> Scene:
-        """A single-run scene (no sweep) with some parameters changed."""
+        """A single-run scene (no sweep) with some parameters changed: one point of a campaign
+        grid. A swept ``[run]`` key (``realisation``) goes to ``[run]``."""
+        run = dict(self.run)
+        run.update({k: int(values.pop(k)) for k in list(values) if k in RUN_SWEEP_KEYS})
         params = dict(self.parameters)
         params.update({k: float(v) for k, v in values.items()})
-        return self.replace(parameters=params, sweep={})
+        return self.replace(parameters=params, run=run, sweep={})
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Scene) and self.to_dict() == other.to_dict()
@@ -245,7 +250,9 @@ def _validate(data: Mapping[str, Any]) -> Scene:
 
     solver = validate_solver(table(data, "solver"))
     period = model.forcing_period(resolved)
-    run = validate_run(table(data, "run"), period is not None)
+    run_t = table(data, "run")
+    ensemble = validate_ensemble(run_t)  # takes its keys out of run_t
+    run = validate_run(run_t, period is not None) | ensemble
     record = validate_record(table(data, "record"), model, effects, period is not None, run)
     sweep = validate_sweep(model, table(data, "sweep"), effects)
     return Scene(

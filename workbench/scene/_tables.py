@@ -139,9 +139,39 @@ def validate_solver(given: dict) -> dict:
     return s
 
 
+#: ``[run]`` keys of an ensemble (see :mod:`workbench.run._ensemble`)
+ENSEMBLE_KEYS = ("realisation", "perturbation")
+#: ``[run]`` keys a ``[sweep]`` may list
+RUN_SWEEP_KEYS = ("realisation",)
+#: largest relative initial-state perturbation of an ensemble: it models round-off and unknown
+#: initial conditions, not another initial state (that is ``[initial]``)
+MAX_PERTURBATION = 1e-2
+
+
+def validate_ensemble(run: dict) -> dict:
+    """Take the ensemble keys ``realisation`` and ``perturbation`` out of the ``[run]`` table
+    ``run`` and validate them; returns those given."""
+    out: dict[str, Any] = {}
+    if "realisation" in run:
+        out["realisation"] = integer("run.realisation", run.pop("realisation"), 0)
+    if "perturbation" in run:
+        size = run.pop("perturbation")
+        x = number("run.perturbation", size)
+        if not 0 < x <= MAX_PERTURBATION:
+            raise SceneError(
+                "run.perturbation",
+                f"got {size!r}; must lie in (0, {MAX_PERTURBATION:g}] (relative to each state's "
+                "characteristic size, e.g. the clearance c for positions)",
+            )
+        out["perturbation"] = x
+    return out
+
+
 def validate_run(given: dict, forced: bool) -> dict:
     if forced:
-        unknown_keys("run", given, ("cycles", "transient_cycles", "duration", "transient"))
+        unknown_keys(
+            "run", given, ("cycles", "transient_cycles", "duration", "transient", *ENSEMBLE_KEYS)
+        )
         if "cycles" in given or "transient_cycles" in given or not given:
             if "duration" in given or "transient" in given:
                 raise SceneError(
@@ -159,7 +189,7 @@ def validate_run(given: dict, forced: bool) -> dict:
                 raise SceneError(
                     f"run.{k}", "this model has no forcing period; use run.duration (s) instead"
                 )
-        unknown_keys("run", given, ("duration", "transient"))
+        unknown_keys("run", given, ("duration", "transient", *ENSEMBLE_KEYS))
     if "duration" not in given:
         raise SceneError("run.duration", "is required (simulated time to record, s)")
     transient = number("run.transient", given.get("transient", 0.0))
@@ -206,7 +236,7 @@ def validate_record(given: dict, model, effects, forced: bool, run: dict) -> dic
 
 def validate_sweep(model, given: dict, effects) -> dict[str, tuple[float, ...]]:
     declared = {p.name: p for p in model.parameters}
-    unknown_keys("sweep", given, declared)
+    unknown_keys("sweep", given, {*declared, *RUN_SWEEP_KEYS})
     out = {}
     for k, spec in given.items():
         key = f"sweep.{k}"
@@ -237,6 +267,14 @@ def validate_sweep(model, given: dict, effects) -> dict[str, tuple[float, ...]]:
             raise SceneError(key, f"must be a list of values or {{start, stop, num}}, got {spec!r}")
         if len(np.unique(values)) != len(values):
             raise SceneError(key, f"repeats a value: {list(values)!r}")
+        if k in RUN_SWEEP_KEYS:
+            for i, v in enumerate(values):
+                if not (math.isfinite(v) and v >= 0 and v == round(v)):
+                    raise SceneError(
+                        f"{key}[{i}]", f"got {float(v)!r}; a realisation is an integer >= 0"
+                    )
+            out[k] = tuple(float(v) for v in values)
+            continue
         for i, v in enumerate(values):
             problem = declared[k].check(float(v))
             if problem:

@@ -1,81 +1,241 @@
-"""The paper's qualitative conclusions as checks on our runs.
+"""The paper's qualitative conclusions as checks on our ensembles.
 
-A claim in ``study.toml`` compares a statistic of two cases, or of two parameter ranges of a
-campaign:
+Every case of a study is an ensemble of realisations (:mod:`workbench.run._ensemble`), so every
+statistic below is a sample with one value per realisation, and a verdict is one of
+:data:`workbench.study._stats.VERDICTS`:
 
-- ``statistic = "peak"`` (default): ``|peak(larger)| > factor * |peak(smaller)|`` (factor 1),
-  peaks over the whole record (all recorded cycles);
-- ``"strobe_spread"``: the stroboscopic spread (in units of c) of ``larger`` exceeds ``smaller``;
-- ``"seconds_per_cycle"``: computing time per crank cycle;
-- ``"peak_ratio_near_one"``: ``| |peak(larger)| / |peak(smaller)| - 1 | < tolerance``;
-- ``"chaos"``: every Wolf LLE measured in the study is positive;
-- ``"bifurcation_spread"``: the mean stroboscopic spread over the parameter range ``upper``
-  exceeds (``expect = "upper_larger"``) or falls below (``"lower_larger"``) that over ``lower``.
+- ``statistic = "peak"`` (default): ``|peak|`` over the whole record of ``larger`` against
+  ``factor`` (default 1) times that of ``smaller``, by the two-sample rule of
+  :mod:`workbench.study._stats` (Mann-Whitney U, two-sided, 5 %, then the sign of the median
+  difference): "reproduced" / "contradicted" only where the difference exceeds the
+  realisations' scatter, else "not resolved";
+- ``"strobe_spread"``: the stroboscopic spread (in units of c), same rule;
+- ``"seconds_per_cycle"``: computing time per crank cycle of each realisation, same rule;
+- ``"peak_ratio_near_one"``: ``r = |peak(larger)| / median |peak(smaller)|`` per realisation;
+  reproduced when the upper quartile of ``|r - 1|`` is below ``tolerance``, contradicted when
+  its lower quartile is above it, else not resolved;
+- ``"chaos"``: the Wolf LLE of each coordinate over the realisations; reproduced when every
+  coordinate's median is positive by the two-sided Wilcoxon signed-rank test at 5 %,
+  contradicted when one is negative by it, else not resolved;
+- ``"bifurcation_spread"``: the stroboscopic spreads of every point (and realisation) in the
+  parameter range ``upper`` against those in ``lower`` (``expect = "upper_larger"`` or
+  ``"lower_larger"``), two-sample rule: the points of a range are its sample.
 
-Each evaluation returns ``{"text", "reproduced": bool | None, "evidence": str}``; ``None`` when
-the runs hold no number to decide on.
+Each evaluation returns ``{"text", "verdict", "evidence", "p_value", "reason"}``. ``reason`` is
+empty for a reproduced claim; otherwise it says why, with numbers: for "not resolved" the
+ensemble spread that swamps the difference; for "contradicted" the claim's ``reason`` from
+``study.toml`` with the measured numbers of its ``evidence`` kind (``contact``: contact fraction
+and 99th-percentile contact force of the two cases; ``strobe_contact``: share of stroboscopic
+samples in contact over the two parameter ranges).
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["evaluate_claim"]
+import numpy as np
+
+from workbench.study._stats import ALPHA, compare_samples, describe, sign_test_zero
+
+__all__ = ["evaluate_claim", "format_stats"]
+
+_UNRESOLVED_CAUSE = (
+    "no cause identified in the spec: the reconstructed geometry (known cause 1) is the first "
+    "suspect"
+)
 
 
 def _fmt(x: float) -> str:
     return f"{x:.4g}"
 
 
+def format_stats(d: dict, unit: str = "") -> str:
+    """'median u [IQR q25-q75, N n]' of a :func:`~workbench.study._stats.describe` result."""
+    u = f" {unit}" if unit else ""
+    if not d["n"]:
+        return "no value"
+    return f"{_fmt(d['median'])}{u} [IQR {_fmt(d['q25'])} to {_fmt(d['q75'])}, N {d['n']}]"
+
+
 def evaluate_claim(claim: dict, measures: dict) -> dict:
-    """Decide ``claim`` from ``measures``, the study's numbers (see :func:`run_study`)."""
+    """Decide ``claim`` from ``measures``, the study's numbers per realisation (see
+    :func:`workbench.study.run_study`); see the module docstring for the rules."""
     stat = claim.get("statistic", "peak")
-    text = claim["text"]
     if stat == "chaos":
-        lles = measures.get("wolf_lle", {})
-        if not lles:
-            return {"text": text, "reproduced": None, "evidence": "no LLE was measured"}
-        ok = all(v > 0 for v in lles.values())
-        shown = ", ".join(f"{k}: {_fmt(v)} 1/s" for k, v in lles.items())
-        return {"text": text, "reproduced": ok, "evidence": f"Wolf LLE {shown}"}
-    if stat == "bifurcation_spread":
-        spread = measures.get("bifurcation_spread", {})
-        values = spread.get("values", [])
-        spreads = spread.get("spread", [])
-        lo = [s for v, s in zip(values, spreads, strict=True) if _within(v, claim["lower"])]
-        hi = [s for v, s in zip(values, spreads, strict=True) if _within(v, claim["upper"])]
-        if not lo or not hi:
-            return {"text": text, "reproduced": None, "evidence": "no points in a range"}
-        m_lo, m_hi = sum(lo) / len(lo), sum(hi) / len(hi)
-        ok = m_hi > m_lo if claim["expect"] == "upper_larger" else m_lo > m_hi
-        evidence = (
-            f"mean stroboscopic spread {_fmt(m_lo)} c over {claim['parameter']} in "
-            f"{claim['lower']} ({len(lo)} points) against {_fmt(m_hi)} c over {claim['upper']} "
-            f"({len(hi)} points)"
-        )
-        return {"text": text, "reproduced": ok, "evidence": evidence}
-    key = _key(claim)
-    peaks = "peak_record" if "peak_record" in measures else "peak"
-    table = measures.get(peaks if stat in ("peak", "peak_ratio_near_one") else stat, {})
-    a, b = table.get(claim["larger"], {}).get(key), table.get(claim["smaller"], {}).get(key)
-    if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
-        return {"text": text, "reproduced": None, "evidence": f"{key}: no number to compare"}
-    if stat == "peak_ratio_near_one":
-        ratio = abs(a) / abs(b)
-        ok = abs(ratio - 1) < claim.get("tolerance", 0.02)
-        evidence = (
-            f"{key}: |peak| {_fmt(abs(a))} ({claim['larger']}) / {_fmt(abs(b))} = {ratio:.4f}"
-        )
-        return {"text": text, "reproduced": ok, "evidence": evidence}
-    factor = claim.get("factor", 1.0)
-    ok = abs(a) > factor * abs(b)
-    unit = {"seconds_per_cycle": " s", "strobe_spread": " c"}.get(stat, "")
-    evidence = (
-        f"{key} ({stat.replace('_', ' ')}): {claim['larger']} {_fmt(a)}{unit} against "
-        f"{claim['smaller']} {_fmt(b)}{unit}"
-        + (f" (factor {factor:g} asked)" if factor != 1 else "")
+        out = _chaos(measures)
+    elif stat == "bifurcation_spread":
+        out = _bifurcation(claim, measures)
+    else:
+        out = _two_cases(claim, measures, stat)
+    out["text"] = claim["text"]
+    if out["verdict"] == "contradicted":
+        out["reason"] = _contradiction_reason(claim, measures)
+    return out
+
+
+def _result(verdict: str, evidence: str, p: float = math.nan, reason: str = "") -> dict:
+    return {"verdict": verdict, "evidence": evidence, "p_value": p, "reason": reason}
+
+
+def _spread_reason(test: dict, unit: str, what: str = "realisations") -> str:
+    u = f" {unit}" if unit else ""
+    iqr = [test[s]["q75"] - test[s]["q25"] for s in ("larger", "smaller")]
+    return (
+        f"ensemble spread: the difference of the medians, {_fmt(test['median_difference'])}{u}, "
+        f"is not beyond the scatter of the {what} (IQR widths {_fmt(iqr[0])} and "
+        f"{_fmt(iqr[1])}{u}; Mann-Whitney p = {test['p_value']:.2g} >= {ALPHA})"
     )
-    return {"text": text, "reproduced": ok, "evidence": evidence}
+
+
+def _two_cases(claim: dict, measures: dict, stat: str) -> dict:
+    key = _key(claim)
+    table = measures.get("peak_record" if stat in ("peak", "peak_ratio_near_one") else stat, {})
+    a = table.get(claim["larger"], {}).get(key)
+    b = table.get(claim["smaller"], {}).get(key)
+    if a is None or b is None or not (np.isfinite(a).any() and np.isfinite(b).any()):
+        return _result(
+            "undecided",
+            f"{key}: no number to compare",
+            reason=f"{key} is not recorded in both cases (e.g. a contact force of ideal joints)",
+        )
+    unit = {"seconds_per_cycle": "s", "strobe_spread": "c"}.get(
+        stat, measures.get("units", {}).get(key, "")
+    )
+    mag_a, mag_b = np.abs(np.asarray(a, float)), np.abs(np.asarray(b, float))
+    label = f"{key} ({stat.replace('_', ' ')})" if key else stat.replace("_", " ")
+    if stat == "peak_ratio_near_one":
+        return _ratio_near_one(claim, label, mag_a, mag_b)
+    factor = claim.get("factor", 1.0)
+    test = compare_samples(mag_a, factor * mag_b)
+    scaled = f" x {factor:g}" if factor != 1 else ""
+    what = ", magnitude" if stat == "peak" else ""
+    evidence = (
+        f"{label}{what}: {claim['larger']} {format_stats(describe(mag_a), unit)} against "
+        f"{claim['smaller']}{scaled} {format_stats(test['smaller'], unit)}; "
+        f"Mann-Whitney p = {test['p_value']:.2g}"
+    )
+    reason = _spread_reason(test, unit) if test["verdict"] == "not resolved" else ""
+    return _result(test["verdict"], evidence, test["p_value"], reason)
+
+
+def _ratio_near_one(claim: dict, label: str, mag_a: np.ndarray, mag_b: np.ndarray) -> dict:
+    tol = claim.get("tolerance", 0.02)
+    ref = float(np.nanmedian(mag_b))
+    dev = describe(np.abs(mag_a / ref - 1.0))
+    if dev["n"] == 0:
+        return _result("undecided", f"{label}: no number to compare")
+    verdict = (
+        "reproduced" if dev["q75"] < tol else "contradicted" if dev["q25"] > tol else "not resolved"
+    )
+    evidence = (
+        f"{label}: | |peak| ({claim['larger']}) / median |peak| ({claim['smaller']}, "
+        f"{_fmt(ref)}) - 1 | = {format_stats(dev)}, tolerance {tol:g}"
+    )
+    reason = (
+        f"ensemble spread: the quartiles of the deviation ({_fmt(dev['q25'])}, "
+        f"{_fmt(dev['q75'])}) straddle the tolerance {tol:g}"
+        if verdict == "not resolved"
+        else ""
+    )
+    return _result(verdict, evidence, reason=reason)
+
+
+def _chaos(measures: dict) -> dict:
+    lles = measures.get("wolf_lle", {})
+    if not lles:
+        return _result("undecided", "no LLE was measured", reason="no LLE was measured")
+    tests = {k: sign_test_zero(v) for k, v in lles.items()}
+    shown = "; ".join(
+        f"{k}: {format_stats(t['stats'], '1/s')}, Wilcoxon p = {t['p_value']:.2g}"
+        for k, t in tests.items()
+    )
+    signs = [t["sign"] for t in tests.values()]
+    if all(s > 0 for s in signs):
+        return _result("reproduced", f"Wolf LLE {shown}")
+    if any(s < 0 for s in signs):
+        return _result("contradicted", f"Wolf LLE {shown}")
+    undecided = ", ".join(k for k, t in tests.items() if t["sign"] == 0)
+    return _result(
+        "not resolved",
+        f"Wolf LLE {shown}",
+        reason=f"ensemble spread: the LLE of {undecided} is not distinguishable from 0 over the "
+        f"realisations (Wilcoxon p >= {ALPHA})",
+    )
+
+
+def _bifurcation(claim: dict, measures: dict) -> dict:
+    spread = measures.get("bifurcation_spread", {})
+    values = spread.get("values", [])
+    samples = spread.get("spread", [])
+    lo = _in_range(values, samples, claim["lower"])
+    hi = _in_range(values, samples, claim["upper"])
+    if not lo.size or not hi.size:
+        return _result("undecided", "no points in a range", reason="no points in a range")
+    big, small = (hi, lo) if claim["expect"] == "upper_larger" else (lo, hi)
+    test = compare_samples(big, small)
+    param = claim["parameter"]
+    evidence = (
+        f"stroboscopic spread over {param} in {claim['lower']}: "
+        f"{format_stats(describe(lo), 'c')} against {claim['upper']}: "
+        f"{format_stats(describe(hi), 'c')} (one value per point and realisation); "
+        f"Mann-Whitney p = {test['p_value']:.2g}"
+    )
+    reason = (
+        _spread_reason(test, "c", "points within each range")
+        if test["verdict"] == "not resolved"
+        else ""
+    )
+    return _result(test["verdict"], evidence, test["p_value"], reason)
+
+
+def _in_range(values: list, samples: list, bounds: list[float]) -> np.ndarray:
+    rows = [
+        np.asarray(s, float) for v, s in zip(values, samples, strict=True) if _within(v, bounds)
+    ]
+    return np.concatenate(rows) if rows else np.zeros(0)
+
+
+def _contradiction_reason(claim: dict, measures: dict) -> str:
+    """The claim's stated cause with the measured numbers of its evidence kind."""
+    cause = claim.get("reason", _UNRESOLVED_CAUSE)
+    kind = claim.get("evidence")
+    numbers = ""
+    if kind == "contact":
+        numbers = _contact_evidence(claim, measures)
+    elif kind == "strobe_contact":
+        numbers = _strobe_contact_evidence(claim, measures)
+    return f"{cause}. Measured: {numbers}" if numbers else cause
+
+
+def _contact_evidence(claim: dict, measures: dict) -> str:
+    contact = measures.get("contact", {})
+    joint = claim.get("select", {}).get("joint")
+    parts = []
+    for member in (claim["larger"], claim["smaller"]):
+        per_joint = contact.get(member, {})
+        for j, c in per_joint.items():
+            if joint not in (None, j):
+                continue
+            frac = describe(c["fraction"])["median"]
+            p99 = describe(c["p99"])["median"]
+            parts.append(
+                f"{member} at {j}: in contact {100 * frac:.0f} % of the time, 99th-percentile "
+                f"force {_fmt(p99)} N"
+            )
+    return "; ".join(parts) + " (medians over the realisations)." if parts else ""
+
+
+def _strobe_contact_evidence(claim: dict, measures: dict) -> str:
+    spread = measures.get("bifurcation_spread", {})
+    values, share = spread.get("values", []), spread.get("in_contact", [])
+    if not share:
+        return ""
+    parts = []
+    for bounds in (claim["lower"], claim["upper"]):
+        x = _in_range(values, share, bounds)
+        if x.size:
+            parts.append(f"{100 * float(np.nanmean(x)):.0f} % over {bounds}")
+    return f"stroboscopic samples with a journal in contact: {' against '.join(parts)}."
 
 
 def _within(v: float, bounds: list[float]) -> bool:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import time as _time
 
 
@@ -17,23 +18,33 @@ def _cmd_study(args: argparse.Namespace) -> int:
             print(name)
         return 0
     names = available_studies() if args.name == "all" else [args.name]
+    t_all = _time.perf_counter()
+    runs = 0
     for name in names:
         t0 = _time.perf_counter()
-        s = run_study(
+        ds = run_study(
             name,
             out=args.output,
             quick=args.quick,
             workers=args.workers,
             progress=not args.no_progress,
         )
-        done = sum(c["reproduced"] is True for c in s["claims"])
+        runs += int(ds.attrs["runs"])
+        verdicts = [str(v) for v in ds["claim_verdict"].values] if "claim" in ds.dims else []
+        counts = ", ".join(
+            f"{verdicts.count(v)} {v}" for v in ("reproduced", "contradicted", "not resolved")
+        )
         print(
-            f"{name}: {len(s['cases'])} case(s), {len(s['figures'])} figure(s), claims "
-            f"reproduced {done}/{len(s['claims'])}, {_time.perf_counter() - t0:.1f} s "
-            f"-> {args.output}/{name}/"
+            f"{name}: {ds.attrs['runs']} runs ({ds.attrs['realisations']} realisation(s) per "
+            f"case), claims: {counts}, {_time.perf_counter() - t0:.1f} s -> {args.output}/{name}/"
         )
     if args.name == "all":
         print(f"report: {write_report(args.output)}")
+    workers = args.workers or os.cpu_count()
+    print(
+        f"{len(names)} stud{'y' if len(names) == 1 else 'ies'}: {runs} runs on {workers} "
+        f"workers, {_time.perf_counter() - t_all:.1f} s"
+    )
     return 0
 
 
@@ -49,7 +60,11 @@ def register_cli(sub) -> None:
     )
     p.add_argument("name", help="study name, 'all', 'report' or 'list'")
     p.add_argument("-o", "--output", default="out/studies", help="directory (default out/studies)")
-    p.add_argument("--quick", action="store_true", help="much shorter runs (smoke test only)")
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="much shorter runs, at most 4 realisations (smoke test only)",
+    )
     p.add_argument("--workers", type=int, help="processes for campaign cases (default: all)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=_cmd_study)

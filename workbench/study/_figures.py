@@ -1,9 +1,23 @@
 """Figures of a study, one per figure (or group of figures) of the paper, titled with its number.
 
-``series``: the cases overlaid over the first two recorded crank cycles; ``orbit``: journal
-centre orbits in units of c, one panel per joint and case; ``phase``, ``poincare``, ``lle``: the
-four clearance coordinates x1, y1, x2, y2 of the chaos study; ``bifurcation``: stroboscopic
-samples against the swept parameter.
+Every case is an ensemble of realisations, and a chaotic run's peak is one sample of a
+distribution, so peaks are drawn as distributions:
+
+- ``series``: per case the band between the smallest and largest value over the realisations
+  at each time and the unperturbed realisation 0 as a line, over the first two recorded crank
+  cycles; beside it a box plot of the realisations' peaks (magnitude) per case with the
+  paper's value;
+- ``orbit``: journal centre orbits of realisation 0 in units of c, one panel per joint and case;
+- ``phase`` (realisation 0), ``poincare`` (all realisations), ``lle`` (running estimate of
+  realisation 0 and the band of the realisations' LLEs): the four clearance coordinates x1, y1,
+  x2, y2 of the chaos study;
+- ``bifurcation``: stroboscopic samples of every realisation against the swept parameter;
+- ``contact_vs_friction``: contact fraction and contact-force percentiles (50/90/99 %) against
+  the friction coefficient, median and interquartile band over the realisations;
+- ``energy_balance``: driver work and dissipated energy per crank cycle against the friction
+  coefficient, median and interquartile band.
+
+A figure without a ``paper`` number is one beyond the paper (file ``extra-<kind>.png``).
 """
 
 from __future__ import annotations
@@ -14,25 +28,46 @@ import numpy as np
 import xarray as xr
 
 from workbench.plot._runs import axis_label, plt
+from workbench.study._claims import _key
 from workbench.study._measure import clearance_of, select, strobe
 from workbench.study._run import CLEARANCE_COORDINATES, PEAK_PERIODS
-from workbench.study._spec import Study
+from workbench.study._spec import Study, parameter_sweep
 
 __all__ = ["study_figures"]
 
 
 def study_figures(
-    study: Study, runs: dict, scenes: dict, directory: Path, measures: dict
+    study: Study,
+    runs: dict,
+    members: dict,
+    scenes: dict,
+    sweeps: dict,
+    directory: Path,
+    measures: dict,
 ) -> list[Path]:
-    """Draw every ``[[figure]]`` of the study into ``directory``; returns the PNG paths."""
+    """Draw every ``[[figure]]`` of the study into ``directory``; returns the PNG paths.
+
+    ``runs``: case -> campaign dataset; ``members``: case or view -> ensemble dataset (dims
+    ``realisation``, ``time``, ...); ``scenes``: their scenes; ``sweeps``: sweep case ->
+    contact statistics (see :func:`workbench.study.run_study`); ``measures``: the study's
+    numbers.
+    """
+    ctx = {
+        "study": study,
+        "runs": runs,
+        "members": members,
+        "scenes": scenes,
+        "sweeps": sweeps,
+        "measures": measures,
+    }
     paths = []
-    for fig_spec in study.figures:
-        kind = fig_spec["kind"]
-        draw = _DRAW[kind]
-        fig = draw(fig_spec, runs, scenes, measures)
-        label = fig_spec.get("var", kind)
-        sel = "".join(f"-{v}" for v in fig_spec.get("select", {}).values())
-        path = directory / f"fig{fig_spec['paper']}-{label}{sel}.png"
+    for spec in study.figures:
+        kind = spec["kind"]
+        fig = _DRAW[kind](spec, ctx)
+        label = spec.get("var", kind)
+        sel = "".join(f"-{v}" for v in spec.get("select", {}).values())
+        name = f"fig{spec['paper']}-{label}{sel}" if "paper" in spec else f"extra-{label}{sel}"
+        path = directory / f"{name}.png"
         fig.savefig(path, dpi=110)
         plt.close(fig)
         paths.append(path)
@@ -40,6 +75,8 @@ def study_figures(
 
 
 def _title(spec: dict, text: str) -> str:
+    if "paper" not in spec:
+        return f"Beyond the paper: {text}"
     return f"Fig. {spec['paper']} (Chen et al.): {text}"
 
 
@@ -49,49 +86,117 @@ def _first_cycles(ds: xr.Dataset, da: xr.DataArray) -> xr.DataArray:
     return da.sel(time=slice(t0, t0 + PEAK_PERIODS * period * (1 + 1e-9)))
 
 
-def _series(spec, runs, scenes, measures):
-    fig, ax = plt.subplots(figsize=(8, 4.2))
+def _realisations_note(ctx) -> str:
+    n = ctx["study"].realisations
+    return f"{n} realisation{'s' if n != 1 else ''}"
+
+
+def _envelope(da: xr.DataArray, samples_per_period: int) -> tuple[xr.DataArray, xr.DataArray]:
+    """Smallest and largest value over the realisations within windows of 1/100 crank cycle:
+    contact spikes last a few records, too thin to see as a band at the records' resolution."""
+    w = max(1, samples_per_period // 100)
+    low = da.min("realisation").rolling(time=w, center=True, min_periods=1).min()
+    high = da.max("realisation").rolling(time=w, center=True, min_periods=1).max()
+    return low, high
+
+
+def _series(spec, ctx):
+    fig, (ax, box) = plt.subplots(
+        1, 2, figsize=(10, 4.4), gridspec_kw={"width_ratios": [3, 1.1]}, squeeze=True
+    )
     where = spec.get("select", {})
+    key = _key(spec)
     da = None
-    for case, ds in runs.items():
+    labels, peaks, records = [], [], []
+    paper = {
+        p["case"]: abs(float(p["value"]))
+        for p in ctx["study"].paper_values
+        if _key(p) == key and p.get("statistic", "peak") == "peak"
+    }
+    for i, (name, ds) in enumerate(ctx["members"].items()):
         if spec["var"] not in ds:  # e.g. contact force of the ideal-joint reference
             continue
-        da = _first_cycles(ds, select(ds, spec["var"], where))
+        whole = select(ds, spec["var"], where)
+        da = _first_cycles(ds, whole)
         if not np.isfinite(da.values).any():
             continue
-        ax.plot(da.time - float(ds.time[0]), da, lw=0.8, label=case)
+        t = da.time - float(ds.time[0])
+        color = f"C{i}"
+        low, high = _envelope(da, int(ds.attrs.get("samples_per_period", 100)))
+        ax.fill_between(t, low, high, color=color, alpha=0.3, lw=0)
+        ax.plot(t, da.isel(realisation=0), lw=0.7, color=color, label=f"{name}")
+        labels.append(name)
+        peaks.append(np.abs(da).max("time").values)
+        records.append(np.abs(whole).max("time").values)
     name = axis_label(da) if da is not None else spec["var"]
     where_text = ", ".join(f"{k} {v}" for k, v in where.items())
     ax.set_xlabel("time from the end of the transient [s]")
     ax.set_ylabel(name)
-    ax.set_title(_title(spec, f"{name}{', ' + where_text if where_text else ''}"), fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(
+        fontsize=8,
+        title="line: realisation 0\nband: range of the realisations\n(in 1/100-cycle windows)",
+        title_fontsize=7,
+    )
+    if peaks:
+        _peak_boxes(box, labels, peaks, records, paper, da.attrs.get("units", ""))
+    fig.suptitle(
+        _title(spec, f"{name}{', ' + where_text if where_text else ''}; {_realisations_note(ctx)}"),
+        fontsize=9,
+    )
     fig.tight_layout()
     return fig
 
 
-def _orbit(spec, runs, scenes, measures):
+def _peak_boxes(box, labels, peaks, records, paper, units) -> None:
+    """Box plots of the realisations' peak magnitudes per case: over the first cycles (as the
+    paper's values) and over the whole record (as the claims), with the paper's value."""
+    x = np.arange(1, len(labels) + 1)
+    for values, dx, color, what in (
+        (peaks, -0.18, "tab:gray", f"first {PEAK_PERIODS} cycles"),
+        (records, 0.18, "tab:green", "whole record (claims)"),
+    ):
+        b = box.boxplot(
+            [v[np.isfinite(v)] for v in values],
+            positions=x + dx,
+            widths=0.3,
+            patch_artist=True,
+            manage_ticks=False,
+        )
+        for patch in b["boxes"]:
+            patch.set(facecolor=color, alpha=0.45)
+        box.plot([], [], "s", color=color, alpha=0.6, label=what)
+    marked = [(i, paper[c]) for i, c in zip(x, labels, strict=True) if c in paper]
+    if marked:
+        box.plot(*zip(*marked, strict=True), "rx", ms=9, mew=2, label="paper (|value|)")
+    box.set_xticks(x, labels, rotation=20, fontsize=8)
+    box.set_ylabel(f"|peak| of the realisations [{units}]")
+    box.legend(fontsize=7)
+    box.grid(alpha=0.3)
+
+
+def _orbit(spec, ctx):
     joints_wanted = spec.get("select", {}).get("joint")
+    members = ctx["members"]
     panels = [
         (case, j)
-        for case, ds in runs.items()
+        for case, ds in members.items()
         if "joint" in ds.dims
         for j in ds.joint.values
         if joints_wanted in (None, j)
     ]
-    fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 3.9), squeeze=False)
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.6 * len(panels), 4.1), squeeze=False)
     theta = np.linspace(0, 2 * np.pi, 200)
     for ax, (case, j) in zip(axes[0], panels, strict=True):
-        ds = runs[case]
-        c = clearance_of(scenes[case], str(j))
+        ds = members[case].isel(realisation=0)
+        c = clearance_of(ctx["scenes"][case], str(j))
         ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.7)
         ax.plot(ds.clearance_x.sel(joint=j) / c, ds.clearance_y.sel(joint=j) / c, lw=0.4)
         ax.set_aspect("equal")
         ax.set_xlabel("x / c [1]")
         ax.set_ylabel("y / c [1]")
         ax.set_title(f"{case}: joint {j}", fontsize=8)
-    fig.suptitle(_title(spec, "journal centre orbits (dashed: e = c)"), fontsize=9)
+    fig.suptitle(_title(spec, "journal centre orbits of realisation 0 (dashed: e = c)"), fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -102,9 +207,13 @@ def _grid4(spec, text):
     return fig, axes.ravel()
 
 
-def _phase(spec, runs, scenes, measures):
-    ds = next(iter(runs.values()))
-    fig, axes = _grid4(spec, "phase portraits of the clearance coordinates")
+def _first_member(ctx) -> xr.Dataset:
+    return next(iter(ctx["members"].values()))
+
+
+def _phase(spec, ctx):
+    ds = _first_member(ctx).isel(realisation=0)
+    fig, axes = _grid4(spec, "phase portraits of the clearance coordinates (realisation 0)")
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
         x = select(ds, var, where)
         v = select(ds, var.replace("clearance_", "clearance_v"), where)
@@ -116,13 +225,16 @@ def _phase(spec, runs, scenes, measures):
     return fig
 
 
-def _poincare(spec, runs, scenes, measures):
-    ds = next(iter(runs.values()))
-    fig, axes = _grid4(spec, "stroboscopic Poincaré maps (one point per crank period)")
+def _poincare(spec, ctx):
+    ds = _first_member(ctx)
+    fig, axes = _grid4(
+        spec,
+        f"stroboscopic Poincaré maps (one point per crank period; {_realisations_note(ctx)})",
+    )
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
         x = strobe(ds, select(ds, var, where))
         v = strobe(ds, select(ds, var.replace("clearance_", "clearance_v"), where))
-        ax.plot(x * 1e3, v, ".", ms=3)
+        ax.plot(x.values.ravel() * 1e3, v.values.ravel(), ".", ms=2)
         ax.set_xlabel(f"{label}: {axis_label(x).replace('[m]', '[mm]')}", fontsize=8)
         ax.set_ylabel(axis_label(v), fontsize=8)
         ax.grid(alpha=0.3)
@@ -130,19 +242,39 @@ def _poincare(spec, runs, scenes, measures):
     return fig
 
 
-def _lle(spec, runs, scenes, measures):
+def _lle(spec, ctx):
     from workbench import analysis
 
-    ds = next(iter(runs.values()))
-    fig, axes = _grid4(spec, "largest Lyapunov exponent, Wolf et al. (1985): running estimate")
-    bench = measures.get("lle_from_equations")
+    ds = _first_member(ctx)
+    m = ctx["measures"]
+    fig, axes = _grid4(
+        spec,
+        "largest Lyapunov exponent, Wolf et al. (1985): running estimate of realisation 0;\n"
+        f"band: interquartile range of the final values over {len(ds.realisation)} realisations",
+    )
+    bench = m.get("lle_from_equations")
+    period = ds.attrs.get("forcing_period")
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
-        w = analysis.wolf_lle(select(ds, var, where))
+        w = analysis.wolf_lle(select(ds, var, where).isel(realisation=0), period=period)
         run = w["running"]
-        ax.plot(run[run.dims[0]], run, lw=0.8, label=f"Wolf: {float(w['lle']):.3g} 1/s")
-        if bench is not None:
-            ax.axhline(bench, color="k", ls="--", lw=0.8, label=f"equations: {bench:.3g} 1/s")
-        ax.set_xlabel(axis_label(run[run.dims[0]]), fontsize=8)
+        x = run[run.dims[0]]
+        ax.plot(x, run, lw=0.8, label=f"realisation 0: {float(w['lle']):.3g} 1/s")
+        shown = list(run.values[x.values >= 0.05 * float(x.max())])
+        values = np.asarray(m.get("wolf_lle", {}).get(label, []), float)
+        if np.isfinite(values).any():
+            q25, med, q75 = np.nanpercentile(values, [25, 50, 75])
+            ax.axhspan(q25, q75, color="C1", alpha=0.3, lw=0, label=f"median {med:.3g} 1/s")
+            shown += [q25, q75]
+        low, high = np.nanmin(shown + [0.0]), np.nanmax(shown + [0.0])
+        pad = 0.1 * (high - low) or 1.0
+        ax.set_ylim(low - pad, high + pad)
+        if bench is not None:  # Benettin's LLE is often far above Wolf's: noted if off scale
+            off = not low - pad <= bench <= high + pad
+            ax.axhline(bench, color="k", ls="--", lw=0.8)
+            ax.plot(
+                [], [], "k--", lw=0.8, label=f"equations: {bench:.3g} 1/s" + off * " (off scale)"
+            )
+        ax.set_xlabel(axis_label(x), fontsize=8)
         ax.set_ylabel(f"{label}: LLE [1/s]", fontsize=8)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
@@ -150,23 +282,120 @@ def _lle(spec, runs, scenes, measures):
     return fig
 
 
-def _bifurcation(spec, runs, scenes, measures):
-    ds = next(iter(runs.values()))
-    scene = next(iter(scenes.values()))
-    (param,) = list(scene.sweep)
-    fig, axes = _grid4(spec, f"bifurcation diagram over {axis_label(ds[param])}")
+def _bifurcation(spec, ctx):
+    ds = next(iter(ctx["runs"].values()))
+    scene = next(iter(ctx["study"].cases.values()))
+    (param,) = list(parameter_sweep(scene))
+    fig, axes = _grid4(
+        spec, f"bifurcation diagram over {axis_label(ds[param])}; {_realisations_note(ctx)}"
+    )
     scale = 1e3 if param == "clearance" else (1 / np.pi if param == "omega" else 1.0)
     xlabel = {"clearance": "clearance [mm]", "omega": "omega / pi [1] (crank 4)"}.get(
         param, axis_label(ds[param])
     )
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
-        da = select(ds, var, where)
-        x = np.broadcast_to(ds[param].values[:, None] * scale, da.shape)
-        ax.plot(x.ravel(), da.values.ravel() * 1e3, ",", color="k", alpha=0.6)
-        ax.plot(x.ravel(), da.values.ravel() * 1e3, ".", ms=1.5, color="k", alpha=0.4)
+        da = select(ds, var, where).transpose(param, ...)
+        y = da.values.reshape(da.shape[0], -1)
+        x = np.broadcast_to(ds[param].values[:, None] * scale, y.shape)
+        ax.plot(x.ravel(), y.ravel() * 1e3, ".", ms=1.5, color="k", alpha=0.4)
         ax.set_xlabel(xlabel, fontsize=8)
         ax.set_ylabel(f"{label}: {axis_label(da).replace('[m]', '[mm]')}", fontsize=8)
         ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def _band(ax, x, da: xr.DataArray, color: str, label: str, ls: str = "-") -> None:
+    """Median line and interquartile band over ``realisation`` of ``da`` (dim: the swept
+    parameter) against ``x``."""
+    q = da.quantile([0.25, 0.5, 0.75], dim="realisation", skipna=True)
+    ax.fill_between(x, q.sel(quantile=0.25), q.sel(quantile=0.75), color=color, alpha=0.2, lw=0)
+    ax.plot(x, q.sel(quantile=0.5), ls, color=color, marker="o", ms=3, lw=1.1, label=label)
+
+
+def _sweep_parameter(d: xr.Dataset) -> str:
+    (param,) = [k for k in d.dims if k not in ("realisation", "joint", "percentile")]
+    return param
+
+
+def _case_label(d: xr.Dataset) -> str:
+    return f"c = {d.attrs['clearance'] * 1e3:g} mm"
+
+
+def _contact_vs_friction(spec, ctx):
+    sweeps = ctx["sweeps"]
+    joints = sorted({str(j) for d in sweeps.values() for j in d["joint"].values})
+    fig, axes = plt.subplots(len(joints), 2, figsize=(10, 3.4 * len(joints) + 0.6), squeeze=False)
+    styles = {50.0: ":", 90.0: "--", 99.0: "-"}
+    for row, joint in zip(axes, joints, strict=True):
+        for i, d in enumerate(sweeps.values()):
+            param = _sweep_parameter(d)
+            x = d[param].values
+            color = f"C{i}"
+            _band(row[0], x, d["contact_fraction"].sel(joint=joint), color, _case_label(d))
+            for q in d["percentile"].values:
+                _band(
+                    row[1],
+                    x,
+                    d["contact_force_percentile"].sel(joint=joint, percentile=q),
+                    color,
+                    f"{_case_label(d)}, {q:g} %",
+                    styles.get(float(q), "-"),
+                )
+        row[0].set_ylabel(f"joint {joint}: fraction of time in contact [1]")
+        row[0].set_ylim(0, 1.05)
+        row[1].set_ylabel(f"joint {joint}: contact force percentile [N]")
+        row[1].set_yscale("log")
+        row[1].text(
+            0.99,
+            0.02,
+            "a percentile of 0 N (out of contact that share of the time) is off the log axis",
+            transform=row[1].transAxes,
+            ha="right",
+            fontsize=6,
+        )
+        for ax in row:
+            ax.set_xlabel(axis_label(d[param]))
+            ax.grid(alpha=0.3, which="both")
+        row[0].legend(fontsize=7)
+        row[1].legend(fontsize=6, ncol=2)
+    fig.suptitle(
+        _title(
+            spec,
+            "contact against the friction coefficient (median and interquartile band over "
+            f"{_realisations_note(ctx)})",
+        ),
+        fontsize=9,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def _energy_balance(spec, ctx):
+    sweeps = ctx["sweeps"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    for i, d in enumerate(sweeps.values()):
+        param = _sweep_parameter(d)
+        x = d[param].values
+        w, e = d["driver_work_per_cycle"], d["dissipated_energy_per_cycle"]
+        _band(axes[0], x, w, f"C{i}", f"{_case_label(d)}: driver work")
+        _band(axes[0], x, e, f"C{i}", f"{_case_label(d)}: dissipated", "--")
+        _band(axes[1], x, e / w, f"C{i}", _case_label(d))
+    axes[0].set_ylabel("energy per crank cycle [J]")
+    axes[1].set_ylabel("dissipated energy / driver work [1]")
+    axes[1].axhline(1.0, color="k", lw=0.6)
+    for ax in axes:
+        ax.set_xlabel(axis_label(d[param]))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(
+        _title(
+            spec,
+            "energy balance per crank cycle (median and interquartile band over "
+            f"{_realisations_note(ctx)})",
+        ),
+        fontsize=9,
+    )
     fig.tight_layout()
     return fig
 
@@ -178,4 +407,6 @@ _DRAW = {
     "poincare": _poincare,
     "lle": _lle,
     "bifurcation": _bifurcation,
+    "contact_vs_friction": _contact_vs_friction,
+    "energy_balance": _energy_balance,
 }

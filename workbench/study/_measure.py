@@ -1,8 +1,10 @@
-"""Numbers a study compares with the paper: peaks, stroboscopic spreads, LLEs, timings.
+"""Numbers a study compares with the paper: peaks, stroboscopic spreads, LLEs, timings, contact.
 
-All functions take the runs of a study (case name -> Dataset) and return plain floats with the
-units of the variable (peaks), dimensionless spreads (in units of the clearance c), 1/s (LLEs)
-or s (timings), so that they can be stored in the study's JSON summary.
+A study runs every case as an ensemble (dim ``realisation``, see :mod:`workbench.run._ensemble`);
+:func:`member_run` and :func:`realisation_run` cut one case (or one point of a sweep) and one
+realisation out of the campaign dataset, and the functions below measure a single run. Peaks
+carry the units of the variable, spreads are in units of the clearance c (dimensionless), LLEs
+in 1/s, timings in s, contact fractions in 1 and energies per cycle in J.
 """
 
 from __future__ import annotations
@@ -20,7 +22,15 @@ __all__ = [
     "strobe_spread",
     "seconds_per_cycle",
     "clearance_of",
+    "member_run",
+    "realisation_run",
+    "contact_fraction",
+    "force_percentiles",
+    "energy_per_cycle",
+    "PERCENTILES",
 ]
+
+PERCENTILES = (50.0, 90.0, 99.0)  # of the contact force over time, %
 
 
 def select(ds: xr.Dataset, var: str, where: dict | None = None) -> xr.DataArray:
@@ -35,6 +45,25 @@ def select(ds: xr.Dataset, var: str, where: dict | None = None) -> xr.DataArray:
             return xr.full_like(da.isel({d: 0 for d in da.dims if d != "time"}), np.nan)
         da = da.sel({dim: label})
     return da
+
+
+def member_run(ds: xr.Dataset, select_params: dict[str, float] | None = None) -> xr.Dataset:
+    """One case of a study's campaign as an ensemble: the point ``select_params`` of its
+    parameter sweep (none for a case without one), dims ``realisation``, ``time`` and the
+    model's; the forcing period (s) as the attribute ``forcing_period``."""
+    if select_params:
+        ds = ds.sel(select_params, method="nearest")
+    if "forcing_period" in ds.data_vars:
+        period = float(np.nanmax(ds["forcing_period"].values))
+        ds = ds.drop_vars("forcing_period")
+        ds.attrs["forcing_period"] = period
+    return ds
+
+
+def realisation_run(ds: xr.Dataset, realisation: int) -> xr.Dataset:
+    """Realisation number ``realisation`` of a :func:`member_run`: a dataset like one run of
+    :func:`workbench.simulate` (dims ``time`` and the model's)."""
+    return ds.sel(realisation=float(realisation))
 
 
 def peak(da: xr.DataArray, periods: float | None = None, ds: xr.Dataset | None = None) -> float:
@@ -71,7 +100,41 @@ def strobe_spread(ds: xr.Dataset, scene: Scene, var: str, where: dict) -> float:
     return float(np.nanstd(da.values) / clearance_of(scene, where["joint"]))
 
 
-def seconds_per_cycle(ds: xr.Dataset, scene: Scene) -> float:
-    """Wall time of the integration per simulated crank cycle (s), transient included."""
+def seconds_per_cycle(wall_time: float, scene: Scene) -> float:
+    """Wall time ``wall_time`` (s) of one run's integration per simulated crank cycle (s),
+    transient included."""
     cycles = scene.run.get("cycles", 0) + scene.run.get("transient_cycles", 0)
-    return float(ds.attrs["solver_wall_time"]) / max(cycles, 1)
+    return float(wall_time) / max(cycles, 1)
+
+
+def contact_fraction(force: xr.DataArray) -> xr.DataArray:
+    """Fraction of the record with a contact force above zero (1): the share of time the
+    journal touches its bearing (records are equally spaced in time). NaN records (a failed
+    run) are left out; reduces dim ``time``."""
+    valid = np.isfinite(force)
+    out = (force > 0).where(valid).sum("time") / valid.sum("time")
+    return out.assign_attrs(units="1", long_name="fraction of the time in contact")
+
+
+def force_percentiles(force: xr.DataArray, q: tuple[float, ...] = PERCENTILES) -> xr.DataArray:
+    """The contact force exceeded during (100 - q) % of the time, for each q in ``q`` (N):
+    percentiles over the record (zero while out of contact); new dim ``percentile`` (%)."""
+    out = force.quantile(np.asarray(q) / 100.0, dim="time", skipna=True)
+    out = out.rename(quantile="percentile").assign_coords(
+        percentile=("percentile", np.asarray(q), {"units": "%", "long_name": "percentile"})
+    )
+    return out.assign_attrs(
+        units=force.attrs.get("units", "N"), long_name="percentile of the contact force over time"
+    )
+
+
+def energy_per_cycle(ds: xr.Dataset, var: str) -> xr.DataArray:
+    """Change of a cumulative energy (``driver_work`` or ``dissipated_energy``, J) over the
+    record, per forcing period (J per crank cycle); reduces dim ``time``."""
+    da = ds[var]
+    t = ds["time"]
+    span = (t.isel(time=-1) - t.isel(time=0)) / float(ds.attrs["forcing_period"])
+    out = (da.isel(time=-1) - da.isel(time=0)) / span
+    return out.drop_vars("time", errors="ignore").assign_attrs(
+        units="J", long_name=f"{da.attrs.get('long_name', var)}: change per crank cycle"
+    )

@@ -4,36 +4,72 @@ Layout of ``studies/<name>/``: one scene per case (``<case>.toml``; a scene with
 run as a campaign) and ``study.toml`` with
 
 - ``title``, ``section`` (of the paper), ``paper_figures``, optional ``paper_seconds_per_cycle``
-  (case -> s, the paper's MATLAB time per crank cycle);
+  (case -> s, the paper's MATLAB time per crank cycle) and ``note`` (a sentence the report
+  shows under the study's heading, e.g. why its runs are shorter);
+- ``realisations`` (integer >= 1, default 1): every case runs as an ensemble of this many
+  realisations, a campaign dimension ``realisation`` (:mod:`workbench.run._ensemble`), and
+  ``perturbation`` (relative size of the initial-state perturbation, default 1e-9);
+- ``[[view]]``: ``name``, ``case`` and ``select`` (e.g. ``{friction_coefficient = 0.1}``): one
+  point of a case's parameter sweep, used like a case by claims, paper values and figures;
 - ``[[figure]]``: ``paper`` (figure number), ``kind`` (``series`` | ``orbit`` | ``phase`` |
-  ``poincare`` | ``lle`` | ``bifurcation``), and for ``series`` a ``var`` with an optional
-  ``select`` (e.g. ``{crank = "1"}``);
+  ``poincare`` | ``lle`` | ``bifurcation`` | ``contact_vs_friction`` | ``energy_balance``),
+  and for ``series`` a ``var`` with an optional ``select`` (e.g. ``{crank = "1"}``);
 - ``[[paper_value]]``: a number the paper's text reports (``case``, ``var``, ``select``,
   ``statistic`` = ``peak`` (default; the value of largest magnitude) or ``wolf_lle``, ``value``);
 - ``[[claim]]``: a qualitative conclusion of the paper in a checkable form (see
-  :mod:`workbench.study._claims`).
+  :mod:`workbench.study._claims`), with an optional ``reason`` (the cause shown, with its
+  evidence, when the claim is not reproduced) and ``evidence`` (``contact`` or
+  ``strobe_contact``: which measured numbers support the reason);
+- ``[flutter]``: where the friction-coefficient study will report the onset of the flutter
+  instability (``parameter``, ``cases``, ``method``); nothing is computed for it yet.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from workbench.scene import Scene, load_scene
+from workbench.run import DEFAULT_PERTURBATION
+from workbench.scene import MAX_PERTURBATION, RUN_SWEEP_KEYS, Scene, load_scene
 
-__all__ = ["Study", "available_studies", "load_study", "quick_scene", "STUDIES_DIR"]
+__all__ = [
+    "Study",
+    "available_studies",
+    "load_study",
+    "quick_study",
+    "quick_scene",
+    "parameter_sweep",
+    "STUDIES_DIR",
+]
 
 STUDIES_DIR = Path(__file__).resolve().parents[2] / "studies"
-FIGURE_KINDS = ("series", "orbit", "phase", "poincare", "lle", "bifurcation")
+FIGURE_KINDS = (
+    "series",
+    "orbit",
+    "phase",
+    "poincare",
+    "lle",
+    "bifurcation",
+    "contact_vs_friction",
+    "energy_balance",
+)
+EVIDENCE_KINDS = ("contact", "strobe_contact")
+QUICK_REALISATIONS = 4  # the fewest for which the two-sample rank test can reach p < 0.05
 _KEYS = {
     "title",
     "section",
     "paper_figures",
     "paper_seconds_per_cycle",
+    "realisations",
+    "perturbation",
+    "view",
     "figure",
     "paper_value",
     "claim",
+    "flutter",
+    "note",
 }
 
 
@@ -51,6 +87,24 @@ class Study:
     paper_values: list[dict] = field(default_factory=list)
     claims: list[dict] = field(default_factory=list)
     paper_seconds_per_cycle: dict[str, float] = field(default_factory=dict)
+    realisations: int = 1
+    perturbation: float = DEFAULT_PERTURBATION
+    views: dict[str, dict] = field(default_factory=dict)
+    flutter: dict = field(default_factory=dict)
+    note: str = ""
+
+    @property
+    def members(self) -> list[str]:
+        """The single-point cases (no parameter sweep) and the views: what claims compare."""
+        single = [c for c, s in self.cases.items() if not parameter_sweep(s)]
+        return single + list(self.views)
+
+    def member_scene(self, name: str) -> Scene:
+        """The scene of a case or a view (a view: its case at the selected parameters)."""
+        if name in self.views:
+            v = self.views[name]
+            return self.cases[v["case"]].with_parameters(**v["select"])
+        return self.cases[name]
 
 
 def available_studies(root: Path = STUDIES_DIR) -> list[str]:
@@ -84,14 +138,38 @@ def load_study(name: str | Path, root: Path = STUDIES_DIR) -> Study:
             raise ValueError(
                 f"{meta_path}: figure[{i}].kind = {fig.get('kind')!r}; allowed: {FIGURE_KINDS}"
             )
+    realisations = meta.get("realisations", 1)
+    if isinstance(realisations, bool) or not isinstance(realisations, int) or realisations < 1:
+        raise ValueError(
+            f"{meta_path}: realisations = {realisations!r}; allowed: an integer >= 1 (the "
+            "size of each case's ensemble)"
+        )
+    perturbation = meta.get("perturbation", DEFAULT_PERTURBATION)
+    if (
+        isinstance(perturbation, bool)
+        or not isinstance(perturbation, int | float)
+        or not 0 < perturbation <= MAX_PERTURBATION
+    ):
+        raise ValueError(
+            f"{meta_path}: perturbation = {perturbation!r}; allowed: a number in "
+            f"(0, {MAX_PERTURBATION:g}] (relative to each state's characteristic size)"
+        )
+    views = _views(meta_path, meta.get("view", []), cases)
+    members = {**{c: s for c, s in cases.items() if not parameter_sweep(s)}, **views}
     for table in ("paper_value", "claim"):
         for i, entry in enumerate(meta.get(table, [])):
             for key in ("case", "larger", "smaller"):
-                if key in entry and entry[key] not in cases:
+                if key in entry and entry[key] not in members:
                     raise ValueError(
                         f"{meta_path}: {table}[{i}].{key} = {entry[key]!r} is not a case of "
-                        f"the study; cases: {sorted(cases)}"
+                        f"the study without a parameter sweep, nor a view; allowed: "
+                        f"{sorted(members)}"
                     )
+            kind = entry.get("evidence")
+            if kind is not None and kind not in EVIDENCE_KINDS:
+                raise ValueError(
+                    f"{meta_path}: {table}[{i}].evidence = {kind!r}; allowed: {EVIDENCE_KINDS}"
+                )
     return Study(
         name=directory.name,
         directory=directory,
@@ -103,16 +181,77 @@ def load_study(name: str | Path, root: Path = STUDIES_DIR) -> Study:
         paper_values=list(meta.get("paper_value", [])),
         claims=list(meta.get("claim", [])),
         paper_seconds_per_cycle=dict(meta.get("paper_seconds_per_cycle", {})),
+        realisations=realisations,
+        perturbation=float(perturbation),
+        views={name: {"case": v["case"], "select": v["select"]} for name, v in views.items()},
+        flutter=dict(meta.get("flutter", {})),
+        note=str(meta.get("note", "")),
     )
 
 
-def quick_scene(scene: Scene) -> Scene:
+def parameter_sweep(scene: Scene) -> dict[str, tuple[float, ...]]:
+    """The swept model parameters of a scene (its ``[sweep]`` without ``realisation``)."""
+    return {k: v for k, v in scene.sweep.items() if k not in RUN_SWEEP_KEYS}
+
+
+def _views(meta_path: Path, entries: list, cases: dict[str, Scene]) -> dict[str, dict]:
+    """Validate the ``[[view]]`` tables: a name that is no case, a swept case, and one value of
+    each of its swept parameters."""
+    views = {}
+    for i, v in enumerate(entries):
+        where = f"{meta_path}: view[{i}]"
+        name, case, select = v.get("name"), v.get("case"), v.get("select")
+        if not isinstance(name, str) or name in cases or name in views:
+            raise ValueError(f"{where}.name = {name!r}; allowed: a new name, not a case's")
+        if case not in cases or not parameter_sweep(cases[case]):
+            swept = sorted(c for c, s in cases.items() if parameter_sweep(s))
+            raise ValueError(f"{where}.case = {case!r}; allowed: a case with a sweep, {swept}")
+        sweep = parameter_sweep(cases[case])
+        if not isinstance(select, dict) or set(select) != set(sweep):
+            raise ValueError(
+                f"{where}.select = {select!r}; allowed: one value of each swept parameter "
+                f"{sorted(sweep)}"
+            )
+        for k, x in select.items():
+            if not any(abs(x - y) <= 1e-12 * max(abs(y), 1e-300) for y in sweep[k]):
+                raise ValueError(
+                    f"{where}.select.{k} = {x!r} is not a swept value; allowed: {list(sweep[k])}"
+                )
+        views[name] = {"case": case, "select": {k: float(x) for k, x in select.items()}}
+    return views
+
+
+def quick_study(study: Study) -> Study:
+    """The study with every case shortened by :func:`quick_scene` (keeping the swept values its
+    views select) and at most :data:`QUICK_REALISATIONS` realisations. Not evidence."""
+    keep: dict[str, dict[str, list[float]]] = {}
+    for v in study.views.values():
+        for k, x in v["select"].items():
+            keep.setdefault(v["case"], {}).setdefault(k, []).append(x)
+    cases = {c: quick_scene(s, keep.get(c, {})) for c, s in study.cases.items()}
+    return dataclasses.replace(
+        study, cases=cases, realisations=min(study.realisations, QUICK_REALISATIONS)
+    )
+
+
+def quick_scene(scene: Scene, keep: dict[str, list[float]] | None = None) -> Scene:
     """A much shorter version of a case for smoke tests (``--quick``): fewer cycles and, for
-    campaigns, four points spanning the same range. Results of a quick run are not evidence."""
+    campaigns, four points spanning the same range (a swept list: its first and last values
+    and those in ``keep``) and at most 4 transient cycles. Results of a quick run are not
+    evidence."""
     run = dict(scene.run)
-    if scene.sweep:
-        run.update(cycles=min(run.get("cycles", 6), 6), transient_cycles=4)
-        sweep = {k: {"start": v[0], "stop": v[-1], "num": 4} for k, v in scene.sweep.items()}
+    if parameter_sweep(scene):
+        dense = scene.record.get("samples_per_period", 1) > 10  # time series, not strobes
+        run.update(
+            cycles=min(run.get("cycles", 6), 3 if dense else 6),
+            transient_cycles=min(run.get("transient_cycles", 4), 4),
+        )
+        sweep = {}
+        for k, v in parameter_sweep(scene).items():
+            if k in (keep or {}):
+                sweep[k] = sorted({v[0], v[-1], *keep[k]})
+            else:
+                sweep[k] = {"start": v[0], "stop": v[-1], "num": 4}
         return scene.replace(run=run, sweep=sweep)
     if "cycles" in run:
         chaos_like = run["cycles"] > 50
