@@ -21,7 +21,7 @@ from workbench import analysis
 from workbench.run import simulate
 from workbench.scene import Scene
 
-__all__ = ["exponent_table"]
+__all__ = ["exponent_table", "reference_exponent"]
 
 #: (samples per crank cycle, recorded cycles) of the series Wolf's method reads
 WOLF_SAMPLING = ((100, 200), (1000, 40), (10000, 8))
@@ -179,3 +179,13 @@ def _wolf_row(scene, var, where, spp, cycles, transient, label) -> dict:
     reliable = bool(r.reliable)
     note = "reliable" if reliable else str(r.reliable.attrs.get("message", "flagged"))
     return _row(f"Wolf, {label}", float(r.lle), math.nan, reliable, note, wall)
+
+
+def reference_exponent(exponents: dict) -> dict | None:
+    """The row of a measured exponent table (:func:`exponent_table` as a dict of lists) the
+    chaos verdict rests on: the two-trajectory estimate, with ``lle`` (s-1), ``stderr`` (s-1),
+    ``trusted`` (converged) and ``lle_per_cycle``; None if there is none."""
+    if not exponents or "two trajectories" not in exponents.get("method", []):
+        return None
+    i = exponents["method"].index("two trajectories")
+    return {k: exponents[k][i] for k in ("lle", "lle_per_cycle", "stderr", "trusted", "note")}
