@@ -30,8 +30,13 @@ import xarray as xr
 from workbench.plot._runs import axis_label, plt
 from workbench.study._claims import _key
 from workbench.study._exponents import reference_exponent
-from workbench.study._measure import clearance_of, select, strobe
-from workbench.study._run import CLEARANCE_COORDINATES, PEAK_PERIODS
+from workbench.study._measure import (
+    CLEARANCE_COORDINATES,
+    PEAK_PERIODS,
+    clearance_of,
+    select,
+    strobe,
+)
 from workbench.study._spec import Study, parameter_sweep
 
 __all__ = ["study_figures"]

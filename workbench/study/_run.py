@@ -18,6 +18,8 @@ from workbench.scene import Scene
 from workbench.study._claims import _key, evaluate_claim
 from workbench.study._exponents import WOLF_SAMPLING, exponent_table
 from workbench.study._measure import (
+    CLEARANCE_COORDINATES,
+    PEAK_PERIODS,
     clearance_of,
     contact_fraction,
     energy_per_cycle,
@@ -31,16 +33,8 @@ from workbench.study._measure import (
 from workbench.study._spec import Study, load_study, parameter_sweep, quick_study
 from workbench.study._stats import describe
 
-__all__ = ["run_study", "ensemble_scene", "CLEARANCE_COORDINATES", "PEAK_PERIODS"]
+__all__ = ["run_study", "ensemble_scene"]
 
-# The four clearance coordinates of the paper's Sec. 5: x1, y1 (joint A), x2, y2 (joint B).
-CLEARANCE_COORDINATES = {
-    "x1": ("clearance_x", {"joint": "A"}),
-    "y1": ("clearance_y", {"joint": "A"}),
-    "x2": ("clearance_x", {"joint": "B"}),
-    "y2": ("clearance_y", {"joint": "B"}),
-}
-PEAK_PERIODS = 2  # paper values: peaks over the first two recorded crank cycles, as in a plot
 _PER_CASE = ("peak", "peak_ratio_near_one", "strobe_spread")  # statistics measured per case
 
 # Why a paper value may lie outside our ensemble's range (the report's known causes).
