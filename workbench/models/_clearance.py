@@ -11,6 +11,7 @@ evaluation (:func:`mechanism_derive`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -273,6 +274,24 @@ def check_records(problem, t: np.ndarray, Y: np.ndarray, codes: np.ndarray) -> N
     )
 
 
+def mechanism_parameters(
+    params: Mapping[str, float], effects: Mapping[str, Any], bodies: tuple[str, ...]
+) -> dict[str, Any]:
+    """The fields that every crank-driven mechanism's parameter layout has, by name: the
+    bodies' masses (kg) and centroidal inertias (kg m2; 0 for a body that only translates),
+    the gravity vector (m s-2; 0 when the effect is off), the crank speed (rad s-1) and the
+    friction block."""
+    g = params["gravity"] if effects["gravity"] else 0.0
+    return {
+        "mass": [params[f"mass_{body}"] for body in bodies],
+        "inertia": [params.get(f"inertia_{body}", 0.0) for body in bodies],
+        "gx": g * math.cos(params["gravity_angle"]),
+        "gy": g * math.sin(params["gravity_angle"]),
+        "omega": params["omega"],
+        "friction": friction_block(params),
+    }
+
+
 def mechanism_problem(
     *,
     hooks: str,
@@ -286,7 +305,6 @@ def mechanism_problem(
     IP: Layout,
     work: Layout,
     n_driven: int,
-    decay_slot: Callable[[int], int],
     assembly: str,
 ) -> Problem:
     """The solver's problem for a crank-driven mechanism with clearance joints.
@@ -308,12 +326,12 @@ def mechanism_problem(
         The packed float parameters.
     IP, work : Layout
         The model's integer-parameter layout (fields of
-        :func:`workbench.models._reduced.index_fields`) and workspace layout (with ``hg``).
+        :func:`workbench.models._reduced.index_fields`) and workspace layout (the fields of
+        :func:`workbench.models._reduced.record_fields` and ``work_fields``): the hooks write
+        joint j's LuGre decay rate into its record's ``decay`` and find h gamma in ``hg``.
     n_driven : int
         Number of driven coordinates, first in q; joint j's clearance vector follows at
         q[n_driven + 2 j].
-    decay_slot : callable
-        ``decay_slot(j)``: slot of ``work`` where the hooks write joint j's LuGre decay rate.
     assembly : str
         Why this mechanism cannot be assembled (for the failure messages).
 
@@ -373,7 +391,7 @@ def mechanism_problem(
         failure=lambda code: codes.get(code, f"model failure code {code}"),
         data={"joints": tuple(present), "all_joints": joints, "IP": IP},
         stiff_states=[z[j] for j in stiff],
-        stiff_slots=[decay_slot(j) for j in stiff],
+        stiff_slots=[work.joint + j * JOINT_RECORD.size + JOINT_RECORD.decay for j in stiff],
         implicit_slot=work.hg,
     )
 

@@ -141,6 +141,29 @@ def record_fields(n_q: int, n_cranks: int, n_joints: int) -> list[tuple[str, int
     ]
 
 
+def work_fields(n_q: int, n_bodies: int, n_points: int) -> list[tuple[str, int]]:
+    """Fields of the scratch that follows the record in a mechanism's workspace (the hooks' work
+    array): q, qd, the kinematics arrays of the record-time evaluation (see
+    :func:`kinematic_arrays`), M, h, Q, and ``hg``, where the solver puts h gamma (s) of an
+    implicit ARK548 stage (0 otherwise)."""
+    return [
+        ("q", n_q),
+        ("qd", n_q),
+        ("pos", 3 * n_bodies),
+        ("pts", 2 * n_points),
+        ("J", 3 * n_bodies * n_q),
+        ("Jp", 2 * n_points * n_q),
+        ("gam", 3 * n_bodies),
+        ("gamp", 2 * n_points),
+        ("vel", 3 * n_bodies),
+        ("velp", 2 * n_points),
+        ("M", n_q * n_q),
+        ("h", n_q),
+        ("Q", n_q),
+        ("hg", 1),
+    ]
+
+
 # ================================================================================================
 # scalar building blocks (inlined)
 # ================================================================================================
@@ -434,6 +457,26 @@ def store_column(values, J, Jp, k):
     for i in range(Jp.shape[0]):
         for r in range(2):
             Jp[i, r, k] = values[3 * nb + 2 * i + r]
+
+
+@njit(cache=True)
+def kinematic_arrays(work, W, n_q, n_bodies, n_points):
+    """Views into ``work`` (layout W, fields of :func:`work_fields`) of q, qd and the
+    kinematics arrays: (q, qd, pos, pts, J, Jp, gam, gamp, vel, velp) with pos, gam, vel
+    [n_bodies, 3], pts, gamp, velp [n_points, 2], J [n_bodies, 3, n_q], Jp [n_points, 2, n_q]."""
+    nb, npt, nq = n_bodies, n_points, n_q
+    return (
+        work[W.q : W.q + nq],
+        work[W.qd : W.qd + nq],
+        work[W.pos : W.pos + 3 * nb].reshape((nb, 3)),
+        work[W.pts : W.pts + 2 * npt].reshape((npt, 2)),
+        work[W.J : W.J + 3 * nb * nq].reshape((nb, 3, nq)),
+        work[W.Jp : W.Jp + 2 * npt * nq].reshape((npt, 2, nq)),
+        work[W.gam : W.gam + 3 * nb].reshape((nb, 3)),
+        work[W.gamp : W.gamp + 2 * npt].reshape((npt, 2)),
+        work[W.vel : W.vel + 3 * nb].reshape((nb, 3)),
+        work[W.velp : W.velp + 2 * npt].reshape((npt, 2)),
+    )
 
 
 @njit(cache=True)

@@ -55,11 +55,13 @@ from workbench.models._reduced import (
     friction_parameters,
     index_fields,
     joint_parameters,
+    kinematic_arrays,
     lean_joint,
     pass_term,
     rates_from_record,
     record_fields,
     spd4_solve,
+    work_fields,
 )
 from workbench.models.contact import onset_velocity
 from workbench.models.ninebar._geometry import ARRAY_FIELDS, GEOMETRY_FIELDS
@@ -109,26 +111,7 @@ IP = layout("NineBarIndices", index_fields(N_JOINTS))
 # workspace of `evaluate` (and the hooks' work array): the record, then scratch
 _RECORD_FIELDS = record_fields(N_Q, 2, N_JOINTS)
 RECORD = layout("NineBarRecord", _RECORD_FIELDS)
-W = layout(
-    "NineBarWork",
-    [
-        *_RECORD_FIELDS,
-        ("q", N_Q),
-        ("qd", N_Q),
-        ("pos", 3 * N_BODIES),
-        ("pts", 2 * N_POINTS),
-        ("J", 3 * N_BODIES * N_Q),
-        ("Jp", 2 * N_POINTS * N_Q),
-        ("gam", 3 * N_BODIES),
-        ("gamp", 2 * N_POINTS),
-        ("vel", 3 * N_BODIES),
-        ("velp", 2 * N_POINTS),
-        ("M", N_Q * N_Q),
-        ("h", N_Q),
-        ("Q", N_Q),
-        ("hg", 1),  # h gamma of an implicit ARK548 stage (s; 0 otherwise), set by the solver
-    ],
-)
+W = layout("NineBarWork", [*_RECORD_FIELDS, *work_fields(N_Q, N_BODIES, N_POINTS)])
 WORK_SIZE = W.size
 
 BEARING_BODY = (CRANK1, CRANK4)  # crank 1 carries bearing A, crank 4 bearing B
@@ -136,11 +119,6 @@ JOURNAL_BODY = (LINK2, LINK3)  # link 2 carries journal A, link 3 journal B
 BEARING_POINT = (PT_A, PT_B)
 _G_S0 = GEOMETRY_FIELDS.index("S0")
 _G_O6X = GEOMETRY_FIELDS.index("O6x")
-
-
-def decay_slot(j: int) -> int:
-    """Slot of ``work`` where the hooks write joint j's LuGre decay rate (s-1)."""
-    return W.joint + j * JOINT_RECORD.size + JOINT_RECORD.decay
 
 
 # ================================================================================================
@@ -155,8 +133,9 @@ def evaluate(t, y, p, ip, aux, work):
     """
     omega = p[P.omega]
     nf = ip[IP.nf]
-    q = work[W.q : W.q + N_Q]
-    qd = work[W.qd : W.qd + N_Q]
+    q, qd, pos, pts, J, Jp, gam, gamp, vel, velp = kinematic_arrays(
+        work, W, N_Q, N_BODIES, N_POINTS
+    )
     q[:] = 0.0
     qd[:] = 0.0
     q[0] = p[P.theta10] - omega * t
@@ -166,14 +145,6 @@ def evaluate(t, y, p, ip, aux, work):
     for i in range(nf):
         q[ip[IP.free + i]] = y[i]
         qd[ip[IP.free + i]] = y[nf + i]
-    pos = work[W.pos : W.pos + 3 * N_BODIES].reshape((N_BODIES, 3))
-    pts = work[W.pts : W.pts + 2 * N_POINTS].reshape((N_POINTS, 2))
-    J = work[W.J : W.J + 3 * N_BODIES * N_Q].reshape((N_BODIES, 3, N_Q))
-    Jp = work[W.Jp : W.Jp + 2 * N_POINTS * N_Q].reshape((N_POINTS, 2, N_Q))
-    gam = work[W.gam : W.gam + 3 * N_BODIES].reshape((N_BODIES, 3))
-    gamp = work[W.gamp : W.gamp + 2 * N_POINTS].reshape((N_POINTS, 2))
-    vel = work[W.vel : W.vel + 3 * N_BODIES].reshape((N_BODIES, 3))
-    velp = work[W.velp : W.velp + 2 * N_POINTS].reshape((N_POINTS, 2))
     if kinematics(q, qd, p, pos, pts, J, Jp, gam, gamp, vel, velp) != 0:
         return CODE_ASSEMBLY
     # slider: S9 = S0 - (x_E - x_O6); body SLIDER9 moves with E

@@ -12,10 +12,10 @@ from workbench.models._clearance import (
     FRICTION_EFFECT,
     clearance_states,
     contact_parameters,
-    friction_block,
     joint_block,
     mechanism_derive,
     mechanism_outputs,
+    mechanism_parameters,
     mechanism_problem,
     validate_joint,
 )
@@ -150,20 +150,14 @@ class NineBar(Model):
     # -- building ------------------------------------------------------------------------------
     def problem(self, params, effects, initial, requested):
         geometry = {f: params[name] for name, f, _, _ in _GEOMETRY_PARAMETERS}
-        g = params["gravity"] if effects["gravity"] else 0.0
         clearances = self.clearances(params)
         p = dyn.P.pack(
             {
                 "geometry": geometry_array(geometry),
-                "mass": [params[f"mass_{body}"] for body in BODY_NAMES],
-                "inertia": [params.get(f"inertia_{body}", 0.0) for body in BODY_NAMES],
-                "gx": g * math.cos(params["gravity_angle"]),
-                "gy": g * math.sin(params["gravity_angle"]),
-                "omega": params["omega"],
+                **mechanism_parameters(params, effects, BODY_NAMES),
                 "theta10": params["theta10"],
                 "theta40": params["theta40"],
                 "joint": np.concatenate([joint_block(params, clearances[j]) for j in JOINTS]),
-                "friction": friction_block(params),
             }
         )
         return mechanism_problem(
@@ -178,7 +172,6 @@ class NineBar(Model):
             IP=dyn.IP,
             work=dyn.W,
             n_driven=2,
-            decay_slot=dyn.decay_slot,
             assembly="the mechanism cannot be assembled at this configuration (a loop does not "
             "close)",
         )

@@ -37,11 +37,13 @@ from workbench.models._reduced import (
     friction_parameters,
     index_fields,
     joint_parameters,
+    kinematic_arrays,
     lean_joint,
     pass_term,
     rates_from_record,
     record_fields,
     spd4_solve,
+    work_fields,
 )
 from workbench.models.contact import onset_velocity
 from workbench.models.slider_crank._geometry import GEOMETRY_FIELDS
@@ -81,37 +83,13 @@ P = layout(
 IP = layout("SliderCrankIndices", index_fields(N_JOINTS))
 _RECORD_FIELDS = record_fields(N_Q, 1, N_JOINTS)
 RECORD = layout("SliderCrankRecord", _RECORD_FIELDS)
-W = layout(
-    "SliderCrankWork",
-    [
-        *_RECORD_FIELDS,
-        ("q", N_Q),
-        ("qd", N_Q),
-        ("pos", 3 * N_BODIES),
-        ("pts", 2 * N_POINTS),
-        ("J", 3 * N_BODIES * N_Q),
-        ("Jp", 2 * N_POINTS * N_Q),
-        ("gam", 3 * N_BODIES),
-        ("gamp", 2 * N_POINTS),
-        ("vel", 3 * N_BODIES),
-        ("velp", 2 * N_POINTS),
-        ("M", N_Q * N_Q),
-        ("h", N_Q),
-        ("Q", N_Q),
-        ("hg", 1),  # h gamma of an implicit ARK548 stage (s; 0 otherwise), set by the solver
-    ],
-)
+W = layout("SliderCrankWork", [*_RECORD_FIELDS, *work_fields(N_Q, N_BODIES, N_POINTS)])
 WORK_SIZE = W.size
 
 JOURNAL_BODY = (ROD,)  # the rod's end B' is the journal
 BEARING_BODY = (SLIDER,)  # the slider carries the bearing
 BEARING_POINT = (PT_B,)
 _ZERO_PASS = (0.0,) * (3 * N_BODIES + 2 * N_POINTS)
-
-
-def decay_slot(j: int) -> int:
-    """Slot of ``work`` where the hooks write joint j's LuGre decay rate (s-1)."""
-    return W.joint + j * JOINT_RECORD.size + JOINT_RECORD.decay
 
 
 # ================================================================================================
@@ -122,22 +100,15 @@ def evaluate(t, y, p, ip, aux, work):
     """Accelerations, torque, forces and energies at (t, y) into ``work[:RECORD.size]``
     (layout RECORD); returns 0 or a failure code (CODE_*)."""
     omega = p[P.omega]
-    q = work[W.q : W.q + N_Q]
-    qd = work[W.qd : W.qd + N_Q]
+    q, qd, pos, pts, J, Jp, gam, gamp, vel, velp = kinematic_arrays(
+        work, W, N_Q, N_BODIES, N_POINTS
+    )
     q[:] = 0.0
     qd[:] = 0.0
     q[0] = p[P.theta10] + omega * t
     qd[0] = omega
     if ip[IP.has] == 1:
         q[1], q[2], qd[1], qd[2] = y[0], y[1], y[2], y[3]
-    pos = work[W.pos : W.pos + 3 * N_BODIES].reshape((N_BODIES, 3))
-    pts = work[W.pts : W.pts + 2 * N_POINTS].reshape((N_POINTS, 2))
-    J = work[W.J : W.J + 3 * N_BODIES * N_Q].reshape((N_BODIES, 3, N_Q))
-    Jp = work[W.Jp : W.Jp + 2 * N_POINTS * N_Q].reshape((N_POINTS, 2, N_Q))
-    gam = work[W.gam : W.gam + 3 * N_BODIES].reshape((N_BODIES, 3))
-    gamp = work[W.gamp : W.gamp + 2 * N_POINTS].reshape((N_POINTS, 2))
-    vel = work[W.vel : W.vel + 3 * N_BODIES].reshape((N_BODIES, 3))
-    velp = work[W.velp : W.velp + 2 * N_POINTS].reshape((N_POINTS, 2))
     if kinematics(q, qd, p, pos, pts, J, Jp, gam, gamp, vel, velp) != 0:
         return CODE_ASSEMBLY
     return evaluate_mechanism(

@@ -20,10 +20,10 @@ from workbench.models._clearance import (
     FRICTION_EFFECT,
     clearance_states,
     contact_parameters,
-    friction_block,
     joint_block,
     mechanism_derive,
     mechanism_outputs,
+    mechanism_parameters,
     mechanism_problem,
     validate_joint,
 )
@@ -129,18 +129,12 @@ class SliderCrank(Model):
             )
 
     def problem(self, params, effects, initial, requested):
-        g = params["gravity"] if effects["gravity"] else 0.0
         p = dyn.P.pack(
             {
                 "geometry": geometry_array({f: params[n] for n, f, _ in _GEOMETRY_PARAMETERS}),
-                "mass": [params[f"mass_{body}"] for body in BODY_NAMES],
-                "inertia": [params.get(f"inertia_{body}", 0.0) for body in BODY_NAMES],
-                "gx": g * math.cos(params["gravity_angle"]),
-                "gy": g * math.sin(params["gravity_angle"]),
-                "omega": params["omega"],
+                **mechanism_parameters(params, effects, BODY_NAMES),
                 "theta10": params["theta10"],
                 "joint": joint_block(params, params["clearance"]),
-                "friction": friction_block(params),
             }
         )
         return mechanism_problem(
@@ -155,7 +149,6 @@ class SliderCrank(Model):
             IP=dyn.IP,
             work=dyn.W,
             n_driven=1,
-            decay_slot=dyn.decay_slot,
             assembly="the rod cannot reach the slider guide (|y - L1 sin theta1| >= L2)",
         )
 
