@@ -349,7 +349,7 @@ def acceleration_entry(g, cols, qdd, i):
     return g[i] + c0[i] * a0 + c1[i] * a1 + c2[i] * a2 + c3[i] * a3
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # not inlined: its loops index tuples at run time (long to compile, rarely run)
 def driver_power(mass, inertia, gx, gy, vd, cen, acc, cols, qdd, forces, journal, bearing):
     """Driver power tau . qd_d (W) without the torques.
 
