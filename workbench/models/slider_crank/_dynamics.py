@@ -166,7 +166,8 @@ def rhs(t, y, p, ip, aux, work, dydt):
     """dy/dt at (t, y) (the solver's hook; protocol in :mod:`workbench.solver._kernel`).
 
     Equal to :func:`rhs_reference` to rounding, computing only what the integration reads;
-    written as the nine-bar's :func:`workbench.models.ninebar._dynamics.rhs`."""
+    compiled as the nine-bar's :func:`workbench.models.ninebar._dynamics.rhs` (no reference
+    counting, IEEE divisions)."""
     omega = p[P.omega]
     x, yy, vx, vy = y[0], y[1], y[2], y[3]  # the hook runs only with the clearance
     iz = ip[IP.z]
