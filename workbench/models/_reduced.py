@@ -34,7 +34,11 @@ from numba import njit
 
 from workbench.models._base import EVENT_INSIDE_STEP
 from workbench.models._layout import layout
-from workbench.models.contact import contact_elastic_energy, lankarani_nikravesh
+from workbench.models.contact import (
+    contact_elastic_energy,
+    lankarani_nikravesh,
+    onset_velocity,
+)
 from workbench.models.friction import coulomb_modified, lugre_decay, lugre_force
 
 FRICTION_NONE = 0
@@ -739,4 +743,36 @@ def rates_from_record(y, ip, aux, work, dydt, IP, W, n_joints):
         delta = work[W.joint + j * JOINT_RECORD.size + JOINT_RECORD.delta]
         if ip[IP.has + j] == 1 and aux[j] == 0.0 and delta > 0.0:
             return EVENT_INSIDE_STEP  # in contact, but its onset has not been located
+    return 0
+
+
+@njit(cache=True)
+def contact_event_values(y, p, ip, g, P, IP, n_joints):
+    """The event functions of a mechanism's clearance joints (hook ``event_values``): per joint
+    with a clearance, g = e - c, its penetration (m), twice: event 2i (rising zero, contact
+    onset) and 2i + 1 (falling zero, contact end) of the i-th joint with a clearance."""
+    for j in range(n_joints):
+        k = ip[IP.slot + j]  # the joint's clearance x and y are y[k], y[k + 1]
+        if k >= 0:
+            d = math.sqrt(y[k] * y[k] + y[k + 1] * y[k + 1]) - p[P.joint + j * JOINT.size + JOINT.c]
+            g[k] = d
+            g[k + 1] = d
+
+
+@njit(cache=True)
+def contact_event(k, y, ip, aux, IP, n_joints):
+    """Apply event k of :func:`contact_event_values` (hook ``apply_event``): at a contact onset
+    hold the normal velocity in aux (and reset the joint's LuGre bristles); at its end clear it.
+    Returns 0 (the integration goes on)."""
+    nf = ip[IP.nf]
+    slot = k - k % 2
+    for j in range(n_joints):
+        if ip[IP.slot + j] == slot:
+            if k % 2 == 0:
+                aux[j] = onset_velocity(y[slot], y[slot + 1], y[nf + slot], y[nf + slot + 1])
+                iz = ip[IP.z + j]
+                if iz >= 0:
+                    y[iz] = 0.0
+            else:
+                aux[j] = 0.0
     return 0

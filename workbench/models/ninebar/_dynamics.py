@@ -49,6 +49,8 @@ from workbench.models._reduced import (
     JOINT,
     JOINT_RECORD,
     column_force,
+    contact_event,
+    contact_event_values,
     dissipated_power,
     driver_power,
     evaluate_mechanism,
@@ -63,7 +65,6 @@ from workbench.models._reduced import (
     spd4_solve,
     work_fields,
 )
-from workbench.models.contact import onset_velocity
 from workbench.models.ninebar._geometry import ARRAY_FIELDS, GEOMETRY_FIELDS
 from workbench.models.ninebar._kinematics import (
     CRANK1,
@@ -340,34 +341,12 @@ def rhs(t, y, p, ip, aux, work, dydt):
 
 @njit(cache=True)
 def event_values(t, y, p, ip, aux, work, g):
-    """g_j = e_j - c_j, the penetration of joint j (m); rising zero = contact onset,
-    falling zero = contact end. Events 2j (onset) and 2j+1 (end) per clearance joint."""
-    k = 0
-    for j in range(N_JOINTS):
-        if ip[IP.has + j] == 0:
-            continue
-        # free coordinates of joint j are consecutive: x at slot k, y at k + 1
-        x = y[k]
-        yy = y[k + 1]
-        d = math.sqrt(x * x + yy * yy) - p[P.joint + j * JOINT.size + JOINT.c]
-        g[k] = d
-        g[k + 1] = d
-        k += 2
-    return None
+    """Penetration e - c (m) of each joint with a clearance, twice: its contact onset (rising
+    zero) and end (falling zero); see :func:`workbench.models._reduced.contact_event_values`."""
+    contact_event_values(y, p, ip, g, P, IP, N_JOINTS)
 
 
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):
     """Contact onset: hold the normal velocity (and reset the LuGre bristles); end: clear it."""
-    nf = ip[IP.nf]
-    # which joint does slot k belong to?
-    j = 0 if (ip[IP.has] == 1 and k < 2) else 1
-    slot = k - (k % 2)
-    if k % 2 == 0:
-        aux[j] = onset_velocity(y[slot], y[slot + 1], y[nf + slot], y[nf + slot + 1])
-        iz = ip[IP.z + j]
-        if iz >= 0:
-            y[iz] = 0.0
-    else:
-        aux[j] = 0.0
-    return 0
+    return contact_event(k, y, ip, aux, IP, N_JOINTS)

@@ -31,6 +31,8 @@ from workbench.models._reduced import (
     JOINT,
     JOINT_RECORD,
     column_force,
+    contact_event,
+    contact_event_values,
     dissipated_power,
     driver_power,
     evaluate_mechanism,
@@ -45,7 +47,6 @@ from workbench.models._reduced import (
     spd4_solve,
     work_fields,
 )
-from workbench.models.contact import onset_velocity
 from workbench.models.slider_crank._geometry import GEOMETRY_FIELDS
 from workbench.models.slider_crank._kinematics import (
     N_BODIES,
@@ -232,21 +233,12 @@ def rhs(t, y, p, ip, aux, work, dydt):
 
 @njit(cache=True)
 def event_values(t, y, p, ip, aux, work, g):
-    """Penetration e - c (m) of the clearance joint: rising zero = onset, falling = end."""
-    if ip[IP.has] == 1:
-        d = math.sqrt(y[0] * y[0] + y[1] * y[1]) - p[P.joint + JOINT.c]
-        g[0] = d
-        g[1] = d
+    """Penetration e - c (m) of each joint with a clearance, twice: its contact onset (rising
+    zero) and end (falling zero); see :func:`workbench.models._reduced.contact_event_values`."""
+    contact_event_values(y, p, ip, g, P, IP, N_JOINTS)
 
 
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):
     """Contact onset: hold the normal velocity (and reset the LuGre bristles); end: clear it."""
-    if k == 0:
-        aux[0] = onset_velocity(y[0], y[1], y[2], y[3])
-        iz = ip[IP.z]
-        if iz >= 0:
-            y[iz] = 0.0
-    else:
-        aux[0] = 0.0
-    return 0
+    return contact_event(k, y, ip, aux, IP, N_JOINTS)
