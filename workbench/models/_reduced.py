@@ -1,11 +1,12 @@
 """Compiled building blocks of a mechanism in reduced (Lagrange) coordinates with clearance joints.
 
-A mechanism model supplies its closed-form kinematics as *passes*: flat tuples with, per body b,
-the centroid x, y (m) and angle phi (rad) or their rates or accelerations, then per point its x,
-y (see :mod:`workbench.models._assur`). The Jacobian column k is the velocity pass for a unit
-rate of coordinate k, the bias accelerations ``gam`` the acceleration pass at qdd = 0. From
-these, d'Alembert's principle gives the reduced equations (e.g. Nikravesh 1988, *Computer-Aided
-Analysis of Mechanical Systems*, Ch. 13; the nine-bar's are Chen et al. 2019, Sec. 3)
+A mechanism model supplies its closed-form kinematics as *passes* (built from the Assur groups
+of :mod:`workbench.models._assur`): flat tuples with, per body b, the centroid x, y (m) and angle
+phi (rad) or their rates or accelerations, then per point its x, y. The Jacobian column k is
+the velocity pass for a unit rate of coordinate k, the bias accelerations ``gam`` the
+acceleration pass at qdd = 0. From these, d'Alembert's principle gives the reduced equations
+(e.g. Nikravesh 1988, *Computer-Aided Analysis of Mechanical Systems*, Ch. 13; the nine-bar's
+are Chen et al. 2019, Sec. 3)
 
     M qdd + h = Q,   M_kl = sum_b m_b Jc_k . Jc_l + I_b Jphi_k Jphi_l,
     h_k = sum_b m_b Jc_k . gam_c + I_b Jphi_k gam_phi,
