@@ -30,6 +30,12 @@ from workbench.models.ninebar._geometry import (
 
 JOINTS = ("A", "B")
 
+
+def geometry_of(params) -> np.ndarray:
+    """The geometry block (m, rad) of the kinematics for the model's resolved parameters."""
+    return geometry_array({f: params[name] for name, f, _, _ in _GEOMETRY_PARAMETERS})
+
+
 # scene name, geometry field, long name, units
 _GEOMETRY_PARAMETERS = (
     ("crank1_length", "L1", "length O1A of crank 1", "m"),
@@ -149,11 +155,10 @@ class NineBar(Model):
 
     # -- building ------------------------------------------------------------------------------
     def problem(self, params, effects, initial, requested):
-        geometry = {f: params[name] for name, f, _, _ in _GEOMETRY_PARAMETERS}
         clearances = self.clearances(params)
         p = dyn.P.pack(
             {
-                "geometry": geometry_array(geometry),
+                "geometry": geometry_of(params),
                 **mechanism_parameters(params, effects, BODY_NAMES),
                 "theta10": params["theta10"],
                 "theta40": params["theta40"],
