@@ -267,8 +267,7 @@ def _exponent_table(e: dict | None) -> list[str]:
     per_sample = ref * T / spp
     lines += [
         "",
-        f"Full spectrum (variational equations, 1/s): {spectrum}; sum "
-        f"{_fmt(e.get('spectrum_sum'))} 1/s.",
+        f"Largest exponents (variational equations, 1/s): {spectrum}.",
         "",
         "Why they differ: the equations' estimates (the two-trajectory method and the "
         "variational equations with saltation at every contact event, on one trajectory) agree; "
