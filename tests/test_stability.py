@@ -29,6 +29,10 @@ def test_damped_linear_oscillator_eigenvalues():
     np.testing.assert_allclose(np.sort(r.eigenvalue_imag.values, axis=1), expected, atol=1e-12)
     assert r.eigenvalue_real.attrs["units"] == "s-1"
     assert r.frequency.attrs["units"] == "Hz"
+    from workbench.plot import jacobian_spectrum_figure
+
+    fig = jacobian_spectrum_figure(r)
+    assert fig.axes[0].get_ylabel() == "largest real part of an eigenvalue [1/s]"
 
 
 def test_duffing_eigenvalues_follow_the_state():
@@ -128,3 +132,6 @@ def test_flip_bifurcation_located_within_one_percent_of_the_strobe_samples():
         lo, hi = (mid, hi) if _strobe_points(mid) == 1 else (lo, mid)
     assert g_flip == pytest.approx(0.5 * (lo + hi), rel=0.01)
     assert sweep.gamma.attrs["units"] == "m s-2"
+    from workbench.plot import floquet_figure
+
+    assert floquet_figure(sweep).axes[0].get_xlabel() == "forcing amplitude [m s-2]"

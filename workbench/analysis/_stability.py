@@ -183,8 +183,9 @@ def jacobian_spectrum(
             "modes": ("modes", kinds, {"long_name": "mode of the records"}),
         },
         attrs={
-            "method": "eigenvalues of the compiled Jacobian "
-            + ("(analytic)" if jac.HAS_ANALYTIC else "(central differences of the rhs)"),
+            "method": "analytic Jacobian"
+            if jac.HAS_ANALYTIC
+            else "Jacobian by central differences of the rhs",
             "scene": scene.to_toml(),
         },
     )

@@ -15,11 +15,14 @@ from workbench.plot._analysis import (
 )
 from workbench.plot._base import register_overview
 from workbench.plot._runs import run_figures
+from workbench.plot._stability import floquet_figure, jacobian_spectrum_figure
 from workbench.plot._verify import verification_figure
 
 __all__ = [
     "bifurcation_figure",
     "embedding_figure",
+    "floquet_figure",
+    "jacobian_spectrum_figure",
     "lle_figure",
     "phase_figure",
     "poincare_figure",
