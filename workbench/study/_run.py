@@ -286,9 +286,9 @@ def _chaos_measures(ds: xr.Dataset, scene: Scene) -> dict:
     )
     out["exponents"] = {
         "method": [str(m) for m in table.method.values],
-        **{k: [_plain(v) for v in table[k].values] for k in _EXPONENT_VARS},
+        **{k: [_native(v) for v in table[k].values] for k in _EXPONENT_VARS},
         "spectrum": [float(v) for v in table.spectrum.values],
-        **{k: _plain(v) for k, v in table.attrs.items()},
+        **{k: _native(v) for k, v in table.attrs.items()},
     }
     return out
 
@@ -299,8 +299,8 @@ STROBE_CYCLES = 400
 _EXPONENT_VARS = ("lle", "lle_per_cycle", "stderr", "trusted", "note", "wall_time")
 
 
-def _plain(v):
-    """A JSON-ready Python value of a numpy scalar."""
+def _native(v):
+    """A JSON-ready Python value of a numpy or Python scalar (non-finite floats as None)."""
     v = v.item() if hasattr(v, "item") else v
     return None if isinstance(v, float) and not math.isfinite(v) else v
 
