@@ -32,6 +32,7 @@ _RUN_ATTRS = (
     "campaign_chunk",
     "campaign_blocks",
     "campaign_id",
+    "campaign_block_sha256",  # the blocks' bytes hold their wall times and worker pids
 )
 
 
