@@ -14,10 +14,17 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import register_overview
-from workbench.plot._runs import campaign_figure, run_figure_names, run_figures, timeseries_figure
+from workbench.plot._runs import (
+    PANELS_PER_FIGURE,
+    campaign_figure,
+    run_figure_names,
+    run_figures,
+    timeseries_figure,
+)
 from workbench.plot._verify import verification_figure
 
 __all__ = [
+    "PANELS_PER_FIGURE",
     "bifurcation_figure",
     "campaign_figure",
     "embedding_figure",

@@ -49,7 +49,7 @@ class StudyStore:
 
     def __init__(self, directory: Path | None, identity: dict) -> None:
         self.directory = directory
-        self.identity = identity
+        self.identity = json.loads(json.dumps(identity))  # as stored: lists, not tuples
         self.manifest: dict = {"format": FORMAT, "identity": identity, "checksums": {}}
         self.reused = 0
 

@@ -278,7 +278,7 @@ def accuracy(
         )
     twin_tol = ref_tol / 10 if ref_tol / 10 >= RTOL_MIN else None
     identity = {
-        "scene": scene.replace(sweep={}).to_toml(),
+        "scene": scene.replace(sweep={}).to_dict(),
         "reference": [ref_method, ref_tol],
         "horizon": horizon,
     }
