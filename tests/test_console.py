@@ -130,7 +130,8 @@ def test_plot_of_a_campaign_archive(tmp_path, capsys):
 
 
 def test_the_first_compile_is_announced_and_only_then():
-    from workbench._console import announce_compile, kernel_cached
+    from workbench._console import announce_compile
+    from workbench.campaign._warm import kernel_cached
 
     scene = workbench.load_scene({"model": {"name": "duffing"}, "run": {"cycles": 1}})
     workbench.simulate(scene)
@@ -139,7 +140,8 @@ def test_the_first_compile_is_announced_and_only_then():
     assert kernel_cached(scene.replace(solver={"method": "scipy:RK45"})) is None
     code = (
         "import workbench\n"
-        "from workbench._console import announce_compile, kernel_cached\n"
+        "from workbench._console import announce_compile\n"
+        "from workbench.campaign._warm import kernel_cached\n"
         "s = workbench.load_scene({'model': {'name': 'duffing'}})\n"
         "assert kernel_cached(s) is False\n"
         "assert announce_compile(s)\n"

@@ -84,6 +84,13 @@ def live_in_group(pgid: int) -> list[int]:
     return found
 
 
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
 def wait_gone(pgid: int, limit: float) -> float:
     """Seconds until no process of the group is alive; fails after ``limit`` seconds."""
     t0 = time.monotonic()
@@ -152,10 +159,13 @@ def test_ctrl_c_while_the_workers_start_is_one_line(tmp_path):
     args = ["campaign", str(scene), "-o", str(tmp_path / "c.nc"), "--workers", "2", "-q"]
     with cli_process(args, tmp_path) as proc:
         deadline = time.monotonic() + 20
-        while len(live_in_group(proc.pid)) < 2:  # the fork server is starting
+        while not any("forkserver" in _cmdline(p) for p in live_in_group(proc.pid)):
             assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
-            assert time.monotonic() < deadline, "no process started"
-            time.sleep(0.01)
+            assert time.monotonic() < deadline, "no fork server started"
+            time.sleep(0.005)
+        # Python is up in the fork server, which imports workbench and loads the kernel for
+        # its workers (2-4 s); the campaign waits for its first worker
+        time.sleep(0.5)
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does
         assert proc.wait(timeout=20) == 130
         wait_gone(proc.pid, 10.0)
@@ -273,12 +283,14 @@ def files(tmp_path):
         "file": tmp_path / "file.nc",
         "truncated": tmp_path / "truncated.nc",
         "five": tmp_path / "five.nc",
+        "norun": tmp_path / "norun.nc",
     }
     paths["huge"].write_text('[model]\nname = "duffing"\n[solver]\nmax_steps = 1e21\n')
     paths["dir"].mkdir()
     workbench.save_run(workbench.simulate(run), paths["file"])
     paths["truncated"].write_bytes(paths["file"].read_bytes()[:3000])
     workbench.save_run(workbench.simulate(paths["short"]), paths["five"])
+    workbench.save_run(xr.Dataset({"a": ((), 1.0)}), paths["norun"])
     return {k: str(v) for k, v in paths.items()}
 
 
@@ -298,6 +310,7 @@ CASES = [
     ("plot truncated", "plot {truncated} -o {dir}", 2, "is not a readable netCDF file"),
     ("bifurcation truncated", "bifurcation {truncated} --var x", 2, "not a readable netCDF"),
     ("analyse truncated", "analyse {truncated} --var x", 2, "is not a readable netCDF file"),
+    ("plot not a run", "plot {norun} -o {dir}", 2, "has no variables over time"),
     ("analyse 5 points", "analyse {five} --var x -o {dir}", 2, "has 5 samples"),
     (
         "unreachable scheduler",

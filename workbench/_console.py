@@ -14,7 +14,6 @@ from collections.abc import Callable, Iterator
 __all__ = [
     "announce_compile",
     "float_list",
-    "kernel_cached",
     "one_line_warnings",
     "positive_float",
     "positive_int",
@@ -75,33 +74,11 @@ def one_line_warnings(command: str) -> Iterator[None]:
         yield
 
 
-def kernel_cached(scene) -> bool | None:
-    """Whether numba's on-disk cache holds the compiled kernel of a scene's model (None when it
-    cannot tell: a scipy method, a model without states, or a numba that keeps its cache
-    elsewhere). Reads the index of the kernel's main entry point, as numba itself does before
-    it compiles."""
-    from workbench.run import prepare
-
-    if scene.solver["method"].startswith("scipy:"):
-        return None
-    try:
-        problem = prepare(scene.replace(sweep={}) if scene.sweep else scene).problem
-    except Exception:  # the run itself will report it
-        return None
-    if problem.y0.size == 0:
-        return None
-    try:
-        from workbench.solver._compile import kernel_for
-
-        index = kernel_for(problem.hooks).advance._cache._cache_file._load_index()
-    except Exception:  # pragma: no cover - numba internals changed
-        return None
-    return bool(index)
-
-
 def announce_compile(scene, out: Callable[[str], None] | None = None) -> bool:
     """Print "compiling the <model> kernel (first run only, ...)" to stderr when the cache does
     not hold it; return whether it was printed."""
+    from workbench.campaign._warm import kernel_cached
+
     if kernel_cached(scene) is not False:
         return False
     seconds = _COMPILE_SECONDS.get(scene.model, "~15-30 s")

@@ -81,6 +81,11 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     ds = open_run(args.run)
     campaign = "campaign_dims" in ds.attrs
     series = [v for v in ds.data_vars if "time" in ds[v].dims]
+    if not series:
+        raise UsageError(
+            f"{args.run!r} has no variables over time: it is not a run or a campaign archive "
+            "(write one with 'workbench run' or 'workbench campaign')"
+        )
     names = run_figure_names(ds.attrs.get("model"), len(series), campaign=campaign)
     check_output_directory(args.output, "-o/--output", names, overwrite=args.overwrite)
     for path in run_figures(ds, Path(args.output)):

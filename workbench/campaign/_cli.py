@@ -149,9 +149,10 @@ def _cmd_bifurcation(args: argparse.Namespace) -> int:
 
     try:
         ds, param = _select(ds, args.var, args.param, args.at or [])
+        diagram = bifurcation_diagram(ds, args.var, param)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    fig = bifurcation_figure(bifurcation_diagram(ds, args.var, param))
+    fig = bifurcation_figure(diagram)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=150)
     n_failed = int(failed(ds["status"].values).sum())

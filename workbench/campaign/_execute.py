@@ -20,11 +20,13 @@ import contextlib
 import os
 import signal
 import sys
+import threading
 import uuid
 from collections.abc import Callable, Iterator
 
 from workbench.campaign._block import PRELOAD_ENV, BlockTask, run_block, worker_start
 from workbench.campaign._lifeline import PARENT_ENV
+from workbench.campaign._warm import kernel_cached, load_kernel
 from workbench.scene import scene_from_toml
 
 __all__ = ["available_workers", "execute"]
@@ -93,28 +95,45 @@ def execute(
             return client.submit(run_block, t, key=key, pure=False)
 
         return _dispatch(submit, wait, tasks, workers, on_done)
-    with _local_pool(workers, _first_point(tasks[0])) as pool:
+    first = _first_point(tasks[0])
+    if kernel_cached(scene_from_toml(first)) is False:
+        # Compiled here, where Ctrl-C stops it at once, not in the fork server's start.
+        load_kernel(first)
+    with _local_pool(workers, first) as pool:
 
         def submit_local(t: BlockTask):
-            # Processes started here (the fork server, the workers it forks) inherit a blocked
-            # SIGINT: a terminal's Ctrl-C reaches the client alone, which stops them.
-            with _sigint_blocked():
+            with _uninterrupted_start():
                 return pool.submit(run_block, t)
 
         return _dispatch(submit_local, concurrent.futures.wait, tasks, workers, on_done)
 
 
 @contextlib.contextmanager
-def _sigint_blocked() -> Iterator[None]:
-    """Block SIGINT in this thread for the duration (a pending one is delivered after)."""
-    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+def _uninterrupted_start() -> Iterator[None]:
+    """Start processes without Ctrl-C cutting a start in half (a process whose start the
+    campaign abandoned would outlive the queues it was given, and fail with a traceback).
+
+    SIGINT is blocked in this thread, so that the processes started here (the fork server, and
+    the workers it forks) inherit the block: a terminal's Ctrl-C reaches the campaign alone,
+    which stops them. A Ctrl-C that arrives meanwhile (possibly through another thread) is
+    raised as KeyboardInterrupt once the start is done: after the fork server's start (it only
+    loads the kernel, compiled beforehand) at most, a few seconds.
+    """
+    defer = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGINT) if defer else None
+    defer = defer and previous is not None
+    caught: list[int] = []
+    if defer:
+        signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+        if defer:
+            signal.signal(signal.SIGINT, previous)
+        if caught:
+            raise KeyboardInterrupt from None
 
 
 def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, on_done) -> list[dict]:
@@ -151,16 +170,21 @@ def _local_pool(workers: int, preload: str) -> Iterator[concurrent.futures.Proce
     from concurrent.futures.process import BrokenProcessPool
 
     ctx = _mp_context(preload)
-    pids = ctx.SimpleQueue()
+    with _uninterrupted_start():  # the queue's lock starts multiprocessing's resource tracker
+        pids = ctx.SimpleQueue()
     pool = concurrent.futures.ProcessPoolExecutor(
         workers, mp_context=ctx, initializer=worker_start, initargs=(pids, os.getpid())
     )
     try:
         yield pool
     except BaseException as exc:
+        # every worker: those that reported, and those still starting (the pool's own list)
+        started = set(getattr(pool, "_processes", None) or ())
         while not pids.empty():
+            started.add(pids.get())
+        for pid in started:
             with contextlib.suppress(ProcessLookupError):
-                os.kill(pids.get(), signal.SIGTERM)
+                os.kill(pid, signal.SIGTERM)
         if isinstance(exc, BrokenProcessPool):
             raise RuntimeError(
                 "a worker process of the local pool died (killed, out of memory, or the calling "

@@ -17,19 +17,7 @@ import os
 
 from workbench.campaign._block import PRELOAD_ENV
 from workbench.campaign._lifeline import PARENT_ENV, die_with_parent
-
-
-def _load_kernel(scene_toml: str) -> None:
-    """The provenance's package versions, then the compiled kernel of the scene's model."""
-    from workbench.run import integrate, prepare, provenance
-    from workbench.scene import scene_from_toml
-
-    prepared = prepare(scene_from_toml(scene_toml))
-    provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
-    if prepared.scene.solver["method"].startswith("scipy:"):
-        return
-    # An empty interval: every compiled entry point is loaded, nothing is integrated.
-    integrate(prepared, [prepared.problem.t0])
+from workbench.campaign._warm import load_kernel
 
 
 def _warm_xarray() -> None:
@@ -53,6 +41,6 @@ if os.environ.get(PARENT_ENV):
 if os.environ.get(PRELOAD_ENV):
     try:
         _warm_xarray()
-        _load_kernel(os.environ[PRELOAD_ENV])
+        load_kernel(os.environ[PRELOAD_ENV])
     except Exception:  # pragma: no cover - best effort only
         pass

@@ -33,6 +33,7 @@ import numpy as np
 from workbench._cache import package_digest
 from workbench.archive import (
     StoreWarning,
+    check_output_file,
     file_problem,
     mapping_diff,
     store_lock,
@@ -148,6 +149,7 @@ class Store:
                 f"directory {str(self.archive)!r}; its blocks go to the sibling directory "
                 "'sweep.nc.blocks/'"
             )
+        check_output_file(self.archive, "store", overwrite=True)  # e.g. not under a file
         self.blocks_dir = self.archive.with_name(self.archive.name + ".blocks")
         self.manifest_path = self.blocks_dir / "manifest.json"
 
