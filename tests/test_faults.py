@@ -174,13 +174,15 @@ def test_ctrl_c_while_the_workers_start_is_one_line(tmp_path):
     assert "workbench campaign: interrupted" in err
 
 
-def flip(path: Path, n: int = 2000) -> None:
-    """Invert ``n`` bytes in the middle of a file (at most all but its first 100)."""
-    data = bytearray(path.read_bytes())
-    start = min(len(data) // 3, 100)
-    for i in range(start, min(start + n, len(data))):
-        data[i] ^= 0xFF
-    path.write_bytes(bytes(data))
+def flip_values(path: Path, name: str) -> None:
+    """Invert the bytes of variable ``name``'s data in a block file: the file still opens and
+    belongs to its campaign, only the numbers are wrong (the issue's case: reused, with
+    clearance_y at 8.3e180 m)."""
+    data = path.read_bytes()
+    raw = np.asarray(workbench.open_run(path)[name].values, ">f8").tobytes()  # netCDF-3
+    at = data.index(raw)
+    flipped = bytes(b ^ 0xFF for b in raw)
+    path.write_bytes(data[:at] + flipped + data[at + len(raw) :])
 
 
 def test_corrupt_truncated_and_deleted_blocks_are_named_and_recomputed(tmp_path):
@@ -189,7 +191,8 @@ def test_corrupt_truncated_and_deleted_blocks_are_named_and_recomputed(tmp_path)
     blocks = store_paths(store)["blocks"]
     files = sorted(blocks.glob("block-*.nc"))
     assert first.attrs["campaign_block_sha256"].split() == [sha256_file(p) for p in files]
-    flip(files[0])
+    flip_values(files[0], "x")
+    assert workbench.open_run(files[0]).attrs["campaign_id"] == first.attrs["campaign_id"]
     files[1].write_bytes(files[1].read_bytes()[:500])  # truncated
     files[2].unlink()
     with pytest.warns(CampaignWarning) as record:
