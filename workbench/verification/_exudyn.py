@@ -245,10 +245,10 @@ def _settings(exu, t_end: float, step: float, record_dt: float, spectral_radius:
     ti.newton.maxIterations = 50
     for key, value in (newton or {}).items():
         setattr(ti.newton, key, value)
-    settings.solutionSettings.sensorsWritePeriod = record_dt
-    settings.solutionSettings.writeSolutionToFile = False
-    settings.displayComputationTime = False
-    settings.displayStatistics = False
+    settings.solution.sensors.writePeriod = record_dt  # exudyn 1.13 names (pinned)
+    settings.solution.file.write = False
+    settings.show.computationTime = False
+    settings.show.statistics = False
     return settings
 
 
