@@ -265,7 +265,8 @@ def _lle(spec, ctx):
         w = analysis.wolf_lle(select(ds, var, where).isel(realisation=0), period=period)
         run = w["running"]
         x = run[run.dims[0]]
-        ax.plot(x, run, lw=0.8, label=f"realisation 0: {float(w['lle']):.3g} 1/s")
+        flagged = "" if bool(w["reliable"]) else " (flagged: see the exponent table)"
+        ax.plot(x, run, lw=0.8, label=f"realisation 0: {float(w['lle']):.3g} 1/s{flagged}")
         shown = list(run.values[x.values >= 0.05 * float(x.max())])
         values = np.asarray(m.get("wolf_lle", {}).get(label, []), float)
         if np.isfinite(values).any():
