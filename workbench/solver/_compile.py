@@ -87,7 +87,8 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    return _specialise("_kernel", "kernel", hooks, {"HOOKS": hooks})
+    modules = {"HOOKS": hooks, "JACOBIAN": jacobian_for(hooks).__name__}
+    return _specialise("_kernel", "kernel", hooks, modules)
 
 
 @cache

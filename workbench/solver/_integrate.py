@@ -12,16 +12,27 @@ from workbench.solver import _scipy_backend
 from workbench.solver._compile import kernel_for
 from workbench.solver._loop import (
     ARK548,
+    AUTO,
     CT_F_INSIDE,
     CT_H,
     CT_T,
     DONE,
     DOP853,
     DOPRI5,
+    IS_JAC,
+    IS_LU,
+    IS_NEWTON,
+    IS_NEWTON_FAIL,
+    IS_RHS,
+    IS_STEPS,
+    IS_TO_EXPLICIT,
+    IS_TO_IMPLICIT,
     MAX_STEPS,
     MODEL_FAILURE,
     NON_FINITE,
     PAUSED,
+    RADAU5,
+    RC_TIME_IMPLICIT,
     ST_EVENT_RETRIES,
     ST_EVENTS,
     ST_MODEL_CODE,
@@ -34,13 +45,15 @@ from workbench.solver._loop import (
     Settings,
     allocate,
     hooks_of,
+    implicit_of,
 )
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, Status, solver_stats
+from workbench.solver._tangent import state_scale
 
 __all__ = ["COMPILED_METHODS", "METHODS", "integrate"]
 
-_METHOD_IDS = {"dop853": DOP853, "dopri5": DOPRI5, "ark548": ARK548}
+_METHOD_IDS = {"auto": AUTO, "dop853": DOP853, "dopri5": DOPRI5, "ark548": ARK548, "radau": RADAU5}
 COMPILED_METHODS = tuple(_METHOD_IDS)
 # every method a scene may name
 METHODS = COMPILED_METHODS + tuple(f"scipy:{m}" for m in _scipy_backend.METHODS)
@@ -73,7 +86,8 @@ def integrate(
     t_rec : array_like
         Record times, s, ascending, the first at or after ``problem.t0``.
     method : str
-        ``"dop853"``, ``"dopri5"``, ``"ark548"`` (compiled) or ``"scipy:<solve_ivp method>"``.
+        ``"auto"`` (DOP853 and Radau IIA, switched on measured stiffness), ``"dop853"``,
+        ``"dopri5"``, ``"ark548"``, ``"radau"`` (compiled) or ``"scipy:<solve_ivp method>"``.
     rtol, atol : float
         Tolerances; ``atol`` is multiplied per state by ``problem.atol_scale``.
     max_step : float
@@ -117,6 +131,7 @@ def integrate(
     settings = Settings(mid, float(rtol), atol_arr, float(max_step), int(max_steps), t_rec)
     hooks = hooks_of(problem)
     state = allocate(problem, t_rec.size)
+    implicit = _implicit(problem, settings)
     t_end = float(t_rec[-1])
     _compiled(k, problem, settings)
     wall0 = _time.perf_counter()
@@ -135,7 +150,7 @@ def integrate(
     chunk = (t_end - problem.t0) / 100.0 if progress is not None else math.inf
     t_pause = problem.t0 + chunk
     while True:
-        code = k.advance(t_end, t_pause, settings, hooks, state, None)
+        code = k.advance(t_end, t_pause, settings, hooks, state, implicit)
         if progress is not None:
             progress(float(state.ctrl[CT_T]))
         if code != PAUSED:
@@ -155,6 +170,7 @@ def integrate(
         event_retries=int(stats[ST_EVENT_RETRIES]),
         wall_time=_time.perf_counter() - wall0,
     )
+    st.update(_implicit_stats(implicit, float(ctrl[CT_T]) - problem.t0))
     status = _STATUS[code]
     t_now = float(ctrl[CT_T])
     n_rec = int(stats[ST_RECORDED])
@@ -195,6 +211,38 @@ def failure_message(
     )
 
 
+def _implicit(problem: Problem, settings: Settings):
+    """The implicit method's arrays for Radau IIA and the automatic method, else None (the
+    loop is then compiled without the implicit method)."""
+    if settings.method not in (RADAU5, AUTO):
+        return None
+    return implicit_of(problem, settings.rtol, settings.atol, state_scale(problem), settings.method)
+
+
+def _implicit_stats(implicit, duration: float) -> dict:
+    """The implicit method's and the automatic switching's statistics (zeros for an explicit
+    method): Jacobian evaluations, LU decompositions (a real and a complex one each), Newton
+    iterations and the steps they failed, implicit steps, evaluations and simulated time (s),
+    the explicit method's simulated time (s), and the switches either way."""
+    if implicit is None:
+        counts = np.zeros(9, np.int64)
+        t_implicit = 0.0
+    else:
+        counts, t_implicit = implicit.stats, float(implicit.rc[RC_TIME_IMPLICIT])
+    return {
+        "jacobians": int(counts[IS_JAC]),
+        "lu_decompositions": int(counts[IS_LU]),
+        "newton_iterations": int(counts[IS_NEWTON]),
+        "newton_failures": int(counts[IS_NEWTON_FAIL]),
+        "implicit_steps": int(counts[IS_STEPS]),
+        "implicit_rhs_evaluations": int(counts[IS_RHS]),
+        "implicit_time": t_implicit,
+        "explicit_time": max(duration - t_implicit, 0.0),
+        "switches_to_implicit": int(counts[IS_TO_IMPLICIT]),
+        "switches_to_explicit": int(counts[IS_TO_EXPLICIT]),
+    }
+
+
 def _compiled(k, problem: Problem, settings: Settings) -> None:
     """Compile (or load from cache) every kernel entry point before the clock starts, so that
     the recorded wall time is integration only."""
@@ -205,4 +253,4 @@ def _compiled(k, problem: Problem, settings: Settings) -> None:
     k.start(t0, hooks, state)
     k.initial_step(settings.method, t0, t0 + 1.0, settings, hooks, state)
     short = settings._replace(max_steps=1, t_rec=np.zeros(0))
-    k.advance(t0, t0, short, hooks, state, None)
+    k.advance(t0, t0, short, hooks, state, _implicit(problem, settings))

@@ -4,7 +4,7 @@ Everything here works on arrays only (stages, states, dense-output coefficients,
 values) and calls no model hook, so numba compiles and caches it once; the per-model loop
 (:mod:`workbench.solver._kernel`) links the cached code. Algorithms: Dormand & Prince (1980)
 DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853 (Hairer, Nørsett & Wanner 1993,
-Sec. II.10); the ARK5(4)8L[2]SA
+Sec. II.10) and its stiffness detection (Hairer & Wanner 1996, Sec. IV.2); the ARK5(4)8L[2]SA
 of Kennedy & Carpenter (2003) with quartic Hermite dense output; the error norms of Hairer
 et al. (1993, Eq. II.4.11); the Illinois variant of regula falsi (Dowell & Jarratt 1971).
 """
@@ -14,10 +14,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.solver._loop import ARK548, DOP853
+from workbench.solver._loop import ARK548, DOP853, DOPRI5
 from workbench.solver._tableaux import (
     ARK_E,
     ARK_GAMMA,
+    DOP853_A,
+    DOP853_B,
     DOP853_D,
     DOP853_E3,
     DOP853_E5,
@@ -27,6 +29,9 @@ from workbench.solver._tableaux import (
     RK45_P,
     SAFETY,
 )
+
+#: DOP853's stability bound on the negative real axis, |h lambda| < 6.1 (Hairer's DOP853 code)
+DOP853_STABILITY = 6.1
 
 
 @njit(cache=True)
@@ -214,7 +219,7 @@ def dense_eval(method, t_old, h, y_old, F, t, out):
     elif method == ARK548:
         for i in range(n):
             out[i] = y_old[i] + x * (F[1, i] + x * (F[2, i] + x * (F[3, i] + x * F[4, i])))
-    else:
+    elif method == DOPRI5:
         for i in range(n):
             acc = 0.0
             xp = x
@@ -222,6 +227,9 @@ def dense_eval(method, t_old, h, y_old, F, t, out):
                 acc += F[j, i] * xp
                 xp *= x
             out[i] = y_old[i] + h * acc
+    else:  # Radau IIA: the collocation polynomial, y_old + sum_k F[k] x^(k+1)
+        for i in range(n):
+            out[i] = y_old[i] + x * (F[0, i] + x * (F[1, i] + x * F[2, i]))
 
 
 @njit(cache=True)
@@ -297,3 +305,25 @@ def initial_difference(y0, f0, f1, rtol, atol, h0):
         sc = atol[i] + abs(y0[i]) * rtol
         d2 += ((f1[i] - f0[i]) / sc) ** 2
     return np.sqrt(d2 / n) / h0
+
+
+@njit(cache=True)
+def dop853_stiffness(K, h, scale):
+    """Hairer's estimate of |h lambda| from DOP853's last step (Hairer & Wanner 1996,
+    Sec. IV.2; the test of his code DOP853): the 12th stage and the step's end lie at the same
+    time t + h, so ``h |f(y_new) - f(Y12)| / |y_new - Y12|`` estimates h times the Jacobian's
+    dominant eigenvalue along their difference. Norms in the state divided by ``scale``.
+    Returns 0 where the two points coincide."""
+    n = K.shape[1]
+    num = 0.0
+    den = 0.0
+    for i in range(n):
+        acc = 0.0
+        for j in range(12):
+            acc += (DOP853_B[j] - DOP853_A[11, j]) * K[j, i]
+        d = h * acc / scale[i]
+        den += d * d
+        num += ((K[12, i] - K[11, i]) / scale[i]) ** 2
+    if den <= 0.0:
+        return 0.0
+    return abs(h) * np.sqrt(num / den)
