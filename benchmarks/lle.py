@@ -11,11 +11,18 @@ against the exponent of each window is what tests/test_wolf_heldout.py judges; a
 own exponent scatters by several % about 0.9056.) Then wolf_lle's verdict on the same run
 sampled every 20th point (dt = 0.2 s): flagged.
 
-Run: ``python benchmarks/lle.py``.
+Then the exponents from the equations, per method with its converged flag and wall time: on
+Lorenz (200 s after 10 s) ``lle_from_equations`` (two trajectories, five knob variants, the
+variational exponent on the same trajectory) and ``lyapunov_spectrum`` (QR); on the nine-bar
+chaos case (studies/chaos/chaos.toml, 4 transient + 3 crank cycles) the same two
+(``--skip-ninebar`` leaves it out: several minutes).
+
+Run: ``python benchmarks/lle.py [--skip-ninebar]``.
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 import tracemalloc
 import warnings
@@ -24,7 +31,7 @@ import nolds
 import numpy as np
 
 import workbench
-from workbench.analysis import wolf_lle
+from workbench.analysis import lle_from_equations, lyapunov_spectrum, wolf_lle
 
 TRUE = 0.9056  # 1/s
 DT = 0.01
@@ -61,7 +68,34 @@ def nolds_default(x):
         return float(nolds.lyap_r(x)) / DT
 
 
+def equations(label: str, scene, lyapunov_exponents: int | None) -> None:
+    """The exponents from the equations of one scene: value, converged flag, wall time."""
+    t0 = time.perf_counter()
+    b = lle_from_equations(scene)
+    wall_b = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    v = lyapunov_spectrum(scene, exponents=lyapunov_exponents)
+    wall_v = time.perf_counter() - t0
+    print(
+        f"{label:>10} {'two trajectories':>26} {float(b.lle):9.4f} {str(bool(b.converged)):>9} "
+        f"{wall_b:8.1f}   variants {100 * float(b.spread):.2g} %, stderr {float(b.stderr):.3g}"
+    )
+    print(
+        f"{label:>10} {'variational, same run':>26} {float(b.lle_variational):9.4f} "
+        f"{'':>9} {'':>8}   differs by {100 * float(b.method_difference):.2g} %"
+    )
+    print(
+        f"{label:>10} {'variational spectrum (QR)':>26} {float(v.exponent[0]):9.4f} "
+        f"{str(bool(v.converged[0])):>9} {wall_v:8.1f}   rtol/10: "
+        f"{float(v.exponent_tight[0]):.4g}, stderr {float(v.stderr[0]):.3g}, sum "
+        f"{float(v.spectrum_sum):.4g} (divergence {float(v.divergence):.4g})"
+    )
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--skip-ninebar", action="store_true", help="leave out the nine-bar")
+    args = parser.parse_args()
     ds = workbench.simulate(
         {
             "model": {"name": "lorenz"},
@@ -99,6 +133,14 @@ def main() -> None:
         f"dt = 0.2 s ({coarse.sizes['elapsed']} steps): LLE {float(coarse.lle):.3f} 1/s, reliable "
         f"{bool(coarse.reliable)}: {coarse.reliable.attrs['message'][:110]}..."
     )
+    print(f"\n{'system':>10} {'method':>26} {'LLE 1/s':>9} {'converged':>9} {'time s':>8}")
+    lorenz = {"model": {"name": "lorenz"}, "run": {"duration": 200.0, "transient": 10.0}}
+    equations("Lorenz", lorenz, None)
+    if not args.skip_ninebar:
+        chaos = workbench.load_scene("studies/chaos/chaos.toml").replace(
+            run={"cycles": 3, "transient_cycles": 4}
+        )
+        equations("nine-bar", chaos, 1)
 
 
 if __name__ == "__main__":

@@ -1,88 +1,250 @@
-"""Speed of the nine-bar model: seconds per crank cycle, steps and evaluations per cycle.
+"""Speed of the nine-bar model: CPU seconds per crank cycle, and where they go.
 
-The default scene (studies/ninebar.toml: A and B, 0.5 mm, omega = 2.5 pi, modified Coulomb),
-2 transient + 10 recorded cycles at rtol 1e-6, with the compiled DOP853 and DOPRI5, and the first
-cycle with the compiled DOP853 and with ``scipy:DOP853`` on the same compiled right-hand side
-(their ratio is the speed-up on the same work); then the same with LuGre. The time per
-right-hand-side evaluation (solver overhead included) shows why the ratio to scipy is what it
-is: scipy adds ~10-15 us of Python per evaluation to a ~2 us model.
-With LuGre also the implicit-explicit ARK548 (the bristle states implicit), and what it costs
-in accuracy: the short-horizon error (30 ms of the first cycle, ``workbench.accuracy``) of
-DOP853 and ARK548 at rtol 1e-6 and 1e-8 against DOP853 at 1e-11.
-Targets on one core: <= 0.02 s per cycle (Coulomb), <= 0.06 s (LuGre); >= 50x scipy.
-The paper's MATLAB needed 20.05 s (Coulomb) and 37.29 s (LuGre) per cycle.
+The default scene (studies/ninebar.toml: joints A and B, 0.5 mm, omega = 2.5 pi, modified
+Coulomb), rtol = atol = 1e-6, on one core, CPU time (``time.process_time``) of the integration
+alone, each figure the range over repeats, every baseline measured in the same run:
 
-Run: ``python benchmarks/ninebar_speed.py``.
+1. the right-hand side alone, per call, at the 2001 recorded states of the first cycle: the lean
+   hook ``rhs`` against ``rhs_reference`` (the full record-time evaluation: the formulation the
+   hook had before, "before");
+2. the compiled solver, 2 transient + 10 recorded cycles: DOP853 with the lean hook and with the
+   reference one (before), and DOPRI5; steps, evaluations per cycle (exact) and CPU time per
+   evaluation (right-hand side and solver together);
+3. the first cycle: compiled DOP853 against ``scipy:DOP853`` on the same compiled hook (the
+   ratio is the solver's own speed-up), and against scipy with the plain-Python hook (numba's
+   JIT disabled: every numba function runs as Python), measured over the first 0.1 s and
+   extrapolated to the cycle by its number of evaluations;
+4. against the paper's MATLAB: 20.05 s per cycle (Coulomb), 37.29 s (LuGre);
+5. LuGre: ARK548 (the bristles implicit; the best method at rtol 1e-6, see README "Stiff LuGre
+   bristles") and DOP853, 2 + 10 cycles.
+
+Targets (one quiet core): <= 0.04 s per cycle (Coulomb DOP853), <= 0.1 s per cycle (LuGre).
+With ``--accuracy`` also the short-horizon error of DOP853 and ARK548 at rtol 1e-6 and 1e-8
+against DOP853 at 1e-11 (first 30 ms, ``workbench.accuracy``), which backs the choice of ARK548.
+
+Run: ``python benchmarks/ninebar_speed.py [--repeats N] [--accuracy]`` (3-6 min; the first run
+also compiles the kernels, ~2-4 min).
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+import types
 from pathlib import Path
+
+import numpy as np
+from numba import njit
 
 import workbench
 from workbench import accuracy
+from workbench.models.ninebar import _dynamics as dyn
+from workbench.run import prepare
+from workbench.solver import integrate
 
 SCENE = Path(__file__).resolve().parents[1] / "studies" / "ninebar.toml"
 PAPER = {"coulomb": 20.05, "lugre": 37.29}
+TARGET = {"coulomb": 0.04, "lugre": 0.1}
+REFERENCE_HOOKS = "ninebar_reference_hooks"  # the hooks module whose rhs is rhs_reference
 
 
-def per_cycle(friction: str, method: str, cycles: int, transient: int) -> dict:
+def problem(friction: str, cycles: float, transient: int = 0, spp: int = 100):
+    """The default scene's problem with this friction law and its record grid."""
     base = workbench.load_scene(SCENE)
     scene = base.replace(
-        effects={
-            **base.effects,
-            "friction": friction,
-            "clearance": list(base.effects["clearance"]),
-        },
-        solver={**base.solver, "method": method, "rtol": 1e-6, "atol": 1e-6},
+        effects={**base.effects, "friction": friction},
         run={"cycles": cycles, "transient_cycles": transient},
-        record={"samples_per_period": 100, "variables": ["clearance_x"]},
+        record={"samples_per_period": spp, "variables": ["clearance_x"]},
     )
-    ds = workbench.simulate(scene)
-    a = ds.attrs
+    prepared = prepare(scene)
+    return prepared.problem, prepared.times
+
+
+def solve(friction: str, method: str, cycles: int, transient: int, repeats: int, hooks=None):
+    """CPU time per cycle (min, max over repeats) and the exact counts per cycle."""
+    prob, t_rec = problem(friction, cycles, transient)
+    if hooks is not None:
+        prob.hooks = hooks
     n = cycles + transient
+    integrate(prob, t_rec[:2], method=method, rtol=1e-6, atol=1e-6)  # compile or load
+    times = []
+    for _ in range(repeats):
+        c0 = time.process_time()
+        run = integrate(prob, t_rec, method=method, rtol=1e-6, atol=1e-6)
+        times.append((time.process_time() - c0) / n)
+    st = run.stats
     return {
-        "s_per_cycle": a["solver_wall_time"] / n,
-        "steps": a["solver_steps"] / n,
-        "rhs": a["solver_rhs_evaluations"] / n,
-        "events": a["solver_events"] / n,
+        "s": (min(times), max(times)),
+        "steps": st["steps"] / n,
+        "evals": st["rhs_evaluations"] / n,
+        "events": st["events"] / n,
     }
 
 
+@njit  # takes the hook as an argument: numba cannot cache that
+def _calls(f, T, Y, p, ip, AUX, work, reps):
+    """Call the hook f at every state (copied element-wise: no array views in the loop)."""
+    n = Y.shape[1]
+    y = np.empty(n)
+    aux = np.empty(AUX.shape[1])
+    dydt = np.empty(n)
+    acc = 0.0
+    for _ in range(reps):
+        for i in range(T.size):
+            for k in range(n):
+                y[k] = Y[i, k]
+            for k in range(aux.size):
+                aux[k] = AUX[i, k]
+            acc += f(T[i], y, p, ip, aux, work, dydt) + dydt[n - 1]
+    return acc
+
+
+def rhs_cost(friction: str, repeats: int) -> dict[str, tuple[float, float]]:
+    """CPU time per call (us; min, max over repeats) of the lean and the reference hook."""
+    prob, t_rec = problem(friction, 1, spp=2000)
+    run = integrate(prob, t_rec, method="dop853", rtol=1e-6, atol=1e-6)
+    work = np.zeros(prob.work_size)
+    out = {}
+    for name, f in (("lean", dyn.rhs), ("reference", dyn.rhs_reference)):
+        reps = 400 if name == "lean" else 50
+        _calls(f, run.t, run.Y, prob.p, prob.ip, run.AUX, work, 1)
+        times = []
+        for _ in range(repeats):
+            c0 = time.process_time()
+            _calls(f, run.t, run.Y, prob.p, prob.ip, run.AUX, work, reps)
+            times.append((time.process_time() - c0) / (reps * run.t.size) * 1e6)
+        out[name] = (min(times), max(times))
+    return out
+
+
+def plain_python(friction: str, horizon: float) -> dict:
+    """scipy:DOP853 with numba's JIT disabled over the first ``horizon`` (s), in a fresh
+    process: CPU seconds and evaluations."""
+    code = (
+        "import json, sys, time\n"
+        f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+        "from ninebar_speed import problem\n"
+        "from workbench.solver._simulate import integrate\n"
+        f"prob, t = problem({friction!r}, 1)\n"
+        f"t = t[t <= {horizon!r}]\n"
+        "c0 = time.process_time()\n"
+        "run = integrate(prob, t, method='scipy:DOP853', rtol=1e-6, atol=1e-6)\n"
+        "print(json.dumps({'s': time.process_time() - c0,"
+        " 'evals': run.stats['rhs_evaluations']}))\n"
+    )
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _register_reference_hooks() -> None:
+    """A hooks module whose rhs is the reference formulation (the solver's "before")."""
+    mod = types.ModuleType(REFERENCE_HOOKS)
+    mod.rhs = dyn.rhs_reference
+    mod.event_values = dyn.event_values
+    mod.apply_event = dyn.apply_event
+    sys.modules[REFERENCE_HOOKS] = mod
+
+
+def _range(r: tuple[float, float], fmt: str = ".4f") -> str:
+    return f"{r[0]:{fmt}}-{r[1]:{fmt}}"
+
+
+def _row(name: str, r: dict, friction: str) -> str:
+    us = (r["s"][0] / r["evals"] * 1e6, r["s"][1] / r["evals"] * 1e6)
+    return (
+        f"  {name:24s} {_range(r['s'])} s/cycle  {r['steps']:6.0f} steps  "
+        f"{r['evals']:7.0f} evaluations  {r['events']:4.0f} events per cycle  "
+        f"{_range(us, '.2f')} us/evaluation  {PAPER[friction] / r['s'][1]:5.0f}x the paper"
+    )
+
+
 def main() -> None:
-    for friction in ("coulomb", "lugre"):
-        print(f"--- friction = {friction} (paper's MATLAB: {PAPER[friction]} s per cycle)")
-        per_cycle(friction, "dop853", 1, 0)  # compile / load the kernel
-        rows = {
-            "dop853": per_cycle(friction, "dop853", 10, 2),
-            "dopri5": per_cycle(friction, "dopri5", 10, 2),
-            "dop853 cycle 1": per_cycle(friction, "dop853", 1, 0),
-            "scipy:DOP853": per_cycle(friction, "scipy:DOP853", 1, 0),
-        }
-        if friction == "lugre":
-            rows["ark548"] = per_cycle(friction, "ark548", 10, 2)
-        for method, r in rows.items():
-            print(
-                f"{method:14s} {r['s_per_cycle']:9.4f} s/cycle  {r['steps']:9.0f} steps/cycle  "
-                f"{r['rhs']:10.0f} rhs/cycle  {r['events']:6.0f} events/cycle  "
-                f"{r['s_per_cycle'] / r['rhs'] * 1e6:5.2f} us/rhs  "
-                f"{PAPER[friction] / r['s_per_cycle']:8.0f}x the paper"
-            )
-        # the same first cycle (the transient's cost differs from a settled cycle's)
-        ratio = rows["scipy:DOP853"]["s_per_cycle"] / rows["dop853 cycle 1"]["s_per_cycle"]
-        target = 0.02 if friction == "coulomb" else 0.06
-        print(
-            f"compiled dop853 vs scipy:DOP853 (same rhs, same first cycle): {ratio:.0f}x "
-            f"(target >= 50x; bounded by (rhs + scipy's per-call overhead) / rhs, see us/rhs); "
-            f"target <= {target} s/cycle: "
-            f"{'met' if rows['dop853']['s_per_cycle'] <= target else 'NOT met'}"
-        )
-        if friction == "lugre":
-            stiff_remedy()
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=5, help="repeats of each timing (5)")
+    ap.add_argument("--accuracy", action="store_true", help="also ARK548's short-horizon error")
+    args = ap.parse_args()
+    _register_reference_hooks()
+    print(
+        "nine-bar, default scene (A+B, 0.5 mm, omega 2.5 pi), rtol 1e-6; CPU time of one "
+        f"process, min-max over {args.repeats} repeats"
+    )
+
+    print("--- right-hand side alone (2001 states of the first cycle, Coulomb)")
+    cost = rhs_cost("coulomb", args.repeats)
+    ratio = (cost["reference"][0] / cost["lean"][1], cost["reference"][1] / cost["lean"][0])
+    print(
+        f"  lean rhs {_range(cost['lean'], '.3f')} us/call; reference rhs (the full "
+        f"evaluation, before) {_range(cost['reference'], '.3f')} us/call: "
+        f"{_range(ratio, '.1f')}x"
+    )
+
+    print("--- Coulomb (paper's MATLAB: 20.05 s per cycle), 2 + 10 cycles")
+    rows = {
+        "dop853": solve("coulomb", "dop853", 10, 2, args.repeats),
+        "dop853, reference rhs": solve(
+            "coulomb", "dop853", 10, 2, max(1, args.repeats // 2), hooks=REFERENCE_HOOKS
+        ),
+        "dopri5": solve("coulomb", "dopri5", 10, 2, args.repeats),
+    }
+    for name, r in rows.items():
+        print(_row(name, r, "coulomb"))
+    best = rows["dop853"]["s"]
+    before = rows["dop853, reference rhs"]["s"]
+    print(
+        f"  lean vs reference rhs in the solver: {before[0] / best[1]:.1f}-"
+        f"{before[1] / best[0]:.1f}x; target <= {TARGET['coulomb']} s/cycle: "
+        f"{'met' if best[0] <= TARGET['coulomb'] else 'NOT met'} (best repeat {best[0]:.4f})"
+    )
+
+    print("--- first cycle (the transient; from rest)")
+    first = solve("coulomb", "dop853", 1, 0, args.repeats)
+    sp = solve("coulomb", "scipy:DOP853", 1, 0, max(1, args.repeats // 2))
+    horizon = 0.1  # s: an eighth of the cycle, impacts and sliding included
+    py = plain_python("coulomb", horizon)
+    py_cycle = py["s"] / py["evals"] * sp["evals"]
+    print(_row("dop853", first, "coulomb"))
+    print(_row("scipy:DOP853, same rhs", sp, "coulomb"))
+    print(
+        f"  scipy:DOP853 with the plain-Python rhs (numba JIT off): {py['s']:.1f} s for the "
+        f"first {horizon * 1e3:.0f} ms ({py['evals']} evaluations, "
+        f"{py['s'] / py['evals'] * 1e6:.0f} us each), extrapolated to the cycle's "
+        f"{sp['evals']:.0f} evaluations: {py_cycle:.0f} s/cycle"
+    )
+    print(
+        f"  compiled dop853 vs scipy:DOP853 on the same compiled rhs: "
+        f"{sp['s'][0] / first['s'][1]:.0f}-{sp['s'][1] / first['s'][0]:.0f}x; vs scipy with "
+        f"the plain-Python rhs: ~{py_cycle / first['s'][1]:.0f}-{py_cycle / first['s'][0]:.0f}x "
+        f"(extrapolated); vs the paper's MATLAB (20.05 s/cycle): "
+        f"{PAPER['coulomb'] / best[1]:.0f}-{PAPER['coulomb'] / best[0]:.0f}x"
+    )
+
+    print("--- LuGre (paper's MATLAB: 37.29 s per cycle), 2 + 10 cycles")
+    lugre = {
+        "ark548": solve("lugre", "ark548", 10, 2, args.repeats),
+        "dop853": solve("lugre", "dop853", 10, 2, max(1, args.repeats // 2)),
+    }
+    for name, r in lugre.items():
+        print(_row(name, r, "lugre"))
+    best = lugre["ark548"]["s"]
+    print(
+        f"  ARK548 target <= {TARGET['lugre']} s/cycle: "
+        f"{'met' if best[0] <= TARGET['lugre'] else 'NOT met'}; vs the paper: "
+        f"{PAPER['lugre'] / best[1]:.0f}-{PAPER['lugre'] / best[0]:.0f}x"
+    )
+    if args.accuracy:
+        stiff_remedy()
 
 
 def stiff_remedy() -> None:
     """What ARK548 costs in accuracy: short-horizon errors against DOP853 at 1e-11."""
+
     base = workbench.load_scene(SCENE)
     scene = base.replace(
         effects={**base.effects, "friction": "lugre"},
@@ -96,7 +258,7 @@ def stiff_remedy() -> None:
         reference=("dop853", 1e-11),
         horizon=0.03,
     )
-    print("LuGre, first 30 ms: short-horizon error (fraction of range) and rhs evaluations")
+    print("--- LuGre, first 30 ms: short-horizon error (fraction of range), rhs evaluations")
     for m in wp.solver_method.values:
         for tol in wp.rtol.values:
             r = wp.sel(solver_method=m, rtol=tol)

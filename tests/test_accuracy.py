@@ -4,7 +4,13 @@ import numpy as np
 import pytest
 
 from workbench.cli import main
-from workbench.precision import REFERENCE_FLOOR, Recommendation, accuracy, recommend
+from workbench.precision import (
+    LIMIT_FACTOR,
+    REFERENCE_FLOOR,
+    Recommendation,
+    accuracy,
+    recommend,
+)
 
 DUFFING = {"model": {"name": "duffing"}, "run": {"cycles": 10}}
 
@@ -66,8 +72,12 @@ def test_cli_accuracy(tmp_path, capsys):
         )
         == 0
     )
-    assert "recommended" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "recommended" in text and "reference error" in text
     assert out.with_suffix(".png").stat().st_size > 10_000
+    assert not out.with_name("wp.nc.runs").exists()  # a finished study keeps no runs
+    assert main(["accuracy", str(scene), "-o", str(out), "--methods", "dop853"]) == 2
+    assert "exists; pass --overwrite" in capsys.readouterr().err
 
 
 def test_run_estimates_its_own_error_when_asked():
@@ -154,3 +164,114 @@ def test_short_horizon_stops_where_the_reference_is_no_longer_exact():
     assert short_horizon(ref, probe) == pytest.approx(0.3)
     assert short_horizon(ref, probe, twin) == pytest.approx(0.199)
     assert short_horizon(ref, probe, ref) == pytest.approx(0.3)  # an exact twin changes nothing
+
+
+def test_the_reference_is_100x_tighter_than_the_tightest_tolerance(study):
+    assert study.attrs["reference_tolerance"] == pytest.approx(1e-9 / 100)
+    assert study.attrs["reference_twin_tolerance"] == pytest.approx(1e-12)
+    assert study.at_reference_limit.attrs["flag_meanings"].split() == [
+        "short_error_at_reference_limit",
+        "peak_error_at_reference_limit",
+    ]
+
+
+def test_errors_at_the_reference_limit_are_flagged_and_never_recommended():
+    """The issue's case: a reference only 10x below a tolerance studied. The setting at the
+    reference's own tolerance reads an error of 0, which says nothing about it: it is flagged,
+    and recommend refuses to pick it."""
+    with pytest.warns(UserWarning, match="less than 100x tighter than the tightest"):
+        wp = accuracy(
+            DUFFING, methods=["dop853"], tolerances=[1e-4, 1e-8], reference=("dop853", 1e-8)
+        )
+    errors = wp.short_error.sel(solver_method="dop853")
+    assert float(errors.sel(rtol=1e-8)) <= LIMIT_FACTOR * wp.attrs["reference_error"]
+    assert int(wp.at_reference_limit.sel(solver_method="dop853", rtol=1e-8)) == 3  # both errors
+    assert int(wp.at_reference_limit.sel(solver_method="dop853", rtol=1e-4)) == 0
+    assert float(errors.sel(rtol=1e-4)) > 1e-5  # only the flagged setting meets 1e-5
+    with pytest.raises(ValueError, match=r"\(dop853 1e-08 \(.*\)\) are at the reference's limit"):
+        recommend(wp, 1e-5)
+    assert recommend(wp, 1.0).rtol == 1e-4
+
+
+def test_without_a_twin_every_setting_near_the_reference_is_flagged():
+    """A reference at the smallest rtol a scene accepts has no tighter twin, so its own error is
+    unknown: every setting less than 100x looser is flagged."""
+    with pytest.warns(UserWarning, match="less than 100x tighter"):
+        wp = accuracy(
+            DUFFING, methods=["dop853"], tolerances=[1e-6, 1e-13], reference=("dop853", 1e-14)
+        )
+    assert np.isnan(wp.attrs["reference_error"])
+    np.testing.assert_array_equal(wp.at_reference_limit.values, [[0, 3]])
+
+
+def test_an_interrupted_study_resumes_from_its_store(tmp_path, monkeypatch):
+    """Interrupted (Ctrl-C) during its second setting, a study with a store keeps the reference
+    runs and the first setting; run again, it computes only the second setting's two runs and
+    gives the same errors as an uninterrupted study. The store is gone once the study is done."""
+    import workbench.precision._study as study_module
+
+    real = study_module.simulate
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        if stop_at is not None and len(calls) == stop_at:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(study_module, "simulate", counted)
+    kwargs = {"methods": ["dop853"], "tolerances": [1e-4, 1e-6]}
+    store = tmp_path / "wp.nc.runs"
+    stop_at = 7  # 4 reference runs, 2 for the first setting, then the second setting's first
+    with pytest.raises(KeyboardInterrupt):
+        accuracy(DUFFING, store=store, **kwargs)
+    assert sorted(p.name for p in store.glob("setting-*")) == ["setting-dop853-1.000000e-04.json"]
+    calls.clear()
+    stop_at = None
+    resumed = accuracy(DUFFING, store=store, **kwargs)
+    assert len(calls) == 2
+    assert not store.exists()
+    whole = accuracy(DUFFING, **kwargs)
+    for name in ("short_error", "peak_error", "events_error", "statistic_error", "steps"):
+        np.testing.assert_array_equal(resumed[name].values, whole[name].values)
+    assert resumed.attrs["reference_error"] == whole.attrs["reference_error"]
+
+
+def test_a_changed_study_is_refused_and_a_store_in_use_too(tmp_path):
+    from workbench.archive import ArchiveError, StoreLocked, store_lock
+
+    store = tmp_path / "runs"
+    (store).mkdir()
+    with store_lock(store), pytest.raises(StoreLocked, match=r"in use by process \d+"):
+        accuracy(DUFFING, methods=["dop853"], tolerances=[1e-4], store=store)
+    (store / "manifest.json").write_text(
+        '{"format": "workbench-accuracy 1", "identity": {"scene": {"model": {"name": "duffing"}, '
+        '"run": {"cycles": 20}}, "reference": ["dop853", 1e-07], "horizon": null}, '
+        '"checksums": {}}'
+    )
+    with pytest.raises(ArchiveError, match=r"(?s)different work-precision study.*run.cycles: 20"):
+        accuracy(DUFFING, methods=["dop853"], tolerances=[1e-4], store=store)
+
+
+def test_solver_warnings_go_to_the_record_not_the_terminal(monkeypatch, capsys):
+    import warnings
+
+    import workbench.precision._study as study_module
+
+    real = study_module.simulate
+
+    def noisy(*args, **kwargs):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=2)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(study_module, "simulate", noisy)
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        wp = accuracy(DUFFING, methods=["dop853"], tolerances=[1e-4, 1e-6], progress=True)
+    assert not [w for w in shown if issubclass(w.category, RuntimeWarning)]
+    expected = "RuntimeWarning: overflow encountered in multiply (x2)"
+    assert (wp.solver_warnings.values == expected).all()
+    assert wp.attrs["reference_warnings"] == "RuntimeWarning: overflow encountered in multiply (x4)"
+    err = capsys.readouterr().err
+    assert "overflow" not in err
+    assert "8/8" in err and "run/s" in err  # the count of runs, with a rate for the ETA

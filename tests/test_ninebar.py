@@ -8,6 +8,7 @@ from helpers import ENERGY, IDEAL_SLIDER_PEAKS, energy_residual
 
 import workbench
 from workbench.models import get_model
+from workbench.models._reduced import JOINT
 from workbench.models.ninebar import _dynamics as dyn
 from workbench.models.ninebar._geometry import geometry_array
 from workbench.models.ninebar._kinematics import N_POINTS, PT_E, kinematics
@@ -22,6 +23,8 @@ def kin(q, qd=None):
         np.empty((N_POINTS, 2)),
         np.empty((8, 3, 6)),
         np.empty((N_POINTS, 2, 6)),
+        np.empty((8, 3)),
+        np.empty((N_POINTS, 2)),
         np.empty((8, 3)),
         np.empty((N_POINTS, 2)),
     )
@@ -78,11 +81,12 @@ def test_closure_and_derivatives_against_finite_differences():
     for _ in range(20):
         q = np.concatenate([rng.uniform(-np.pi, np.pi, 2), rng.uniform(-3e-4, 3e-4, 4)])
         qd = rng.normal(size=6) * np.array([8, 8, 0.05, 0.05, 0.05, 0.05])
-        code, (pos, pts, J, Jp, gam, _) = kin(q, qd)
+        code, (pos, pts, J, Jp, gam, _, vel, _) = kin(q, qd)
         assert code == 0
         # the loop P closes from both sides to round-off: |P - B'| = L3
         geo = geometry_array()
         assert abs(np.hypot(*(pts[4] - pts[3])) - geo[2]) < 1e-12
+        np.testing.assert_allclose(vel, J @ qd, rtol=0, atol=1e-13)  # the stored velocity pass
         h = 1e-7
         for col in range(6):
             e = np.zeros(6)
@@ -234,4 +238,4 @@ def test_stiffness_from_eq4_matches_spec_table():
         prob = m.problem(
             params, {"clearance": ("A",), "friction": "none", "gravity": True}, {}, ("torque",)
         )
-        assert prob.p[dyn.P_JOINT + dyn.PJ_K] == pytest.approx(k, rel=2e-3)
+        assert prob.p[dyn.P.joint + JOINT.k] == pytest.approx(k, rel=2e-3)

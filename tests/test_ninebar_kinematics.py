@@ -14,6 +14,7 @@ from workbench.models.ninebar import _kinematics as K
 from workbench.models.ninebar._geometry import (
     BODY_NAMES,
     DEFAULT_GEOMETRY,
+    DERIVED_FIELDS,
     GEOMETRY_FIELDS,
     INERTIAS,
     MASSES,
@@ -38,8 +39,15 @@ def kin(q, qd=None, geo=GEO):
         "Jp": np.full((K.N_POINTS, 2, 6), np.nan),
         "gam": np.full((8, 3), np.nan),
         "gamp": np.full((K.N_POINTS, 2), np.nan),
+        "vel": np.full((8, 3), np.nan),
+        "velp": np.full((K.N_POINTS, 2), np.nan),
     }
     assert K.kinematics(q, qd, geo, *out.values()) == K.ASSEMBLED
+    # the stored velocity pass is J qd to rounding
+    np.testing.assert_allclose(out["vel"], out["J"] @ qd, rtol=0, atol=1e-14 * (1 + abs(qd).max()))
+    np.testing.assert_allclose(
+        out["velp"], out["Jp"] @ qd, rtol=0, atol=1e-14 * (1 + abs(qd).max())
+    )
     return out
 
 
@@ -309,11 +317,13 @@ def test_assembly_failure_is_a_code_not_a_nan(q, changes, code):
         np.zeros((K.N_POINTS, 2, 6)),
         np.zeros((8, 3)),
         np.zeros((K.N_POINTS, 2)),
+        np.zeros((8, 3)),
+        np.zeros((K.N_POINTS, 2)),
     ]
     assert K.kinematics(q, np.ones(6), geo, *outs) == code
     assert K.positions(q, geo, *outs[:2]) == code
     assert K.jacobian(q, geo, *outs[2:4]) == code
-    assert K.bias_acceleration(q, np.ones(6), geo, *outs[4:]) == code
+    assert K.bias_acceleration(q, np.ones(6), geo, *outs[4:6]) == code
     for out in outs:  # left untouched
         assert not np.any(out)
     with pytest.raises(ValueError, match="does not assemble"):
@@ -353,7 +363,9 @@ def test_rrp_dyad_on_a_3_4_5_triangle():
 
 # -- parameter defaults ----------------------------------------------------------------------------
 def test_geometry_defaults_and_mass_properties_follow_the_spec():
-    assert len(GEOMETRY_FIELDS) == len(set(GEOMETRY_FIELDS)) == GEO.size
+    assert len(GEOMETRY_FIELDS) == len(set(GEOMETRY_FIELDS)) == GEO.size - len(DERIVED_FIELDS)
+    beta = GEO[GEOMETRY_FIELDS.index("beta")]
+    np.testing.assert_array_equal(GEO[-2:], [math.cos(beta), math.sin(beta)])
     assert set(GEOMETRY_FIELDS) == set(DEFAULT_GEOMETRY)
     geo = geometry_array({"L8": 0.4})
     assert geo[GEOMETRY_FIELDS.index("L8")] == 0.4

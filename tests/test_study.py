@@ -185,14 +185,35 @@ def test_contradicted_claim_carries_its_reason_with_measured_evidence():
     assert "cf_0.1 at A: in contact 85 % of the time, 99th-percentile force 332 N" in out["reason"]
 
 
+def _exponents(lle, stderr, trusted):
+    return {
+        "method": ["two trajectories", "Wolf, 100 per cycle"],
+        "lle": [lle, 0.1],
+        "lle_per_cycle": [lle, 0.1],
+        "stderr": [stderr, None],
+        "trusted": [trusted, False],
+        "note": ["five variants within 0.1 %", "flagged"],
+    }
+
+
 def test_chaos_and_bifurcation_claims_over_samples():
-    lle = {k: _peaks(8.0, 2.0, 8, i) for i, k in enumerate(("x1", "y1", "x2", "y2"))}
-    assert evaluate_claim({"text": "t", "statistic": "chaos"}, {"wolf_lle": lle})["verdict"] == (
-        "reproduced"
+    """The chaos verdict rests on the converged exponent of the equations and the 0-1 test,
+    not on Wolf's estimates of a sampled series (which are ignored here)."""
+    k = {c: [0.95, 0.97, 0.99, 0.93] for c in ("x1", "y1", "x2", "y2")}
+    wolf = {c: [-1.0, -2.0] for c in k}  # would contradict, but is not evidence
+    chaos = {"text": "t", "statistic": "chaos"}
+    out = evaluate_claim(
+        chaos, {"exponents": _exponents(27.0, 7.0, True), "zero_one_K": k, "wolf_lle": wolf}
     )
-    lle["y2"] = _peaks(0.0, 2.0, 8, 9)  # one coordinate indistinguishable from 0
-    out = evaluate_claim({"text": "t", "statistic": "chaos"}, {"wolf_lle": lle})
-    assert out["verdict"] == "not resolved" and "y2" in out["reason"]
+    assert out["verdict"] == "reproduced" and "27 +/- 7 1/s" in out["evidence"]
+    out = evaluate_claim(chaos, {"exponents": _exponents(27.0, 7.0, False), "zero_one_K": k})
+    assert out["verdict"] == "not resolved" and "variants disagree" in out["reason"]
+    out = evaluate_claim(chaos, {"exponents": _exponents(5.0, 7.0, True), "zero_one_K": k})
+    assert out["verdict"] == "not resolved" and "two standard errors" in out["reason"]
+    low = {c: [0.1, 0.05] for c in k}
+    out = evaluate_claim(chaos, {"exponents": _exponents(-20.0, 2.0, True), "zero_one_K": low})
+    assert out["verdict"] == "contradicted"
+    assert evaluate_claim(chaos, {"wolf_lle": wolf})["verdict"] == "undecided"
     assert sign_test_zero([-1.0, -2.0, -1.5, -3.0, -2.2, -1.1])["sign"] == -1
     values = list(np.linspace(0.01, 0.25, 10))
     spread = [[0.1 + 0.01 * i] for i in range(10)]  # grows with the parameter
@@ -288,8 +309,18 @@ def test_friction_sweep_summary_report_and_figure(tmp_path):
         "measures": {"sweep_contact": {"c_0.02mm": d}},
         "flutter": {
             "parameter": "friction_coefficient",
-            "cases": ["c_0.02mm"],
-            "status": "pending",
+            "status": "computed",
+            "cases": {
+                "c_0.02mm": {
+                    "values": [0.01, 0.2],
+                    "median": [-3.0, 450.0],
+                    "p90": [0.5, 800.0],
+                    "frequency": [300.0, 640.0],
+                    "fraction": [0.97, 0.4],
+                    "threshold": 1.0,
+                    "onset": 0.0109,
+                }
+            },
         },
         "figures": [],
     }
@@ -297,7 +328,9 @@ def test_friction_sweep_summary_report_and_figure(tmp_path):
     (tmp_path / study.name / "summary.json").write_text(json.dumps(summary))
     report = write_report(tmp_path, tmp_path / "REPORT.md").read_text()
     assert "| 0.2 | 60 % (60-60) | 60 % (60-60) | 100 / 100 / 100 | 200 / 200 / 200 |" in report
-    assert "**Flutter onset (pending).**" in report and "No number is shown" in report
+    assert "**Flutter of the sliding contact.**" in report
+    assert "onset friction_coefficient = 0.0109" in report
+    assert "| 0.2 | 40% | 450 | 800 | 640 |" in report
     from workbench.study._figures import study_figures
 
     spec = [f for f in study.figures if f["kind"] in ("contact_vs_friction", "energy_balance")]

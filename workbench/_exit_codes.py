@@ -7,8 +7,11 @@ code  class                       outcomes
 0     success                     ``ok``; ``terminated`` (an event stopped the run as the model
                                   intends)
 1     unexpected error            any other exception (a bug or a broken setup; Python's own)
-2     invalid input               a scene error, a refused campaign store, a missing file, a
-                                  bad argument; a campaign point with ``invalid_parameters``
+2     invalid input               a scene error, a refused campaign store (another scene, or
+                                  in use by another process), a missing or unreadable file, an
+                                  output that exists (without ``--overwrite``) or cannot be
+                                  written, a bad argument; a campaign point with
+                                  ``invalid_parameters``
 3     solver limit                ``max_steps`` (raise ``solver.max_steps``)
 4     integration failure         ``step_underflow``, ``non_finite``
 5     model failure               ``model_failure`` (a state outside the model's domain)
@@ -16,16 +19,24 @@ code  class                       outcomes
 ====  ==========================  ==============================================================
 
 A run that fails is still written (records before the failure, its status in ``run_status``);
-a campaign exits with the largest code among its points.
+a campaign, a study or a work-precision study exits with the largest code among its points,
+runs or settings, and says how many failed.
 """
 
 from __future__ import annotations
 
+from workbench.archive import ArchiveError
 from workbench.campaign import CampaignError
 from workbench.scene import SceneError
 from workbench.solver import SolverError, Status
 
-__all__ = ["EXIT_INVALID", "exit_code"]
+__all__ = ["EXIT_INVALID", "UsageError", "exit_code", "worst_exit_code"]
+
+
+class UsageError(ValueError):
+    """A command-line argument that the command refuses before any work: the message names the
+    argument, the value and what is allowed."""
+
 
 EXIT_INVALID = 2
 _BY_STATUS = {
@@ -46,6 +57,18 @@ def exit_code(outcome: Status | BaseException) -> int:
         return _BY_STATUS[outcome.status]
     if isinstance(outcome, KeyboardInterrupt):
         return 130
-    if isinstance(outcome, SceneError | CampaignError | FileNotFoundError):
+    if isinstance(outcome, SceneError | CampaignError | ArchiveError | UsageError):
+        return EXIT_INVALID
+    if isinstance(outcome, FileNotFoundError):
         return EXIT_INVALID
     return 1
+
+
+def worst_exit_code(flags, invalid: int | None = None) -> int:
+    """The largest exit code among int status flags (a run's :class:`Status`, or ``invalid``,
+    the flag of a point that did not run: invalid input)."""
+    codes = [
+        EXIT_INVALID if invalid is not None and f == invalid else exit_code(Status(int(f)))
+        for f in set(int(x) for x in getattr(flags, "flat", flags))
+    ]
+    return max(codes, default=0)

@@ -23,7 +23,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("campaign", ("workbench.campaign",)),
     ("verification", ("workbench.verification",)),  # workbench.verify
     ("study", ("workbench.study",)),
-    ("cli", ("workbench.cli", "workbench._exit_codes")),
+    ("cli", ("workbench.cli", "workbench._exit_codes", "workbench._console")),
 )
 
 

@@ -19,6 +19,7 @@ from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
 from workbench.analysis._lyapunov import lyapunov_spectrum
 from workbench.analysis._rosenstein import rosenstein_lle
 from workbench.analysis._sections import crossing_section, phase_portrait, poincare_section
+from workbench.analysis._stability import floquet, floquet_sweep, jacobian_spectrum
 from workbench.analysis._wolf import wolf_lle
 from workbench.analysis._zero_one import zero_one_test
 
@@ -30,6 +31,9 @@ __all__ = [
     "embed",
     "embedding_cao",
     "embedding_fnn",
+    "floquet",
+    "floquet_sweep",
+    "jacobian_spectrum",
     "lle_from_equations",
     "lyapunov_spectrum",
     "phase_portrait",

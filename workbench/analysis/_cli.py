@@ -3,53 +3,63 @@
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
+
+from workbench._exit_codes import UsageError
+
+
+def _series(ds, var: str, select: list[str]):
+    """The 1-D series ``var`` of a run with ``--select DIM=LABEL`` applied (UsageError if not)."""
+    if var not in ds or "time" not in ds[var].dims:
+        names = ", ".join(v for v in ds.data_vars if "time" in ds[v].dims)
+        raise UsageError(f"--var: no variable {var!r} over time in the run; there are: {names}")
+    da = ds[var]
+    for item in select:
+        dim, _, label = item.partition("=")
+        if dim not in da.dims or label not in [str(v) for v in da[dim].values]:
+            choices = {d: [str(v) for v in da[d].values] for d in da.dims if d != "time"}
+            raise UsageError(f"--select takes DIM=LABEL among {choices}, got {item!r}")
+        da = da.sel({dim: label})
+    if da.ndim != 1:
+        raise UsageError(
+            f"--var {var!r} has dims {da.dims}; pick one element of the others with "
+            "--select DIM=LABEL"
+        )
+    return da
 
 
 def _cmd_analyse(args: argparse.Namespace) -> int:
     import numpy as np
 
     from workbench import analysis, plot
-    from workbench.archive import open_run
+    from workbench.archive import check_output_directory, open_run
     from workbench.scene import scene_from_toml
 
     ds = open_run(args.run)
-    if args.var not in ds:
-        names = ", ".join(v for v in ds.data_vars if "time" in ds[v].dims)
-        print(
-            f"workbench analyse: error: no variable {args.var!r}; there are: {names}",
-            file=sys.stderr,
+    if "campaign_dims" in ds.attrs:
+        raise UsageError(
+            f"{args.run!r} is a campaign; 'workbench analyse' takes one run (written by "
+            "'workbench run')"
         )
-        return 2
-    da = ds[args.var]
-    for item in args.select or []:
-        dim, _, label = item.partition("=")
-        if dim not in da.dims or label not in [str(v) for v in da[dim].values]:
-            print(
-                f"workbench analyse: error: --select takes DIM=LABEL with DIM among "
-                f"{[d for d in da.dims if d != 'time']}, got {item!r}",
-                file=sys.stderr,
-            )
-            return 2
-        da = da.sel({dim: label})
-    if da.ndim != 1:
-        print(
-            f"workbench analyse: error: {args.var!r} has dims {da.dims}; pick one element of "
-            "the others with --select DIM=LABEL",
-            file=sys.stderr,
-        )
-        return 2
+    da = _series(ds, args.var, args.select or [])
     period = ds.attrs.get("forcing_period")
-    out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
-    ami = analysis.delay_ami(da)
-    delay = int(ami.delay)
-    fnn = analysis.embedding_fnn(da, delay=delay)
-    cao = analysis.embedding_cao(da, delay=delay)
-    wolf = analysis.wolf_lle(da, delay=delay, dim=int(fnn.dim), period=period)
-    ros = analysis.rosenstein_lle(da, delay=delay, dim=int(fnn.dim))
+    strobe = None
+    if period is not None and ds.attrs.get("samples_per_period"):
+        strobe = analysis.poincare_section(ds.assign(_v=da), "_v")["_v"]
     label = args.var + "".join(f"[{s}]" for s in args.select or [])
+    stem = label.replace("[", "-").replace("]", "").replace("=", "")
+    names = ["embedding", "lle"] + (["zero_one"] if strobe is not None else [])
+    out = check_output_directory(
+        args.output, "-o/--output", [f"{stem}-{n}.png" for n in names], overwrite=args.overwrite
+    )
+    try:
+        ami = analysis.delay_ami(da)
+        delay = int(ami.delay)
+        fnn = analysis.embedding_fnn(da, delay=delay)
+        cao = analysis.embedding_cao(da, delay=delay)
+        wolf = analysis.wolf_lle(da, delay=delay, dim=int(fnn.dim), period=period)
+        ros = analysis.rosenstein_lle(da, delay=delay, dim=int(fnn.dim))
+    except ValueError as exc:  # the estimators name what the series lacks
+        raise UsageError(f"--var {label}: {exc}") from None
     print(f"{label}: {da.size} samples, dt = {float(da.time[1] - da.time[0]):.4g} s")
     print(
         f"  delay (first AMI minimum): {delay} samples; ACF 1/e: "
@@ -63,8 +73,7 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
         "embedding": plot.embedding_figure(ami, fnn, cao),
         "lle": plot.lle_figure(wolf, float(ros.lle), label),
     }
-    if period is not None and ds.attrs.get("samples_per_period"):
-        strobe = analysis.poincare_section(ds.assign(_v=da), "_v")["_v"]
+    if strobe is not None:
         if strobe.sizes["strobe"] >= 100:
             z = analysis.zero_one_test(strobe)
             print(f"  0-1 test on {strobe.sizes['strobe']} strobe samples: K = {float(z.K):.3f}")
@@ -74,8 +83,9 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
     if args.equations:
         bench = analysis.lle_from_equations(scene_from_toml(ds.attrs["scene"]))
         print(f"  LLE from the equations (Benettin): {float(bench.lle):.4g} 1/s")
+    out.mkdir(parents=True, exist_ok=True)
     for name, fig in figures.items():
-        path = out / f"{label.replace('[', '-').replace(']', '').replace('=', '')}-{name}.png"
+        path = out / f"{stem}-{name}.png"
         fig.savefig(path, dpi=120)
         print(f"figure: {path}")
     return 0 if np.isfinite(float(wolf.lle)) else 1
@@ -104,4 +114,5 @@ def register_cli(sub) -> None:
         help="also compute the LLE from the equations of the stored scene (slow)",
     )
     p.add_argument("-o", "--output", default=".", metavar="DIR", help="directory for the PNGs")
+    p.add_argument("--overwrite", action="store_true", help="replace existing figures")
     p.set_defaults(func=_cmd_analyse)

@@ -1,6 +1,31 @@
-"""netCDF archives of runs and campaigns: atomic writing (a temporary file, then a rename) and
-exact reading."""
+"""netCDF archives of runs and campaigns: atomic writing (a temporary file, then a rename),
+exact reading, output paths checked before any work, and the integrity of stores (one writer at
+a time, checksummed files)."""
 
+from workbench.archive._integrity import (
+    ArchiveError,
+    StoreLocked,
+    StoreWarning,
+    file_problem,
+    mapping_diff,
+    sha256_file,
+    store_lock,
+)
 from workbench.archive._netcdf import atomic_path, open_run, save_run, write_text_atomic
+from workbench.archive._outputs import check_output_directory, check_output_file
 
-__all__ = ["atomic_path", "open_run", "save_run", "write_text_atomic"]
+__all__ = [
+    "ArchiveError",
+    "StoreLocked",
+    "StoreWarning",
+    "atomic_path",
+    "check_output_directory",
+    "check_output_file",
+    "file_problem",
+    "mapping_diff",
+    "open_run",
+    "save_run",
+    "sha256_file",
+    "store_lock",
+    "write_text_atomic",
+]

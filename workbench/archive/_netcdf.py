@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import tempfile
 from collections.abc import Iterator
@@ -10,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+
+from workbench.archive._integrity import ArchiveError
 
 __all__ = ["atomic_path", "open_run", "save_run", "write_text_atomic"]
 
@@ -83,6 +86,25 @@ def save_run(
 
 
 def open_run(path: str | os.PathLike) -> xr.Dataset:
-    """Read a stored run (or campaign) fully into memory and close the file."""
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        return ds.load()
+    """Read a stored run (or campaign) fully into memory and close the file.
+
+    Raises
+    ------
+    FileNotFoundError
+        There is no file at ``path``.
+    ArchiveError
+        The file is not a readable netCDF file (truncated, corrupt, or something else).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(errno.ENOENT, "no such file", str(path))
+    if path.is_dir():
+        raise ArchiveError(f"{str(path)!r} is a directory, not a netCDF file")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.load()
+    except (OSError, ValueError, RuntimeError, KeyError, IndexError) as exc:
+        raise ArchiveError(
+            f"{str(path)!r} is not a readable netCDF file (truncated or corrupt?): "
+            f"{type(exc).__name__}: {exc}"
+        ) from None

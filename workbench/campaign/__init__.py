@@ -18,7 +18,8 @@ parameter dims first, then ``time`` and the model's dims.
 
 Modules: ``_run`` (the orchestration), ``_store`` (the sweep grid and the store on disk),
 ``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
-(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server).
+(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server),
+``_lifeline`` (processes that die with the campaign).
 
 Store layout
 ------------
@@ -26,7 +27,9 @@ Store layout
 
     sweep.nc                 the assembled campaign (netCDF-4), written last, atomically
     sweep.nc.blocks/
-        manifest.json        scene TOML, grid, chunk size, campaign id, package digest
+        lock                 held (flock) by the one process writing the store: pid, host
+        manifest.json        scene TOML, grid, chunk size, campaign id, package digest, and
+                             the SHA-256 of every committed block
         block-00000.nc       points 0 .. chunk-1 (flat C-order index over the grid)
         block-00001.nc       points chunk .. 2 chunk-1
         ...
@@ -44,13 +47,18 @@ Store layout
 * Each task owns one block file and writes it atomically (a temporary file beside it, then a
   rename), so a block file exists only when complete; only the client writes the manifest and
   the archive. Workers of a cluster must see the store's file system.
-* Resuming: running the same campaign again computes only the missing blocks (after Ctrl-C, a
-  killed worker or a crashed machine); left-over temporary files are removed; a block file that
-  does not open or belongs to another campaign is recomputed. Once ``sweep.nc`` is written the
-  blocks directory may be deleted: a re-run then returns the archive as is.
+* A block is committed when the client records its file's SHA-256 in the manifest. Resuming:
+  running the same campaign again computes only the blocks that are not committed intact (after
+  Ctrl-C, ``kill -9``, a killed worker or a crashed machine); left-over temporary files are
+  removed; a block that is missing, corrupt (its checksum differs) or was never committed is
+  named in a CampaignWarning and recomputed. The archive records the checksums of its blocks
+  (``campaign_block_sha256``). Once ``sweep.nc`` is written the blocks directory may be
+  deleted: a re-run then returns the archive as is.
 * A different scene (any key, the sweep included) or chunk size against an existing store is
   refused with the differences named; ``restart=True`` (CLI ``--restart``) discards the store.
-* One campaign process per store at a time.
+* One campaign process per store at a time: it holds the store's lock for its lifetime; a
+  second one is refused (:class:`workbench.archive.StoreLocked`, naming the holder's pid and
+  host); the lock of a dead process is taken over with a warning.
 
 When every point has the same record times they are the 1-D coordinate ``time`` (as from
 :func:`workbench.simulate`); when they differ (a sweep over the forcing frequency: records at
@@ -62,7 +70,8 @@ workers, the next one submitted, longest first, when one finishes, so the start 
 campaign's own whatever the scheduler. The local pool is a process pool on a fork server that
 imports workbench and loads the campaign's compiled kernel once; its workers (one thread each)
 start in milliseconds and stop with the campaign (on an error or Ctrl-C the blocks in flight are
-stopped at once).
+stopped at once; if the campaign's process dies, whatever the signal, the fork server and the
+workers die within a fraction of a second: ``_lifeline``).
 
 The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: the
 codes of :class:`workbench.Status`, 0 ok, 1 terminated, 2 max_steps, 3 step_underflow,

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from workbench.archive import save_run
+from workbench.archive import save_run, sha256_file
+from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
@@ -77,12 +78,14 @@ class BlockTask:
     block: int
 
 
-def worker_start(pids) -> None:
-    """Initializer of a local pool's worker: report this process's id (``pids``, a
-    multiprocessing queue) so that the client can stop the blocks in flight, and leave Ctrl-C
-    to the client (it stops the workers), so that a terminal's interrupt does not print a
-    traceback per worker."""
+def worker_start(pids, campaign: int) -> None:
+    """Initializer of a local pool's worker: die with the campaign (process ``campaign``; see
+    ``_lifeline``), report this process's id (``pids``, a multiprocessing queue) so that the
+    client can stop the blocks in flight, and leave Ctrl-C to the client (it stops the
+    workers), so that a terminal's interrupt does not print a traceback per worker."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(os.getppid())
+    watch_process(campaign)
     pids.put(os.getpid())
 
 
@@ -129,9 +132,10 @@ def _point(scene: Scene, params: dict[str, float]) -> dict:
 def run_block(task: BlockTask) -> dict:
     """Run the points of one block and write them to ``task.path`` (atomically).
 
-    Returns a summary: block index, number of points, failures ``[(flat, message)]``, wall time
-    of the block and the sum of the solvers' wall times (s), worker process id, and ``dataset``:
-    the block as written (None when larger than RETURN_LIMIT bytes; then read the file).
+    Returns a summary: the SHA-256 of the file written, block index, number of points, failures
+    ``[(flat, message)]``, wall time of the block and the sum of the solvers' wall times (s),
+    worker process id, and ``dataset``: the block as written (None when larger than
+    RETURN_LIMIT bytes; then read the file).
     """
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
@@ -146,6 +150,7 @@ def run_block(task: BlockTask) -> dict:
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
     return {
+        "sha256": sha256_file(task.path),
         "dataset": ds if ds.nbytes <= RETURN_LIMIT else None,
         "block": task.block,
         "points": len(task.flat),

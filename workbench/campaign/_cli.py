@@ -7,33 +7,57 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
-from workbench._exit_codes import EXIT_INVALID, exit_code
-from workbench.campaign._block import INVALID
-from workbench.solver import Status
+from workbench._console import positive_float, positive_int
+from workbench._exit_codes import UsageError, worst_exit_code
+from workbench.campaign._block import INVALID, STATUS, failed
 
 __all__ = ["campaign_exit_code", "register_cli"]
 
 
+def _client(address: str, timeout: float):
+    """A dask client of the scheduler at ``address``; CampaignError (one line) if it cannot be
+    reached within ``timeout`` seconds."""
+    from distributed import Client
+
+    from workbench.campaign import CampaignError
+
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise CampaignError(
+            f"--scheduler: cannot reach a dask scheduler at {address!r} within "
+            f"{timeout:g} s ({reason}); give the address of a running scheduler, e.g. "
+            "tcp://HOST:8786 (raise the wait with --scheduler-timeout), or drop --scheduler "
+            "to use local processes"
+        ) from None
+
+
 def _cmd_campaign(args: argparse.Namespace) -> int:
+    from workbench._console import announce_compile
+    from workbench.archive import check_output_file
     from workbench.campaign import CampaignError, run_campaign, summary
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
+    if args.scheduler and args.workers is not None:
+        raise CampaignError(
+            f"--workers {args.workers} sizes the local pool, but --scheduler "
+            f"{args.scheduler!r} brings its own workers; give one of them"
+        )
+    # existence is the store's business (resume, or refuse another campaign); the path's is here
+    check_output_file(args.output, "-o/--output", overwrite=True)
     client = None
     try:
         if args.scheduler:
-            if args.workers is not None:
-                raise CampaignError(
-                    f"--workers {args.workers} sizes the local pool, but --scheduler "
-                    f"{args.scheduler!r} brings its own workers; give one of them"
-                )
-            from distributed import Client
-
-            client = Client(args.scheduler)
+            client = _client(args.scheduler, args.scheduler_timeout)
             if args.quiet:  # otherwise run_campaign prints it above its progress bar
                 print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
+        else:
+            announce_compile(scene)
         with warnings.catch_warnings():  # the summary below lists every failed point
             warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
             ds = run_campaign(
@@ -45,22 +69,32 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                 restart=args.restart,
                 progress=not args.quiet,
             )
-    except CampaignError as exc:
-        print(f"workbench campaign: error: {exc}", file=sys.stderr)
-        return exit_code(exc)
     finally:
         if client is not None:
             client.close()
     print(summary(ds))
     print(f"-> {Path(args.output)}")
-    return campaign_exit_code(ds["status"].values)
+    code = campaign_exit_code(ds["status"].values)
+    if code:
+        flags = ds["status"].values.reshape(-1)
+        n_failed = int(failed(flags).sum())
+        counts = ", ".join(
+            f"{int((flags == f).sum())} {name}"
+            for f, name in STATUS.items()
+            if failed(np.array([f]))[0] and (flags == f).any()
+        )
+        print(
+            f"workbench campaign: {n_failed} of {flags.size} points failed ({counts}); "
+            f"exit code {code}",
+            file=sys.stderr,
+        )
+    return code
 
 
 def campaign_exit_code(flags) -> int:
     """The largest exit code among a campaign's point flags (a run's Status, or
     invalid_parameters: invalid input)."""
-    codes = [EXIT_INVALID if f == INVALID else exit_code(Status(f)) for f in set(flags.flat)]
-    return max(codes, default=0)
+    return worst_exit_code(flags, INVALID)
 
 
 def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple[xr.Dataset, str]:
@@ -97,32 +131,31 @@ def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple
 
 
 def _cmd_bifurcation(args: argparse.Namespace) -> int:
-    from workbench.archive import open_run
+    from workbench.archive import check_output_file, open_run
 
-    ds = open_run(args.campaign)
-    if "campaign_dims" not in ds.attrs:
-        print(
-            f"workbench bifurcation: error: {args.campaign!r} is not a campaign archive (no "
-            "'campaign_dims' attribute); write one with 'workbench campaign'",
-            file=sys.stderr,
-        )
-        return 2
-    try:
-        from workbench.analysis import bifurcation_diagram
-        from workbench.plot import bifurcation_figure
-
-        ds, param = _select(ds, args.var, args.param, args.at or [])
-        fig = bifurcation_figure(bifurcation_diagram(ds, args.var, param))
-    except ValueError as exc:
-        print(f"workbench bifurcation: error: {exc}", file=sys.stderr)
-        return 2
     out = Path(
         args.output
         or Path(args.campaign).with_name(f"{Path(args.campaign).stem}-bifurcation-{args.var}.png")
     )
+    ds = open_run(args.campaign)
+    if "campaign_dims" not in ds.attrs:
+        raise UsageError(
+            f"{args.campaign!r} is not a campaign archive (no 'campaign_dims' attribute); write "
+            "one with 'workbench campaign'"
+        )
+    check_output_file(out, "-o/--output", overwrite=args.overwrite)
+    from workbench.analysis import bifurcation_diagram
+    from workbench.plot import bifurcation_figure
+
+    try:
+        ds, param = _select(ds, args.var, args.param, args.at or [])
+        diagram = bifurcation_diagram(ds, args.var, param)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    fig = bifurcation_figure(diagram)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=150)
-    n_failed = int((ds["status"] != 0).sum())
+    n_failed = int(failed(ds["status"].values).sum())
     note = f" ({n_failed} failed points left out)" if n_failed else ""
     print(f"bifurcation diagram of {args.var} over {param}{note}: {out}")
     return 0
@@ -139,9 +172,18 @@ def register_cli(sub) -> None:
     )
     p.add_argument("scene", help="scene file (TOML) with a [sweep] table")
     p.add_argument("-o", "--output", required=True, help="campaign netCDF file to write")
-    p.add_argument("--workers", type=int, help="processes of the local pool (default: CPUs)")
+    p.add_argument(
+        "--workers", type=positive_int, help="processes of the local pool (default: CPUs)"
+    )
     p.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address")
-    p.add_argument("--chunk", type=int, metavar="K", help="points per block (task)")
+    p.add_argument(
+        "--scheduler-timeout",
+        type=positive_float,
+        default=10.0,
+        metavar="S",
+        help="seconds to wait for the scheduler (default 10)",
+    )
+    p.add_argument("--chunk", type=positive_int, metavar="K", help="points per block (task)")
     p.add_argument(
         "--restart", action="store_true", help="discard a stored campaign and start afresh"
     )
@@ -158,6 +200,7 @@ def register_cli(sub) -> None:
     p.add_argument("--var", required=True, help="variable on the y axis (e.g. x)")
     p.add_argument("-o", "--output", help="PNG to write (default: beside the campaign)")
     p.add_argument("--param", help="parameter on the x axis (default: the one swept dim)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing PNG")
     p.add_argument(
         "--at",
         action="append",

@@ -20,10 +20,13 @@ import contextlib
 import os
 import signal
 import sys
+import threading
 import uuid
 from collections.abc import Callable, Iterator
 
 from workbench.campaign._block import PRELOAD_ENV, BlockTask, run_block, worker_start
+from workbench.campaign._lifeline import PARENT_ENV
+from workbench.campaign._warm import kernel_cached, load_kernel
 from workbench.scene import scene_from_toml
 
 __all__ = ["available_workers", "execute"]
@@ -48,7 +51,8 @@ def execute(
     client=None,
     workers: int,
     cid: str,
-    bar=None,
+    on_done: Callable[[dict], None] | None = None,
+    announce: bool = False,
 ) -> list[dict]:
     """Run the block tasks, starting them in list order, ``workers`` at a time.
 
@@ -62,8 +66,10 @@ def execute(
         Tasks in flight at once (the cluster's threads for a client).
     cid : str
         Campaign id (names the cluster's tasks).
-    bar : tqdm, optional
-        Advanced by each finished block's points.
+    on_done : callable, optional
+        Called with each task's summary as it finishes (the client commits the block there).
+    announce : bool
+        Print the dashboard link of a client.
 
     Returns
     -------
@@ -78,7 +84,7 @@ def execute(
         The first error a task raised, after the tasks in flight were stopped.
     """
     if client is not None:
-        if bar is not None and getattr(client, "dashboard_link", None):
+        if announce and getattr(client, "dashboard_link", None):
             print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
         from distributed import wait
 
@@ -88,14 +94,49 @@ def execute(
             key = f"campaign-{cid}-block-{t.block:05d}-{token}"
             return client.submit(run_block, t, key=key, pure=False)
 
-        return _dispatch(submit, wait, tasks, workers, bar)
-    with _local_pool(workers, _first_point(tasks[0])) as pool:
-        return _dispatch(
-            lambda t: pool.submit(run_block, t), concurrent.futures.wait, tasks, workers, bar
-        )
+        return _dispatch(submit, wait, tasks, workers, on_done)
+    first = _first_point(tasks[0])
+    if kernel_cached(scene_from_toml(first)) is False:
+        # Compiled here, where Ctrl-C stops it at once, not in the fork server's start.
+        load_kernel(first)
+    with _local_pool(workers, first) as pool:
+
+        def submit_local(t: BlockTask):
+            with _uninterrupted_start():
+                return pool.submit(run_block, t)
+
+        return _dispatch(submit_local, concurrent.futures.wait, tasks, workers, on_done)
 
 
-def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, bar) -> list[dict]:
+@contextlib.contextmanager
+def _uninterrupted_start() -> Iterator[None]:
+    """Start processes without Ctrl-C cutting a start in half (a process whose start the
+    campaign abandoned would outlive the queues it was given, and fail with a traceback).
+
+    SIGINT is blocked in this thread, so that the processes started here (the fork server, and
+    the workers it forks) inherit the block: a terminal's Ctrl-C reaches the campaign alone,
+    which stops them. A Ctrl-C that arrives meanwhile (possibly through another thread) is
+    raised as KeyboardInterrupt once the start is done: after the fork server's start (it only
+    loads the kernel, compiled beforehand) at most, a few seconds.
+    """
+    defer = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGINT) if defer else None
+    defer = defer and previous is not None
+    caught: list[int] = []
+    if defer:
+        signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+        if defer:
+            signal.signal(signal.SIGINT, previous)
+        if caught:
+            raise KeyboardInterrupt from None
+
+
+def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, on_done) -> list[dict]:
     """Keep ``window`` tasks in flight, submitting them in list order; cancel the rest on error."""
     queue = list(reversed(tasks))  # pop() takes them in list order
     running: set = set()
@@ -107,8 +148,8 @@ def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, bar) -
             done, running = wait(running, return_when="FIRST_COMPLETED")
             for fut in done:
                 results.append(fut.result())  # re-raises the task's error
-                if bar is not None:
-                    bar.update(results[-1]["points"])
+                if on_done is not None:
+                    on_done(results[-1])
     finally:
         for fut in running:
             fut.cancel()
@@ -124,20 +165,26 @@ def _first_point(task: BlockTask) -> str:
 @contextlib.contextmanager
 def _local_pool(workers: int, preload: str) -> Iterator[concurrent.futures.ProcessPoolExecutor]:
     """A process pool whose workers stop with the campaign: on an error or Ctrl-C the blocks in
-    flight are stopped at once (each worker reported its pid when it started)."""
+    flight are stopped at once (each worker reported its pid when it started), and if this
+    process dies, they die with it (``_lifeline``)."""
     from concurrent.futures.process import BrokenProcessPool
 
     ctx = _mp_context(preload)
-    pids = ctx.SimpleQueue()
+    with _uninterrupted_start():  # the queue's lock starts multiprocessing's resource tracker
+        pids = ctx.SimpleQueue()
     pool = concurrent.futures.ProcessPoolExecutor(
-        workers, mp_context=ctx, initializer=worker_start, initargs=(pids,)
+        workers, mp_context=ctx, initializer=worker_start, initargs=(pids, os.getpid())
     )
     try:
         yield pool
     except BaseException as exc:
+        # every worker: those that reported, and those still starting (the pool's own list)
+        started = set(getattr(pool, "_processes", None) or ())
         while not pids.empty():
+            started.add(pids.get())
+        for pid in started:
             with contextlib.suppress(ProcessLookupError):
-                os.kill(pids.get(), signal.SIGTERM)
+                os.kill(pid, signal.SIGTERM)
         if isinstance(exc, BrokenProcessPool):
             raise RuntimeError(
                 "a worker process of the local pool died (killed, out of memory, or the calling "
@@ -148,6 +195,7 @@ def _local_pool(workers: int, preload: str) -> Iterator[concurrent.futures.Proce
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         os.environ.pop(PRELOAD_ENV, None)
+        os.environ.pop(PARENT_ENV, None)
 
 
 def _mp_context(preload: str):
@@ -167,4 +215,5 @@ def _mp_context(preload: str):
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["workbench.campaign._block", "workbench.campaign._preload"])
     os.environ[PRELOAD_ENV] = preload  # read by the server if this run starts it
+    os.environ[PARENT_ENV] = str(os.getpid())  # the server dies with this process
     return ctx

@@ -6,6 +6,9 @@ The client puts the scene of the campaign's first point (TOML) in the environmen
 the server inherits the machine code instead of loading it from disk itself (and xarray's and
 netCDF's first-use imports, and the package versions of the provenance). Anything that goes
 wrong here is ignored: the workers then load the kernel on their first point as usual.
+
+First of all the server arms its lifeline (``_lifeline``): it dies with the campaign that
+started it (the pid in ``WORKBENCH_CAMPAIGN_PID``), and its workers die with it.
 """
 
 from __future__ import annotations
@@ -13,19 +16,8 @@ from __future__ import annotations
 import os
 
 from workbench.campaign._block import PRELOAD_ENV
-
-
-def _load_kernel(scene_toml: str) -> None:
-    """The provenance's package versions, then the compiled kernel of the scene's model."""
-    from workbench.run import integrate, prepare, provenance
-    from workbench.scene import scene_from_toml
-
-    prepared = prepare(scene_from_toml(scene_toml))
-    provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
-    if prepared.scene.solver["method"].startswith("scipy:"):
-        return
-    # An empty interval: every compiled entry point is loaded, nothing is integrated.
-    integrate(prepared, [prepared.problem.t0])
+from workbench.campaign._lifeline import PARENT_ENV, die_with_parent
+from workbench.campaign._warm import load_kernel
 
 
 def _warm_xarray() -> None:
@@ -44,9 +36,11 @@ def _warm_xarray() -> None:
         save_run(ds, os.path.join(d, "warm3.nc"), classic=True)
 
 
+if os.environ.get(PARENT_ENV):
+    die_with_parent(int(os.environ[PARENT_ENV]))
 if os.environ.get(PRELOAD_ENV):
     try:
         _warm_xarray()
-        _load_kernel(os.environ[PRELOAD_ENV])
+        load_kernel(os.environ[PRELOAD_ENV])
     except Exception:  # pragma: no cover - best effort only
         pass

@@ -59,7 +59,9 @@ def run_campaign(
     points; each block is one task that runs its points with :func:`workbench.simulate` and
     writes its own netCDF file; the tasks start longest first, as many at a time as there are
     workers; only this process assembles them. The store is resumable: a re-run computes only
-    the blocks whose file is missing.
+    the blocks that are not committed intact (checksums in the manifest), and one process at a
+    time writes it (a lock). The processes of the local pool die with this one, however it
+    ends.
 
     Parameters
     ----------
@@ -96,15 +98,19 @@ def run_campaign(
         frequency), ``time`` has no coordinate and ``record_time`` (s; parameter dims, time)
         holds each point's times. Attributes: provenance, the scene TOML, the grid
         (``campaign_grid``, JSON), ``computed_blocks``, ``reused_blocks``, ``failed_points``,
-        ``campaign_workers``, ``campaign_compute_wall_time`` (s, the task phase) and
-        ``campaign_wall_time`` (s, all of this call but the final write). The same dataset is
-        stored at ``store``.
+        ``campaign_workers``, ``campaign_compute_wall_time`` (s, the task phase),
+        ``campaign_wall_time`` (s, all of this call but the final write) and
+        ``campaign_block_sha256`` (the SHA-256 of every block file, in block order, space
+        separated). The same dataset is stored at ``store``.
 
     Raises
     ------
     CampaignError
         The scene has no ``[sweep]``, or the store holds a campaign of another scene or chunk
         size (the message lists the differences; pass ``restart=True``).
+    workbench.archive.StoreLocked
+        Another live process is writing the store (the message names its pid and host). The
+        lock is held for the whole call; a lock left by a dead process is taken over.
     RuntimeError
         A point raised something other than a failed run or invalid parameters (a bug or a
         broken setup); the blocks finished so far are kept.
@@ -112,7 +118,9 @@ def run_campaign(
     Warns
     -----
     CampaignWarning
-        Some points failed (they are flagged in ``status`` and the campaign goes on).
+        Some points failed (they are flagged in ``status`` and the campaign goes on); a block
+        is missing, corrupt (its SHA-256 differs from the one recorded when it was committed)
+        or was never committed, and is recomputed (each named); a stale lock was taken over.
 
     Notes
     -----
@@ -148,6 +156,22 @@ def run_campaign(
             "workers; pass one of them, not both"
         )
     st = Store(store)
+    with st.lock():
+        return _run_locked(scene, grid, st, client, workers, chunk, restart, progress, wall0)
+
+
+def _run_locked(
+    scene: Scene,
+    grid: SweepGrid,
+    st: Store,
+    client,
+    workers: int | None,
+    chunk: int | None,
+    restart: bool,
+    progress: bool,
+    wall0: float,
+) -> xr.Dataset:
+    """run_campaign while holding the store's lock."""
     if restart:
         st.clear()
     manifest = st.read_manifest()
@@ -164,13 +188,13 @@ def run_campaign(
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
         cid = campaign_id(scene, chunk)
-        st.write_manifest(scene, grid, chunk, cid)
+        manifest = st.write_manifest(scene, grid, chunk, cid)
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
         cid = manifest["campaign_id"]
     st.remove_temporaries()
     blocks = grid.blocks(chunk)
-    done = st.finished_blocks(cid, blocks)
+    done = st.verified_blocks(manifest, blocks)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -192,8 +216,21 @@ def run_campaign(
     results: list[dict] = []
     if tasks:
         bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
+
+        def commit(result: dict) -> None:
+            st.commit(manifest, result["block"], result["sha256"])
+            if bar is not None:
+                bar.update(result["points"])
+
         try:
-            results = execute(tasks, client=client, workers=n_workers, cid=cid, bar=bar)
+            results = execute(
+                tasks,
+                client=client,
+                workers=n_workers,
+                cid=cid,
+                on_done=commit,
+                announce=progress,
+            )
         finally:
             if bar is not None:
                 bar.close()
@@ -213,6 +250,9 @@ def run_campaign(
             "campaign_workers": n_workers if tasks else 0,
             "campaign_compute_wall_time": compute,
             "campaign_wall_time": time.perf_counter() - wall0,
+            "campaign_block_sha256": " ".join(
+                manifest["checksums"][str(i)] for i in range(len(blocks))
+            ),
         },
         in_memory,
     )

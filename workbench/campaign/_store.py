@@ -4,37 +4,48 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
 
     omega.nc                  assembled archive, written last (atomically)
     omega.nc.blocks/
-        manifest.json         scene TOML, grid, chunk, campaign id (written first, atomically)
+        lock                  held (flock) by the one process writing the store; pid and host
+        manifest.json         scene TOML, grid, chunk, campaign id (written first, atomically),
+                              and the SHA-256 of every committed block (rewritten on each)
         block-00000.nc        points 0 .. chunk-1 (one file per task, written atomically;
                               netCDF-3 64-bit offset, half the write time of netCDF-4)
         block-00001.nc        ...
+
+A block is *committed* when its checksum is in the manifest; on resume a block is reused only
+if its file's SHA-256 matches, otherwise it is named and recomputed.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
 import os
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-import xarray as xr
 
 from workbench._cache import package_digest
-from workbench.archive import write_text_atomic
+from workbench.archive import (
+    StoreWarning,
+    check_output_file,
+    file_problem,
+    mapping_diff,
+    store_lock,
+    write_text_atomic,
+)
 from workbench.models import get_model
 from workbench.run import REALISATION_ATTRS
 from workbench.scene import RUN_SWEEP_KEYS, Scene, SceneError, scene_from_toml
 
-__all__ = ["CampaignError", "CampaignWarning", "Store", "SweepGrid", "expand_sweep", "scene_diff"]
+__all__ = ["CampaignError", "CampaignWarning", "Store", "SweepGrid", "expand_sweep"]
 
-FORMAT = "workbench-campaign 1"
+FORMAT = "workbench-campaign 2"  # 2: block checksums, lock
 _BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
 _TMP_RE = re.compile(r"^\.(block-\d{5,}\.nc|manifest\.json)\..*\.tmp$")
 
@@ -44,7 +55,7 @@ class CampaignError(ValueError):
     says what differs and how to proceed."""
 
 
-class CampaignWarning(UserWarning):
+class CampaignWarning(StoreWarning):
     """Something about a campaign deserves attention (failed points, a changed package)."""
 
 
@@ -126,26 +137,6 @@ def campaign_id(scene: Scene, chunk: int) -> str:
     return h.hexdigest()[:16]
 
 
-# -- comparing scenes ------------------------------------------------------------------------------
-def _short(v: Any) -> str:
-    if isinstance(v, list | tuple) and len(v) > 4:
-        return f"[{len(v)} values from {v[0]!r} to {v[-1]!r}]"
-    return repr(v)
-
-
-def scene_diff(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
-    """Lines ``key: old -> new`` for every dotted key whose value differs."""
-    out = []
-    for k in list(old) + [k for k in new if k not in old]:
-        key = f"{prefix}{k}"
-        a, b = old.get(k, "<absent>"), new.get(k, "<absent>")
-        if isinstance(a, Mapping) and isinstance(b, Mapping):
-            out += scene_diff(a, b, key + ".")
-        elif a != b:
-            out.append(f"{key}: {_short(a)} -> {_short(b)}")
-    return out
-
-
 # -- the store -------------------------------------------------------------------------------------
 class Store:
     """Paths and bookkeeping of one campaign store (see the module docstring)."""
@@ -158,6 +149,7 @@ class Store:
                 f"directory {str(self.archive)!r}; its blocks go to the sibling directory "
                 "'sweep.nc.blocks/'"
             )
+        check_output_file(self.archive, "store", overwrite=True)  # e.g. not under a file
         self.blocks_dir = self.archive.with_name(self.archive.name + ".blocks")
         self.manifest_path = self.blocks_dir / "manifest.json"
 
@@ -202,7 +194,11 @@ class Store:
             "points": grid.size,
             "blocks": len(grid.blocks(chunk)),
             "package_digest": package_digest(),
+            "checksums": {},
         }
+        return self.save_manifest(data)
+
+    def save_manifest(self, data: dict) -> dict:
         self.blocks_dir.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
         return data
@@ -218,7 +214,7 @@ class Store:
             ) from None
         if stored == scene:
             return
-        lines = scene_diff(stored.to_dict(), scene.to_dict()) or ["(formatting only)"]
+        lines = mapping_diff(stored.to_dict(), scene.to_dict()) or ["(formatting only)"]
         shown = "\n  ".join(lines[:12]) + ("\n  ..." if len(lines) > 12 else "")
         raise CampaignError(
             f"{where} holds a campaign of a different scene; the scene may not change within a "
@@ -276,34 +272,44 @@ class Store:
             removed.append(p)
         return removed
 
-    def finished_blocks(self, cid: str, blocks: list[range]) -> set[int]:
-        """Indices of the blocks whose file exists, opens and belongs to this campaign."""
-        done = set()
-        for i, rng in enumerate(blocks):
+    def verified_blocks(self, manifest: dict, blocks: list[range]) -> set[int]:
+        """Indices of the committed blocks whose file is intact (its SHA-256 is the one in the
+        manifest). Every other block is named in a CampaignWarning (missing, corrupt, or
+        written but never committed) and will be recomputed; the manifest drops their
+        checksums."""
+        sums: dict[str, str] = manifest.setdefault("checksums", {})
+        done, dropped = set(), False
+        for i in range(len(blocks)):
             path = self.block_path(i)
-            if not path.is_file():
+            problem = file_problem(path, sums.get(str(i)))
+            if problem is None:
+                if str(i) in sums:
+                    done.add(i)
                 continue
-            try:
-                with xr.open_dataset(path, engine="netcdf4") as b:
-                    ok = (
-                        b.attrs.get("campaign_id") == cid
-                        and int(b.attrs.get("block", -1)) == i
-                        and b.sizes.get("point") == len(rng)
-                        and int(b["point"][0]) == rng.start
-                    )
-            except Exception as exc:  # unreadable (e.g. a crash before the disk flushed it)
-                warnings.warn(
-                    CampaignWarning(f"block file {str(path)!r} is unreadable ({exc}); recomputing"),
-                    stacklevel=3,
-                )
-                continue
-            if ok:
-                done.add(i)
-            else:
-                warnings.warn(
-                    CampaignWarning(
-                        f"block file {str(path)!r} belongs to another campaign; recomputing it"
-                    ),
-                    stacklevel=3,
-                )
+            warnings.warn(
+                CampaignWarning(f"block {i} ({path.name}) {problem}; recomputing"), stacklevel=3
+            )
+            if sums.pop(str(i), None) is not None:
+                dropped = True
+            with contextlib.suppress(OSError):
+                path.unlink()
+        if dropped:
+            self.save_manifest(manifest)
         return done
+
+    def commit(self, manifest: dict, block: int, sha256: str) -> None:
+        """Record a finished block's checksum in the manifest (the block is then committed)."""
+        manifest.setdefault("checksums", {})[str(block)] = sha256
+        self.save_manifest(manifest)
+
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[dict]:
+        """Hold the store's lock (one writing process at a time; see
+        :func:`workbench.archive.store_lock`); yields the holder of a stale lock taken over (or
+        {}). The blocks directory is removed on release if nothing else is left in it."""
+        try:
+            with store_lock(self.blocks_dir, f"campaign store {str(self.archive)!r}") as stale:
+                yield stale
+        finally:
+            with contextlib.suppress(OSError):
+                self.blocks_dir.rmdir()  # only if empty

@@ -19,6 +19,7 @@ __all__ = [
     "Quantity",
     "available_models",
     "get_model",
+    "joint_stiffness",
     "register",
 ]
 
@@ -51,3 +52,12 @@ def get_model(name: str) -> Model:
     if name not in _REGISTRY and name in _BUILTIN:
         importlib.import_module(_BUILTIN[name])
     return _REGISTRY[name]()
+
+
+def joint_stiffness(params, clearance: float) -> float:
+    """Contact stiffness K (N m^-n) of a revolute clearance joint with this radial clearance
+    (m): the scene's ``contact_stiffness``, or Hertz's for the journal in its bearing (Eq. 4 of
+    Chen et al. 2019)."""
+    from workbench.models._clearance import stiffness
+
+    return stiffness(params, clearance)

@@ -62,7 +62,7 @@ def hertz_internal_stiffness(
     return 4.0 / 3.0 * e_star * math.sqrt(bearing_radius * r2 / clearance)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _power(delta, n):
     """delta**n for delta > 0; Hertz's n = 1.5 as delta * sqrt(delta), several times faster
     than the general power on the solver's hot path."""
@@ -71,7 +71,7 @@ def _power(delta, n):
     return delta**n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lankarani_nikravesh(delta, delta_dot, delta_dot_minus, K, n, c_e, v_floor):
     """Normal force of the Lankarani–Nikravesh law with the grazing rules above, N.
 
@@ -94,7 +94,7 @@ def lankarani_nikravesh(delta, delta_dot, delta_dot_minus, K, n, c_e, v_floor):
     return total, damping
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def contact_elastic_energy(delta, K, n):
     """Elastic energy stored in a contact, K delta^(n+1) / (n+1), J (0 out of contact)."""
     if delta <= 0.0:
@@ -102,7 +102,7 @@ def contact_elastic_energy(delta, K, n):
     return K * delta * _power(delta, n) / (n + 1.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def onset_velocity(x, y, vx, vy):
     """Normal velocity (m s-1) held through a contact from its onset, for the clearance vector
     (x, y) (m) and its rate (m s-1): at least 1e-300, so that "in contact" (aux > 0) holds even

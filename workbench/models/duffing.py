@@ -13,6 +13,7 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import Model, Parameter, Problem, Quantity
+from workbench.models._no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
 @njit(cache=True)
@@ -32,16 +33,6 @@ def jacobian(t, y, p, ip, aux, work, J):
     J[0, 1] = 1.0
     J[1, 0] = -p[1] - 3.0 * p[2] * y[0] * y[0]
     J[1, 1] = -p[0]
-    return 0
-
-
-@njit(cache=True)
-def event_values(t, y, p, ip, aux, work, g):
-    return None
-
-
-@njit(cache=True)
-def apply_event(k, t, y, p, ip, aux, work):
     return 0
 
 

@@ -11,6 +11,7 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import Model, Parameter, Problem, Quantity
+from workbench.models._no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
 @njit(cache=True)
@@ -35,16 +36,6 @@ def jacobian(t, y, p, ip, aux, work, J):
     J[2, 0] = y[1]
     J[2, 1] = y[0]
     J[2, 2] = -beta
-    return 0
-
-
-@njit(cache=True)
-def event_values(t, y, p, ip, aux, work, g):
-    return None
-
-
-@njit(cache=True)
-def apply_event(k, t, y, p, ip, aux, work):
     return 0
 
 

@@ -14,17 +14,30 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import register_overview
-from workbench.plot._runs import run_figures
+from workbench.plot._runs import (
+    PANELS_PER_FIGURE,
+    campaign_figure,
+    run_figure_names,
+    run_figures,
+    timeseries_figure,
+)
+from workbench.plot._stability import floquet_figure, jacobian_spectrum_figure
 from workbench.plot._verify import verification_figure
 
 __all__ = [
+    "PANELS_PER_FIGURE",
     "bifurcation_figure",
+    "campaign_figure",
     "embedding_figure",
+    "floquet_figure",
+    "jacobian_spectrum_figure",
     "lle_figure",
     "phase_figure",
     "poincare_figure",
     "register_overview",
+    "run_figure_names",
     "run_figures",
+    "timeseries_figure",
     "verification_figure",
     "work_precision_figure",
     "zero_one_figure",

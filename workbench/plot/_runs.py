@@ -1,54 +1,185 @@
-"""Figures of one run: time series of every stored variable and model-specific overviews."""
+"""Figures of one run (time series of every stored variable, model-specific overviews) and of a
+campaign (every stored variable against the swept parameter)."""
 
 from __future__ import annotations
 
+import math
+import textwrap
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
 from workbench.plot._base import axis_label, overview, plt
 
-__all__ = ["run_figures", "timeseries_figure"]
+__all__ = [
+    "PANELS_PER_FIGURE",
+    "campaign_figure",
+    "run_figure_names",
+    "run_figures",
+    "timeseries_figure",
+]
+
+# Panels of one time-series or campaign figure: a grid of up to 4 rows x 2 columns; more
+# variables go to further figures (``<model>_timeseries-2.png``, ...).
+PANELS_PER_FIGURE = 8
+_COLUMNS = 2
 
 
-def timeseries_figure(ds: xr.Dataset, variables: list[str] | None = None) -> plt.Figure:
-    """One panel per variable against time; extra dims (e.g. ``joint``) become labelled lines."""
-    names = variables or [v for v in ds.data_vars if "time" in ds[v].dims]
+def _series(ds: xr.Dataset) -> list[str]:
+    """The stored variables over time (in dataset order)."""
+    return [v for v in ds.data_vars if "time" in ds[v].dims]
+
+
+def _pages(names: list[str]) -> list[list[str]]:
+    return [names[i : i + PANELS_PER_FIGURE] for i in range(0, len(names), PANELS_PER_FIGURE)]
+
+
+def run_figure_names(model: str | None, n_series: int, *, campaign: bool = False) -> list[str]:
+    """File names :func:`run_figures` writes for a run (or a campaign) of ``model`` with
+    ``n_series`` variables over time: known before the run, so that a command can refuse an
+    existing file before it simulates anything."""
+    stem = f"{model or 'run'}_{'campaign' if campaign else 'timeseries'}"
+    pages = max(1, math.ceil(n_series / PANELS_PER_FIGURE))
+    names = [f"{stem}.png"] + [f"{stem}-{k}.png" for k in range(2, pages + 1)]
+    if not campaign and model is not None and overview(model) is not None:
+        names.append(f"{model}_overview.png")
+    return names
+
+
+def _grid(n: int, title: str, width: float = 11.0) -> tuple[plt.Figure, np.ndarray]:
+    """A figure of ``n`` panels in up to two columns, its title wrapped inside the canvas."""
+    cols = 1 if n == 1 else _COLUMNS
+    rows = math.ceil(n / cols)
     fig, axes = plt.subplots(
-        len(names), 1, figsize=(8, 1.9 * len(names) + 0.8), sharex=True, squeeze=False
+        rows,
+        cols,
+        figsize=(width if cols > 1 else 7.5, 2.3 * rows + 0.9),
+        squeeze=False,
+        layout="constrained",
     )
-    for ax, name in zip(axes[:, 0], names, strict=True):
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    if title:
+        fig.suptitle(textwrap.fill(title, 110 if cols > 1 else 75), fontsize=10)
+    return fig, axes
+
+
+def _panel_title(da: xr.DataArray) -> str:
+    return textwrap.fill(str(da.attrs.get("long_name", da.name)), 60)
+
+
+def _short_label(da: xr.DataArray) -> str:
+    units = da.attrs.get("units")
+    return f"{da.name} [{units}]" if units else str(da.name)
+
+
+def _lines(da: xr.DataArray, skip: tuple[str, ...]) -> list[tuple[str, xr.DataArray]]:
+    """One (label, 1-D or swept array) per element of the dims other than ``skip``: e.g.
+    ``("joint A", ...)``; a single unlabelled line when there are none."""
+    others = [d for d in da.dims if d not in skip]
+    if not others:
+        return [("", da)]
+    stacked = da.stack(_line=others)
+    out = []
+    for i in range(stacked.sizes["_line"]):
+        key = stacked["_line"].values[i]
+        key = key if isinstance(key, tuple) else (key,)
+        label = ", ".join(f"{d} {_fmt(v)}" for d, v in zip(others, key, strict=True))
+        out.append((label, stacked.isel(_line=i, drop=True)))
+    return out
+
+
+def _fmt(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float | np.floating) else str(value)
+
+
+def timeseries_figure(
+    ds: xr.Dataset, variables: list[str] | None = None, *, title: str | None = None
+) -> plt.Figure:
+    """Variables against time in a grid of panels (up to two columns), each titled with its
+    ``long_name`` and labelled with its name and units; extra dims (e.g. ``joint``) become
+    labelled lines. Give at most :data:`PANELS_PER_FIGURE` variables for a readable figure
+    (:func:`run_figures` pages them)."""
+    names = variables or _series(ds)
+    fig, axes = _grid(len(names), ds.attrs.get("title", "") if title is None else title)
+    for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
         da = ds[name]
-        others = [d for d in da.dims if d != "time"]
-        if others:
-            stacked = da.stack(line=others) if len(others) > 1 else da.rename({others[0]: "line"})
-            for i in range(stacked.sizes["line"]):
-                label = str(stacked["line"].values[i])
-                ax.plot(ds.time, stacked.isel(line=i), lw=0.8, label=f"{others[0]} {label}")
+        for label, line in _lines(da, ("time",)):
+            ax.plot(ds.time, line, lw=0.7, label=label or None)
+        if len(da.dims) > 1:
             ax.legend(fontsize=7, loc="upper right")
-        else:
-            ax.plot(ds.time, da, lw=0.8)
-        ax.set_ylabel(axis_label(da), fontsize=8)
+        ax.set_title(_panel_title(da), fontsize=8)
+        ax.set_ylabel(_short_label(da), fontsize=8)
+        ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel(axis_label(ds.time))
-    fig.suptitle(ds.attrs.get("title", ""), fontsize=10)
-    fig.tight_layout()
+        if k >= len(names) - axes.shape[1]:  # the bottom panel of each column
+            ax.set_xlabel(axis_label(ds.time), fontsize=8)
+    return fig
+
+
+def _campaign_axis(ds: xr.Dataset) -> str:
+    """The swept dim on the x axis: the one with the most values."""
+    dims = ds.attrs["campaign_dims"].split()
+    return max(dims, key=lambda d: ds.sizes[d])
+
+
+def campaign_figure(
+    ds: xr.Dataset, variables: list[str] | None = None, *, title: str | None = None
+) -> plt.Figure:
+    """Every record of each point against the swept parameter (the dim with the most values,
+    axis labelled with its ``long_name`` and units), one panel per variable: a bifurcation
+    diagram when the campaign records one sample per forcing period. The other dims (the
+    model's, e.g. ``joint``, and other swept ones) are lines named in the legend; failed points
+    are left out."""
+    names = variables or _series(ds)
+    param = _campaign_axis(ds)
+    text = ds.attrs.get("title", "") if title is None else title
+    fig, axes = _grid(len(names), text)
+    ok = ds["status"] <= 1 if "status" in ds else True  # ok or terminated
+    for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
+        da = ds[name].where(ok)
+        for label, line in _lines(da, (param, "time")):
+            x = np.broadcast_to(ds[param].values[:, None], line.transpose(param, "time").shape)
+            y = line.transpose(param, "time").values
+            ax.plot(x.ravel(), y.ravel(), ".", ms=1.5, alpha=0.6, label=label or None)
+        if any(d not in (param, "time") for d in da.dims):
+            ax.legend(fontsize=7, loc="upper right", markerscale=5)
+        ax.set_title(_panel_title(da), fontsize=8)
+        ax.set_ylabel(_short_label(da), fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+        if k >= len(names) - axes.shape[1]:
+            ax.set_xlabel(axis_label(ds[param]), fontsize=8)
     return fig
 
 
 def run_figures(ds: xr.Dataset, directory: Path) -> list[Path]:
-    """Write the standard figures of a run (PNG) into ``directory``; return their paths."""
+    """Write the standard figures of a run or a campaign (PNG) into ``directory``; return their
+    paths (named as :func:`run_figure_names` says).
+
+    A run: its time series, :data:`PANELS_PER_FIGURE` variables per figure, and the model's
+    overview when it has one. A campaign archive (from :func:`workbench.run_campaign`): every
+    variable against the swept parameter.
+    """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    written = []
-    figures = {"timeseries": timeseries_figure(ds)}
     model = ds.attrs.get("model")
-    draw = overview(model)
-    if draw is not None:
-        figures["overview"] = draw(ds)
-    for name, fig in figures.items():
-        path = directory / f"{model or 'run'}_{name}.png"
+    campaign = "campaign_dims" in ds.attrs
+    pages = _pages(_series(ds))
+    names = run_figure_names(model, len(_series(ds)), campaign=campaign)
+    draw = campaign_figure if campaign else timeseries_figure
+    title = ds.attrs.get("title", "")
+    figures = []
+    for k, page in enumerate(pages):
+        suffix = f" ({k + 1}/{len(pages)})" if len(pages) > 1 else ""
+        figures.append(draw(ds, page, title=title + suffix))
+    if not campaign and overview(model) is not None:
+        figures.append(overview(model)(ds))
+    written = []
+    for name, fig in zip(names, figures, strict=True):
+        path = directory / name
         fig.savefig(path, dpi=120)
         plt.close(fig)
         written.append(path)

@@ -5,7 +5,9 @@ is a :func:`workbench.simulate` of a variant of the scene."""
 from workbench.precision._study import (
     DEFAULT_METHODS,
     DEFAULT_TOLERANCES,
+    LIMIT_FACTOR,
     REFERENCE_FLOOR,
+    REFERENCE_MIN_TOL,
     Recommendation,
     accuracy,
     recommend,
@@ -15,7 +17,9 @@ from workbench.precision._study import (
 __all__ = [
     "DEFAULT_METHODS",
     "DEFAULT_TOLERANCES",
+    "LIMIT_FACTOR",
     "REFERENCE_FLOOR",
+    "REFERENCE_MIN_TOL",
     "Recommendation",
     "accuracy",
     "recommend",

@@ -19,20 +19,27 @@ work-precision diagrams; for non-smooth systems e.g. Acary & Brogliato 2008, Ch.
 (c) ``statistic_error``: the error of the mean and of the standard deviation of the stroboscopic
     samples of the whole run, relative to the reference's standard deviation.
 
-The reference is the most accurate method at the tightest tolerance (stated in the result).
+The reference is DOP853 at 100x below the tightest tolerance studied (stated in the result);
+its own error is the separation from a twin 10x tighter still (``reference_error``), and every
+error within 3x of it is flagged ``at_reference_limit``: :func:`recommend` does not use it.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import time as _time
-from collections.abc import Mapping, Sequence
+import warnings
+from collections import Counter
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
 
+from workbench.precision._store import study_store
 from workbench.run import (
     divergence_time,
     provenance,
@@ -44,11 +51,14 @@ from workbench.run import (
     with_solver,
 )
 from workbench.scene import SceneSource, load_scene
+from workbench.solver import Status
 
 __all__ = [
     "DEFAULT_METHODS",
     "DEFAULT_TOLERANCES",
+    "LIMIT_FACTOR",
     "REFERENCE_FLOOR",
+    "REFERENCE_MIN_TOL",
     "Recommendation",
     "accuracy",
     "recommend",
@@ -58,9 +68,16 @@ __all__ = [
 DEFAULT_METHODS = ("dop853", "dopri5", "scipy:DOP853", "scipy:Radau", "scipy:LSODA")
 DEFAULT_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
 _ERRORS = ("short_error", "peak_error", "events_error", "statistic_error")
+_COSTS = ("wall_time", "steps", "rhs_evaluations")  # of the long run; solver_<name> attributes
 # The reference must be exact to this fraction of a variable's range over the short horizon:
 # 1000x below the 1e-3 error targets `recommend` is meant for.
 REFERENCE_FLOOR = 1e-6
+RTOL_MIN = 1e-14  # the smallest rtol a scene accepts (solver.rtol)
+# The tightest default reference: its twin (10x tighter) is then still at RTOL_MIN.
+REFERENCE_MIN_TOL = 1e-13
+# An error within this factor of the reference's own error is flagged: it is not resolved.
+LIMIT_FACTOR = 3.0
+_LIMIT_BITS = {"short_error": 1, "peak_error": 2}
 
 
 def _strobe(ds: xr.Dataset) -> xr.Dataset:
@@ -123,6 +140,51 @@ def _measure(
     }
 
 
+def _check_settings(
+    methods: Sequence[str], tolerances: Sequence[float]
+) -> tuple[list[str], list[float]]:
+    """The settings as lists, refused before any run if malformed (naming the argument)."""
+    if isinstance(methods, str) or not len(methods):
+        raise ValueError(f"methods must be a non-empty sequence of method names, got {methods!r}")
+    tolerances = [float(t) for t in tolerances]
+    if not tolerances or any(not (RTOL_MIN <= t < 1) for t in tolerances):
+        raise ValueError(
+            f"tolerances must be a non-empty sequence of numbers in [{RTOL_MIN:g}, 1), got "
+            f"{tolerances!r}"
+        )
+    if len(set(tolerances)) != len(tolerances) or len(set(methods)) != len(methods):
+        raise ValueError(
+            f"methods and tolerances must not repeat a value, got {list(methods)!r} and "
+            f"{tolerances!r}"
+        )
+    return list(methods), tolerances
+
+
+def _quiet(run: Callable[[], xr.Dataset], log: list[str]) -> xr.Dataset:
+    """``run()`` with the warnings it raises (e.g. scipy's overflows) appended to ``log``
+    instead of printed."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ds = run()
+    log.extend(f"{w.category.__name__}: {w.message}" for w in caught)
+    return ds
+
+
+def _summarise(log: list[str]) -> str:
+    """Distinct messages with their counts, in order of first appearance."""
+    counts = Counter(log)
+    return "; ".join(f"{m} (x{n})" if n > 1 else m for m, n in counts.items())
+
+
+def _bar(total: int, initial: int, enabled: bool):
+    """A progress bar over runs with an ETA (stderr), or None."""
+    if not enabled:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, initial=initial, unit="run", desc="accuracy", smoothing=0.1)
+
+
 def accuracy(
     scene: SceneSource,
     *,
@@ -131,6 +193,8 @@ def accuracy(
     reference: tuple[str, float] | None = None,
     horizon: float | None = None,
     progress: bool = False,
+    store: str | os.PathLike | None = None,
+    restart: bool = False,
 ) -> xr.Dataset:
     """Work-precision study: run a scene with every method at every tolerance.
 
@@ -141,15 +205,26 @@ def accuracy(
     methods : sequence of str
         Solver methods (``"dop853"``, ``"dopri5"``, ``"ark548"``, ``"scipy:<name>"``).
     tolerances : sequence of float
-        rtol = atol values (atol is scaled per state by the model; see the model docs).
+        rtol = atol values in [1e-14, 1) (atol is scaled per state by the model; see the model
+        docs).
     reference : (method, tolerance), optional
-        The reference run; default ``("dop853", min(tolerances) / 10)`` (at least 1e-13).
+        The reference run; default ``("dop853", min(tolerances) / 100)``, at least
+        :data:`REFERENCE_MIN_TOL` (then less than 100x tighter than the tightest tolerances:
+        a warning, and their errors are flagged as below). Its own error is measured against a
+        twin 10x tighter.
     horizon : float, optional
         Horizon (s) of the short-horizon error; default: chosen from the separation of the
         reference and a run 100x looser, and of the reference and a twin 10x tighter (see the
         module docstring), stored as ``short_horizon``.
     progress : bool
-        Print one line per run.
+        A progress bar over the runs with an ETA (stderr) and one line per setting.
+    store : str or PathLike, optional
+        Keep every finished run in this directory (created; e.g. ``"wp.nc.runs"``), so that an
+        interrupted study resumes where it stopped (see :mod:`workbench.precision._store`); one
+        process writes it at a time (a lock). Default: nothing kept.
+    restart : bool
+        Discard what ``store`` holds first. Without it a store of another scene, reference or
+        horizon is refused with the differences named.
 
     Returns
     -------
@@ -157,11 +232,27 @@ def accuracy(
         Dims ``solver_method`` (not ``method``, a keyword of ``Dataset.sel``) and
         ``rtol`` (= atol; not ``tolerance``, a keyword of ``Dataset.sel`` too); variables
         ``wall_time`` (s, long run), ``steps``, ``rhs_evaluations``,
-        the errors (dimensionless, see the module docstring), ``status`` (int8 flags of
-        :class:`workbench.Status`: the first failed run's, 0 if both ran) and ``failure`` (its
-        message);
-        the reference in the attributes, with ``reference_error``: its separation from the
-        twin over the horizon (errors below it are not resolved; NaN without a twin).
+        the errors (dimensionless, see the module docstring), ``at_reference_limit`` (int8 CF
+        flag masks: 1 the short-horizon error, 2 the peak error is within
+        :data:`LIMIT_FACTOR` (3) times the reference's own error, so it measures the reference
+        rather than the setting; where the reference's error is unknown, every setting less
+        than 100x looser than the reference), ``status`` (int8 flags of
+        :class:`workbench.Status`: the first failed run's, 0 if both ran), ``failure`` (its
+        message) and ``solver_warnings`` (the warnings the setting's runs raised, with counts;
+        they are not printed); the reference in the attributes, with ``reference_error``: its
+        separation from the twin over the horizon (NaN without a twin).
+
+    Raises
+    ------
+    ValueError
+        Malformed ``methods`` or ``tolerances`` (before any run).
+    workbench.SceneError
+        A method the scene's solver table refuses (before any run).
+
+    Warns
+    -----
+    UserWarning
+        The reference is less than 100x tighter than the tightest tolerance.
 
     Examples
     --------
@@ -169,53 +260,168 @@ def accuracy(
     ...               methods=["dop853"], tolerances=[1e-4, 1e-8])
     >>> bool(wp.short_error.sel(rtol=1e-8) < wp.short_error.sel(rtol=1e-4))
     True
+    >>> wp.attrs["reference_tolerance"]
+    1e-10
     """
     scene = load_scene(scene)
-    ref_method, ref_tol = reference or ("dop853", max(min(tolerances) / 10, 1e-13))
-    ref_short = simulate(short_scene(scene, ref_method, ref_tol))
-    ref_long = simulate(with_solver(scene, ref_method, ref_tol))
-    twin_tol = max(ref_tol / 10, 1e-13)
-    twin = simulate(short_scene(scene, ref_method, twin_tol)) if twin_tol < ref_tol else None
-    if horizon is None:
-        probe = simulate(short_scene(scene, ref_method, ref_tol * 100))
-        horizon = short_horizon(ref_short, probe, twin)
-    ref_error = math.nan
-    if twin is not None:
-        n = _records_within(ref_short, horizon)
-        ref_error = float(
-            np.max(separation(twin.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))))
+    methods, tolerances = _check_settings(methods, tolerances)
+    ref_method, ref_tol = reference or ("dop853", max(min(tolerances) / 100, REFERENCE_MIN_TOL))
+    ref_tol = float(ref_tol)
+    for m in dict.fromkeys([*methods, ref_method]):  # every method valid before any run
+        with_solver(scene, m, ref_tol)
+    if min(tolerances) < 100 * ref_tol:
+        warnings.warn(
+            f"the reference ({ref_method} at {ref_tol:g}) is less than 100x tighter than the "
+            f"tightest tolerance studied ({min(tolerances):g}); errors within {LIMIT_FACTOR:g}x "
+            "of the reference's own error are flagged in 'at_reference_limit'",
+            stacklevel=2,
         )
-    period = ref_long.attrs.get("forcing_period")
-    total = float(ref_long.time[-1])
-    periods = total / period if period else total
-    shape = (len(methods), len(tolerances))
-    out = {k: np.full(shape, np.nan) for k in ("wall_time", "steps", "rhs_evaluations", *_ERRORS)}
-    status = np.zeros(shape, np.int8)
-    failures = np.full(shape, "", dtype=object)
-    for i, method in enumerate(methods):
-        for j, tol in enumerate(tolerances):
-            t0 = _time.perf_counter()
-            short = simulate(short_scene(scene, method, tol), throw=False)
-            if run_status(short).failed:
-                long = short  # the long run would fail as well: not worth its time
-            else:
-                long = simulate(with_solver(scene, method, tol), throw=False)
-            failed = next((r for r in (short, long) if run_status(r).failed), None)
-            if failed is not None:
-                status[i, j] = run_status(failed)
-                failures[i, j] = failed.attrs["run_message"]
-                continue
-            out["wall_time"][i, j] = long.attrs["solver_wall_time"]
-            out["steps"][i, j] = long.attrs["solver_steps"]
-            out["rhs_evaluations"][i, j] = long.attrs["solver_rhs_evaluations"]
-            for k, v in _measure(short, long, ref_short, ref_long, periods, horizon).items():
-                out[k][i, j] = v
-            if progress:
-                print(
-                    f"{method:14s} tol {tol:7.0e}: {out['wall_time'][i, j]:8.4f} s, "
-                    f"short error {out['short_error'][i, j]:.2e} "
-                    f"({_time.perf_counter() - t0:.1f} s incl. overhead)"
+    twin_tol = ref_tol / 10 if ref_tol / 10 >= RTOL_MIN else None
+    identity = {
+        "scene": scene.replace(sweep={}).to_dict(),
+        "reference": [ref_method, ref_tol],
+        "horizon": horizon,
+    }
+    with study_store(store, identity, restart=restart) as runs:
+        study = _Study(scene, ref_method, ref_tol, twin_tol, runs)
+        names = study.run_names(methods, tolerances, horizon is None)
+        stored = sum(runs.committed(n) for n in names)
+        bar = _bar(len(names), stored, progress)
+        try:
+            ds = study.run(methods, tolerances, horizon, bar)
+        finally:
+            if bar is not None:
+                bar.close()
+        runs.discard()
+    ds.attrs.update(provenance(scene, by="workbench.accuracy"))
+    return ds
+
+
+class _Study:
+    """The runs and measures of :func:`accuracy`, each kept in (and resumed from) a store."""
+
+    def __init__(self, scene, ref_method: str, ref_tol: float, twin_tol, runs) -> None:
+        self.scene, self.runs = scene, runs
+        self.ref_method, self.ref_tol, self.twin_tol = ref_method, ref_tol, twin_tol
+        self.log: list[str] = []  # the reference runs' warnings
+        self.bar = None
+
+    @staticmethod
+    def setting_name(method: str, tol: float) -> str:
+        return f"setting-{method.replace(':', '_')}-{tol:.6e}"
+
+    def run_names(self, methods, tolerances, probe: bool) -> list[str]:
+        """The store names of every run, each setting counted twice (its short and long run)."""
+        names = ["reference-short.nc", "reference-long.nc"]
+        names += ["twin.nc"] if self.twin_tol is not None else []
+        names += ["probe.nc"] if probe else []
+        settings = [f"{self.setting_name(m, t)}.json" for m in methods for t in tolerances]
+        return names + [n for n in settings for _ in range(2)]
+
+    def _step(self, n: int) -> None:
+        if self.bar is not None:
+            self.bar.update(n)
+
+    def _reference(self, name: str, rtol: float, short: bool = True) -> xr.Dataset:
+        make = short_scene if short else with_solver
+        ds, reused = self.runs.dataset(
+            name,
+            lambda: _quiet(lambda: simulate(make(self.scene, self.ref_method, rtol)), self.log),
+        )
+        self._step(0 if reused else 1)
+        return ds
+
+    def run(self, methods, tolerances, horizon: float | None, bar) -> xr.Dataset:
+        self.bar = bar
+        ref_short = self._reference("reference-short", self.ref_tol)
+        ref_long = self._reference("reference-long", self.ref_tol, short=False)
+        twin = None if self.twin_tol is None else self._reference("twin", self.twin_tol)
+        if horizon is None:
+            probe = self._reference("probe", self.ref_tol * 100)
+            horizon = short_horizon(ref_short, probe, twin)
+        ref_error = math.nan
+        if twin is not None:
+            n = _records_within(ref_short, horizon)
+            ref_error = float(
+                np.max(separation(twin.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))))
+            )
+        period = ref_long.attrs.get("forcing_period")
+        total = float(ref_long.time[-1])
+        self.periods = total / period if period else total
+        self.horizon, self.ref_short, self.ref_long = horizon, ref_short, ref_long
+
+        shape = (len(methods), len(tolerances))
+        out = {k: np.full(shape, np.nan) for k in (*_COSTS, *_ERRORS)}
+        status = np.zeros(shape, np.int8)
+        failures = np.full(shape, "", dtype=object)
+        solver_warnings = np.full(shape, "", dtype=object)
+        for i, method in enumerate(methods):
+            for j, tol in enumerate(tolerances):
+                t0 = _time.perf_counter()
+                rec, reused = self.runs.record(
+                    self.setting_name(method, tol), partial(self.measure, method, tol)
                 )
+                self._step(0 if reused else 2)
+                status[i, j], failures[i, j] = rec["status"], rec["failure"]
+                solver_warnings[i, j] = rec["warnings"]
+                for k in out:
+                    out[k][i, j] = rec.get(k, np.nan)
+                if bar is not None:
+                    what = (
+                        f"failed: {Status(rec['status']).label}"
+                        if rec["status"]
+                        else f"short error {rec['short_error']:.2e}"
+                    )
+                    cost = "stored" if reused else f"{_time.perf_counter() - t0:.1f} s"
+                    bar.write(f"{method:14s} rtol {tol:7.0e}: {what} ({cost})")
+        limited = _reference_limited(out, tolerances, self.ref_tol, ref_error)
+        ds = _dataset(methods, tolerances, out, status, failures, solver_warnings, limited)
+        return ds.assign_attrs(
+            statistic_noise_floor=1.0 / math.sqrt(_strobe(ref_long).sizes["time"]),
+            reference_method=self.ref_method,
+            reference_tolerance=self.ref_tol,
+            reference_wall_time=ref_long.attrs["solver_wall_time"],
+            reference_steps=ref_long.attrs["solver_steps"],
+            reference_twin_tolerance=math.nan if twin is None else self.twin_tol,
+            reference_error=ref_error,
+            reference_warnings=_summarise(self.log),
+            reference_limit_factor=LIMIT_FACTOR,
+            short_horizon=horizon,
+        )
+
+    def measure(self, method: str, tol: float) -> dict:
+        """One setting's record (JSON-ready): status, failure, warnings, costs, errors."""
+        own: list[str] = []
+        scene = self.scene
+        short = _quiet(lambda: simulate(short_scene(scene, method, tol), throw=False), own)
+        if run_status(short).failed:
+            long = short  # the long run would fail as well: not worth its time
+        else:
+            long = _quiet(lambda: simulate(with_solver(scene, method, tol), throw=False), own)
+        rec = {"status": 0, "failure": "", "warnings": _summarise(own)}
+        failed = next((r for r in (short, long) if run_status(r).failed), None)
+        if failed is not None:
+            return rec | {"status": int(run_status(failed)), "failure": failed.attrs["run_message"]}
+        rec |= {k: float(long.attrs[f"solver_{k}"]) for k in _COSTS}
+        errors = _measure(short, long, self.ref_short, self.ref_long, self.periods, self.horizon)
+        return rec | {k: float(v) for k, v in errors.items()}
+
+
+def _reference_limited(
+    out: dict[str, np.ndarray], tolerances: Sequence[float], ref_tol: float, ref_error: float
+) -> np.ndarray:
+    """CF flag masks per setting: 1 short error, 2 peak error at the reference's limit."""
+    flags = np.zeros(out["short_error"].shape, np.int8)
+    if math.isnan(ref_error):  # the reference's own error is unknown: judge by tolerance
+        near = np.asarray(tolerances) < 100 * ref_tol
+        flags[:, near] = _LIMIT_BITS["short_error"] | _LIMIT_BITS["peak_error"]
+        return flags
+    for name, bit in _LIMIT_BITS.items():
+        flags |= np.where(out[name] <= LIMIT_FACTOR * ref_error, bit, 0).astype(np.int8)
+    return flags
+
+
+def _dataset(methods, tolerances, out, status, failures, solver_warnings, limited) -> xr.Dataset:
     units = {"wall_time": "s", "steps": "1", "rhs_evaluations": "1"}
     long_names = {
         "wall_time": "solver wall time of the whole run",
@@ -232,9 +438,26 @@ def accuracy(
         k: (dims, v, {"units": units.get(k, "1"), "long_name": long_names[k]})
         for k, v in out.items()
     }
+    data["at_reference_limit"] = (
+        dims,
+        limited,
+        {
+            "long_name": "errors that lie at the reference's own limit (not resolved)",
+            "units": "1",
+            "flag_masks": np.array(list(_LIMIT_BITS.values()), np.int8),
+            "flag_meanings": " ".join(f"{k}_at_reference_limit" for k in _LIMIT_BITS),
+            "comment": f"set where the error is within {LIMIT_FACTOR:g}x the reference's own "
+            "error (reference_error); recommend() does not use such errors",
+        },
+    )
     data["status"] = (dims, status, status_attrs("outcome of the setting's runs"))
     data["failure"] = (dims, failures.astype(str), {"long_name": "failure message"})
-    ds = xr.Dataset(
+    data["solver_warnings"] = (
+        dims,
+        solver_warnings.astype(str),
+        {"long_name": "warnings raised by the setting's runs (with counts)", "units": "1"},
+    )
+    return xr.Dataset(
         data,
         coords={
             "solver_method": (
@@ -249,18 +472,6 @@ def accuracy(
             ),
         },
     )
-    ds.attrs.update(provenance(scene, by="workbench.accuracy"))
-    ds.attrs["statistic_noise_floor"] = 1.0 / math.sqrt(_strobe(ref_long).sizes["time"])
-    ds.attrs.update(
-        reference_method=ref_method,
-        reference_tolerance=ref_tol,
-        reference_wall_time=ref_long.attrs["solver_wall_time"],
-        reference_steps=ref_long.attrs["solver_steps"],
-        reference_twin_tolerance=twin_tol if twin is not None else math.nan,
-        reference_error=ref_error,
-        short_horizon=horizon,
-    )
-    return ds
 
 
 @dataclass(frozen=True)
@@ -299,6 +510,20 @@ class Recommendation:
         )
 
 
+def _limited(wp: xr.Dataset, errors: Sequence[str]) -> xr.DataArray:
+    """Settings whose errors among ``errors`` are flagged at the reference's limit (a study
+    without the flag, from before it existed, has none flagged)."""
+    if "at_reference_limit" not in wp:
+        return xr.zeros_like(wp.status, dtype=bool)
+    mask = sum(_LIMIT_BITS.get(e, 0) for e in errors)
+    return (wp.at_reference_limit & mask) != 0
+
+
+def _where(selected: xr.DataArray) -> list[tuple[str, float]]:
+    idx = np.argwhere(selected.transpose("solver_method", "rtol").values)
+    return [(str(selected.solver_method.values[i]), float(selected.rtol.values[j])) for i, j in idx]
+
+
 def recommend(
     wp: xr.Dataset, target: float, *, errors: Sequence[str] = ("short_error", "peak_error")
 ) -> Recommendation:
@@ -307,7 +532,9 @@ def recommend(
 
     By default the deterministic errors (a) and (b) decide; the long-run statistic and the event
     count of a chaotic run have a sampling-noise floor (about ``statistic_noise_floor`` in the
-    study's attributes) that no tolerance removes.
+    study's attributes) that no tolerance removes. A setting whose deciding errors are flagged
+    in ``at_reference_limit`` (within 3x of the reference's own error) is never recommended:
+    its error measures the reference.
 
     Parameters
     ----------
@@ -327,7 +554,8 @@ def recommend(
     Raises
     ------
     ValueError
-        If no setting meets the target, naming the best error reached.
+        If no setting meets the target, naming the best error reached; or if only settings at
+        the reference's limit do, naming them.
 
     Examples
     --------
@@ -338,8 +566,24 @@ def recommend(
     ('dop853', 1e-08)
     """
     worst = wp[list(errors)].to_array("error").max("error")
-    ok = (worst < target) & (wp.status == 0)
+    meets = (worst < target) & (wp.status == 0)
+    limited = _limited(wp, errors)
+    ok = meets & ~limited
     if not bool(ok.any()):
+        if bool(meets.any()):
+            ref_error = wp.attrs.get("reference_error", math.nan)
+            ref_tol = wp.attrs.get("reference_tolerance", math.nan)
+            shown = ", ".join(
+                f"{m} {r:g} ({float(worst.sel(solver_method=m, rtol=r)):.2g})"
+                for m, r in _where(meets & limited)
+            )
+            raise ValueError(
+                f"the settings that reach errors below target={target!r} ({shown}) are at the "
+                f"reference's limit (reference_error {ref_error:.2g} at rtol {ref_tol:g}): "
+                "their errors "
+                "measure the reference, not the setting. Run the study with a tighter reference "
+                "(at least 100x below the tolerances that matter)"
+            )
         best = float(worst.min())
         raise ValueError(
             f"no setting reaches errors below target={target!r}; the best is "

@@ -14,9 +14,12 @@ statistic below is a sample with one value per realisation, and a verdict is one
 - ``"peak_ratio_near_one"``: ``r = |peak(larger)| / median |peak(smaller)|`` per realisation;
   reproduced when the upper quartile of ``|r - 1|`` is below ``tolerance``, contradicted when
   its lower quartile is above it, else not resolved;
-- ``"chaos"``: the Wolf LLE of each coordinate over the realisations; reproduced when every
-  coordinate's median is positive by the two-sided Wilcoxon signed-rank test at 5 %,
-  contradicted when one is negative by it, else not resolved;
+- ``"chaos"``: the largest Lyapunov exponent from the equations (converged two-trajectory
+  estimate, :func:`workbench.study._exponents.reference_exponent`) and the 0-1 test of the
+  stroboscopic samples; reproduced when the exponent converged, exceeds two standard errors
+  and the median K is above 0.8; contradicted when it is below minus two standard errors and
+  K below 0.2; else not resolved (a Wolf exponent of a sampled series is not evidence: it
+  depends on the sampling, see the chaos study's exponent table);
 - ``"bifurcation_spread"``: the stroboscopic spreads of every point (and realisation) in the
   parameter range ``upper`` against those in ``lower`` (``expect = "upper_larger"`` or
   ``"lower_larger"``), two-sample rule: the points of a range are its sample.
@@ -35,7 +38,8 @@ import math
 
 import numpy as np
 
-from workbench.study._stats import ALPHA, compare_samples, describe, sign_test_zero
+from workbench.study._exponents import reference_exponent
+from workbench.study._stats import ALPHA, compare_samples, describe
 
 __all__ = ["evaluate_claim", "format_stats"]
 
@@ -140,27 +144,42 @@ def _ratio_near_one(claim: dict, label: str, mag_a: np.ndarray, mag_b: np.ndarra
     return _result(verdict, evidence, reason=reason)
 
 
+#: 0-1 test: K above this is chaotic, below 1 - this regular (Gottwald & Melbourne 2009)
+K_CHAOTIC = 0.8
+
+
 def _chaos(measures: dict) -> dict:
-    lles = measures.get("wolf_lle", {})
-    if not lles:
-        return _result("undecided", "no LLE was measured", reason="no LLE was measured")
-    tests = {k: sign_test_zero(v) for k, v in lles.items()}
-    shown = "; ".join(
-        f"{k}: {format_stats(t['stats'], '1/s')}, Wilcoxon p = {t['p_value']:.2g}"
-        for k, t in tests.items()
+    ref = reference_exponent(measures.get("exponents", {}))
+    ks = [k for values in measures.get("zero_one_K", {}).values() for k in values]
+    ks = np.asarray([k for k in ks if k is not None and math.isfinite(k)], float)
+    if ref is None or not ks.size:
+        return _result(
+            "undecided",
+            "no converged exponent or no 0-1 test was measured",
+            reason="the chaos verdict needs the exponent from the equations and the 0-1 test",
+        )
+    k_med = float(np.median(ks))
+    lle, err = ref["lle"], ref["stderr"] or 0.0
+    evidence = (
+        f"largest Lyapunov exponent from the equations {lle:.3g} +/- {err:.2g} 1/s "
+        f"({ref['lle_per_cycle']:.3g} per crank cycle; {ref['note']}; "
+        f"{'converged' if ref['trusted'] else 'not converged'}); 0-1 test K median "
+        f"{k_med:.3g} over {ks.size} coordinates and realisations"
     )
-    signs = [t["sign"] for t in tests.values()]
-    if all(s > 0 for s in signs):
-        return _result("reproduced", f"Wolf LLE {shown}")
-    if any(s < 0 for s in signs):
-        return _result("contradicted", f"Wolf LLE {shown}")
-    undecided = ", ".join(k for k, t in tests.items() if t["sign"] == 0)
-    return _result(
-        "not resolved",
-        f"Wolf LLE {shown}",
-        reason=f"ensemble spread: the LLE of {undecided} is not distinguishable from 0 over the "
-        f"realisations (Wilcoxon p >= {ALPHA})",
-    )
+    if ref["trusted"] and lle > 2 * err and k_med > K_CHAOTIC:
+        return _result("reproduced", evidence)
+    if ref["trusted"] and lle < -2 * err and k_med < 1 - K_CHAOTIC:
+        return _result("contradicted", evidence, reason="a negative exponent and K near 0")
+    why = []
+    if not ref["trusted"]:
+        why.append("the exponent's separation and renormalisation variants disagree")
+    elif abs(lle) <= 2 * err:
+        why.append(f"the exponent is within two standard errors ({err:.2g} 1/s) of 0")
+    if K_CHAOTIC >= k_med >= 1 - K_CHAOTIC:
+        why.append(f"K = {k_med:.3g} is neither near 0 nor near 1")
+    if not why:
+        why.append("the exponent and the 0-1 test disagree")
+    return _result("not resolved", evidence, reason="; ".join(why))
 
 
 def _bifurcation(claim: dict, measures: dict) -> dict:

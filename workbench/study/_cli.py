@@ -3,8 +3,26 @@
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import sys
 import time as _time
+
+from workbench._console import positive_int
+from workbench._exit_codes import worst_exit_code
+
+
+def _failed_runs(ds) -> tuple[int, int]:
+    """Failed runs of a study (read from its case archives) and their worst exit code."""
+    from workbench.archive import open_run
+    from workbench.campaign._block import INVALID, failed
+
+    n, code = 0, 0
+    for archive in json.loads(ds.attrs["archives"]).values():
+        status = open_run(archive)["status"].values
+        n += int(failed(status).sum())
+        code = max(code, worst_exit_code(status, INVALID))
+    return n, code
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
@@ -19,7 +37,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
         return 0
     names = available_studies() if args.name == "all" else [args.name]
     t_all = _time.perf_counter()
-    runs = 0
+    runs, n_failed, code = 0, 0, 0
     for name in names:
         t0 = _time.perf_counter()
         ds = run_study(
@@ -30,13 +48,16 @@ def _cmd_study(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
         )
         runs += int(ds.attrs["runs"])
+        failed, worst = _failed_runs(ds)
+        n_failed, code = n_failed + failed, max(code, worst)
         verdicts = [str(v) for v in ds["claim_verdict"].values] if "claim" in ds.dims else []
         counts = ", ".join(
             f"{verdicts.count(v)} {v}" for v in ("reproduced", "contradicted", "not resolved")
         )
         print(
             f"{name}: {ds.attrs['runs']} runs ({ds.attrs['realisations']} realisation(s) per "
-            f"case), claims: {counts}, {_time.perf_counter() - t0:.1f} s -> {args.output}/{name}/"
+            f"case), {failed} failed, claims: {counts}, {_time.perf_counter() - t0:.1f} s -> "
+            f"{args.output}/{name}/"
         )
     if args.name == "all":
         print(f"report: {write_report(args.output)}")
@@ -45,7 +66,13 @@ def _cmd_study(args: argparse.Namespace) -> int:
         f"{len(names)} stud{'y' if len(names) == 1 else 'ies'}: {runs} runs on {workers} "
         f"workers, {_time.perf_counter() - t_all:.1f} s"
     )
-    return 0
+    if code:
+        print(
+            f"workbench study: {n_failed} of {runs} runs failed (their status and message are in "
+            f"the case archives); exit code {code}",
+            file=sys.stderr,
+        )
+    return code
 
 
 def register_cli(sub) -> None:
@@ -65,6 +92,8 @@ def register_cli(sub) -> None:
         action="store_true",
         help="much shorter runs, at most 4 realisations (smoke test only)",
     )
-    p.add_argument("--workers", type=int, help="processes for campaign cases (default: all)")
+    p.add_argument(
+        "--workers", type=positive_int, help="processes for campaign cases (default: all)"
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=_cmd_study)

@@ -29,8 +29,14 @@ import xarray as xr
 
 from workbench.plot._runs import axis_label, plt
 from workbench.study._claims import _key
-from workbench.study._measure import clearance_of, select, strobe
-from workbench.study._run import CLEARANCE_COORDINATES, PEAK_PERIODS
+from workbench.study._exponents import reference_exponent
+from workbench.study._measure import (
+    CLEARANCE_COORDINATES,
+    PEAK_PERIODS,
+    clearance_of,
+    select,
+    strobe,
+)
 from workbench.study._spec import Study, parameter_sweep
 
 __all__ = ["study_figures"]
@@ -252,7 +258,8 @@ def _lle(spec, ctx):
         "largest Lyapunov exponent, Wolf et al. (1985): running estimate of realisation 0;\n"
         f"band: interquartile range of the final values over {len(ds.realisation)} realisations",
     )
-    bench = m.get("lle_from_equations")
+    ref = reference_exponent(m.get("exponents", {}))
+    bench = ref["lle"] if ref else None
     period = ds.attrs.get("forcing_period")
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
         w = analysis.wolf_lle(select(ds, var, where).isel(realisation=0), period=period)
@@ -268,7 +275,7 @@ def _lle(spec, ctx):
         low, high = np.nanmin(shown + [0.0]), np.nanmax(shown + [0.0])
         pad = 0.1 * (high - low) or 1.0
         ax.set_ylim(low - pad, high + pad)
-        if bench is not None:  # Benettin's LLE is often far above Wolf's: noted if off scale
+        if bench is not None:  # the converged exponent of the equations, noted if off scale
             off = not low - pad <= bench <= high + pad
             ax.axhline(bench, color="k", ls="--", lw=0.8)
             ax.plot(

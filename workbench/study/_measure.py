@@ -30,6 +30,15 @@ __all__ = [
     "PERCENTILES",
 ]
 
+# The four clearance coordinates of the paper's Sec. 5: x1, y1 (joint A), x2, y2 (joint B).
+CLEARANCE_COORDINATES = {
+    "x1": ("clearance_x", {"joint": "A"}),
+    "y1": ("clearance_y", {"joint": "A"}),
+    "x2": ("clearance_x", {"joint": "B"}),
+    "y2": ("clearance_y", {"joint": "B"}),
+}
+PEAK_PERIODS = 2  # paper values: peaks over the first two recorded crank cycles, as in a plot
+
 PERCENTILES = (50.0, 90.0, 99.0)  # of the contact force over time, %
 
 

@@ -16,7 +16,10 @@ from workbench.archive import save_run, write_text_atomic
 from workbench.run import REALISATION_ATTRS
 from workbench.scene import Scene
 from workbench.study._claims import _key, evaluate_claim
+from workbench.study._exponents import WOLF_SAMPLING, exponent_table
 from workbench.study._measure import (
+    CLEARANCE_COORDINATES,
+    PEAK_PERIODS,
     clearance_of,
     contact_fraction,
     energy_per_cycle,
@@ -30,16 +33,8 @@ from workbench.study._measure import (
 from workbench.study._spec import Study, load_study, parameter_sweep, quick_study
 from workbench.study._stats import describe
 
-__all__ = ["run_study", "ensemble_scene", "CLEARANCE_COORDINATES", "PEAK_PERIODS"]
+__all__ = ["run_study", "ensemble_scene"]
 
-# The four clearance coordinates of the paper's Sec. 5: x1, y1 (joint A), x2, y2 (joint B).
-CLEARANCE_COORDINATES = {
-    "x1": ("clearance_x", {"joint": "A"}),
-    "y1": ("clearance_y", {"joint": "A"}),
-    "x2": ("clearance_x", {"joint": "B"}),
-    "y2": ("clearance_y", {"joint": "B"}),
-}
-PEAK_PERIODS = 2  # paper values: peaks over the first two recorded crank cycles, as in a plot
 _PER_CASE = ("peak", "peak_ratio_near_one", "strobe_spread")  # statistics measured per case
 
 # Why a paper value may lie outside our ensemble's range (the report's known causes).
@@ -49,7 +44,8 @@ _CAUSE_TORQUE = (
 )
 _CAUSE_LLE_UNITS = (
     "known cause 5: the paper does not state the unit of its LLEs (per second, per crank period "
-    "or per sample of its output step); ours are 1/s"
+    "or per sample of its output step); ours are 1/s, so no ratio is formed (see the exponent "
+    "table of this study for what the paper's numbers could be)"
 )
 _CAUSE_ABOVE = (
     "known causes 1-2: the geometry is reconstructed, and the paper's 1 ms output step "
@@ -161,7 +157,7 @@ def run_study(
         "paper_values": paper_rows,
         "claims": claims,
         "measures": measures,
-        "flutter": _flutter(study),
+        "flutter": _flutter(study, quick),
         "figures": [str(p) for p in figures],
         "wall_time": _time.perf_counter() - study_wall0,
     }
@@ -250,8 +246,10 @@ def _measures(study: Study, runs: dict, members: dict, scenes: dict) -> dict:
 
 def _chaos_measures(ds: xr.Dataset, scene: Scene) -> dict:
     """Per realisation: Wolf LLE (1/s) of x1, y1, x2, y2 and the 0-1 test K of their
-    stroboscopic samples; the automatic choices of Wolf's method for realisation 0; and the LLE
-    from the equations (Benettin) of the unperturbed scene."""
+    stroboscopic samples; the automatic choices of Wolf's method for realisation 0; and the
+    exponent of the unperturbed scene by every method (:func:`exponent_table`: the converged
+    two-trajectory and variational estimates, Wolf at finer samplings and on the stroboscopic
+    map)."""
     from workbench import analysis
 
     out: dict = {"wolf_lle": {}, "wolf_lle_per_period": {}, "wolf_choices": {}, "zero_one_K": {}}
@@ -279,11 +277,32 @@ def _chaos_measures(ds: xr.Dataset, scene: Scene) -> dict:
         out["wolf_lle"][label] = lle
         out["wolf_lle_per_period"][label] = per_period
         out["zero_one_K"][label] = k
-    horizon = min(10, int(scene.run["cycles"]))
-    bench = analysis.lle_from_equations(scene, cycles=horizon)
-    out["lle_from_equations"] = float(bench["lle"])
-    out["lle_from_equations_cycles"] = horizon
+    table = exponent_table(
+        scene.replace(sweep={}),
+        cycles=min(EXPONENT_CYCLES, int(scene.run["cycles"])),
+        transient_cycles=int(scene.run["transient_cycles"]),
+        wolf_sampling=WOLF_SAMPLING if int(scene.run["cycles"]) >= 100 else ((100, 30),),
+        strobe_cycles=STROBE_CYCLES if int(scene.run["cycles"]) >= 100 else 120,
+    )
+    out["exponents"] = {
+        "method": [str(m) for m in table.method.values],
+        **{k: [_native(v) for v in table[k].values] for k in _EXPONENT_VARS},
+        "spectrum": [float(v) for v in table.spectrum.values],
+        **{k: _native(v) for k, v in table.attrs.items()},
+    }
     return out
+
+
+#: measured crank cycles of the exponents from the equations, and of the stroboscopic map
+EXPONENT_CYCLES = 6
+STROBE_CYCLES = 400
+_EXPONENT_VARS = ("lle", "lle_per_cycle", "stderr", "trusted", "note", "wall_time")
+
+
+def _native(v):
+    """A JSON-ready Python value of a numpy or Python scalar (non-finite floats as None)."""
+    v = v.item() if hasattr(v, "item") else v
+    return None if isinstance(v, float) and not math.isfinite(v) else v
 
 
 def _bifurcation_spread(ds: xr.Dataset, scene: Scene) -> dict:
@@ -352,14 +371,66 @@ def _sweep_summary(d: xr.Dataset) -> dict:
     return out
 
 
-def _flutter(study: Study) -> dict | None:
-    """The place of the flutter onset (largest real part of the eigenvalues of the rhs
-    Jacobian at continuous-contact states, against the friction coefficient). Not computed
-    yet: it awaits ``workbench.analysis.jacobian_spectrum``; until then the spec is echoed with
-    status "pending" and no numbers."""
+#: records per crank cycle, and cycles after the scene's transient, of the flutter analysis
+FLUTTER_SAMPLES = 200
+FLUTTER_CYCLES = 1
+
+
+def _flutter(study: Study, quick: bool) -> dict | None:
+    """The flutter of the sliding contact against the friction coefficient: for every value of
+    each ``[flutter]`` case's sweep, the eigenvalues of the rhs Jacobian
+    (:func:`workbench.analysis.jacobian_spectrum`) at the records where both journals are in
+    contact, over one crank cycle after the transient (200 records). Per value: the median and
+    90th percentile of the largest real part (s-1), the frequency (Hz) at the largest, and the
+    fraction of records in continuous contact. The onset is where the median first exceeds the
+    crank frequency (the sliding mode then grows e-fold within a crank cycle), interpolated."""
     if not study.flutter:
         return None
-    return dict(study.flutter, status="pending")
+    from workbench import analysis
+
+    spec = dict(study.flutter)
+    param = spec["parameter"]
+    out = {**spec, "status": "computed", "cases": {}}
+    for case in spec["cases"]:
+        scene = study.cases[case]
+        values = list(scene.sweep[param])
+        if quick:
+            values = values[:: max(1, len(values) // 3)]
+        rows = {"values": values, "median": [], "p90": [], "frequency": [], "fraction": []}
+        omega = float(scene.resolved_parameters["omega"])
+        for v in values:
+            point = scene.with_parameters(**{param: v}).replace(
+                run={"cycles": FLUTTER_CYCLES, "transient_cycles": scene.run["transient_cycles"]},
+                record={"samples_per_period": FLUTTER_SAMPLES},
+            )
+            r = analysis.jacobian_spectrum(point)
+            both = [i for i, m in enumerate(r.modes.values) if m.count("contact") == 2]
+            sel = np.isin(r.mode.values, both)
+            top = r.largest_real.values[sel]
+            rows["fraction"].append(float(sel.mean()))
+            if top.size:
+                i = int(np.argmax(top))
+                rows["median"].append(float(np.median(top)))
+                rows["p90"].append(float(np.quantile(top, 0.9)))
+                rows["frequency"].append(float(r.frequency.values[sel][i]))
+            else:
+                rows["median"].append(math.nan)
+                rows["p90"].append(math.nan)
+                rows["frequency"].append(math.nan)
+        threshold = omega / (2 * math.pi)
+        rows["threshold"] = threshold
+        rows["onset"] = _first_crossing(values, rows["median"], threshold)
+        out["cases"][case] = rows
+    return out
+
+
+def _first_crossing(x: list, y: list, level: float) -> float:
+    """First x where y rises through ``level`` (linear interpolation; NaN if it never does)."""
+    for i in range(1, len(x)):
+        a, b = y[i - 1], y[i]
+        if np.isfinite(a) and np.isfinite(b) and a < level <= b:
+            return float(x[i - 1] + (level - a) / (b - a) * (x[i] - x[i - 1]))
+    return math.nan
 
 
 def _paper_values(study: Study, measures: dict) -> list[dict]:
@@ -382,12 +453,13 @@ def _paper_values(study: Study, measures: dict) -> list[dict]:
         mags = describe(np.abs(values))
         finite = values[np.isfinite(values)]
         within = mags["n"] > 0 and mags["min"] <= abs(paper) <= mags["max"]
-        if within:
+        if stat == "wolf_lle":
+            note = _CAUSE_LLE_UNITS  # a value of unknown units is never "within our range"
+            within = False
+        elif within:
             note = ""
         elif entry["var"] == "torque":
             note = _CAUSE_TORQUE
-        elif stat == "wolf_lle":
-            note = _CAUSE_LLE_UNITS
         else:
             note = _CAUSE_ABOVE if mags["median"] > abs(paper) else _CAUSE_BELOW
         rows.append(
@@ -399,7 +471,9 @@ def _paper_values(study: Study, measures: dict) -> list[dict]:
                 "paper": paper,
                 "ours": mags,
                 "same_sign": int(np.sum(np.sign(finite) == np.sign(paper))),
-                "ratio_of_medians": mags["median"] / abs(paper) if mags["n"] else None,
+                "ratio_of_medians": (
+                    mags["median"] / abs(paper) if mags["n"] and stat != "wolf_lle" else None
+                ),
                 "within_range": bool(within),
                 "note": note,
             }
@@ -497,10 +571,20 @@ def summary_dataset(
             for i, k in enumerate(labels):
                 arr[i, : len(measures[field][k])] = measures[field][k]
             data[field] = (("coordinate", "realisation"), arr, {"units": u, "long_name": long_name})
-        data["lle_from_equations"] = (
-            (),
-            measures["lle_from_equations"],
-            {"units": "s-1", "long_name": "largest Lyapunov exponent from the equations"},
+    exponents = measures.get("exponents")
+    if exponents:
+        coords["method"] = ("method", exponents["method"], {"long_name": "estimator", "units": "1"})
+        for field, units, long_name in (
+            ("lle", "s-1", "largest Lyapunov exponent of realisation 0 by each method"),
+            ("lle_per_cycle", "1", "the same per crank cycle"),
+            ("stderr", "s-1", "standard error of the finite window"),
+        ):
+            values = np.array([np.nan if v is None else v for v in exponents[field]], float)
+            data[f"exponent_{field}"] = ("method", values, {"units": units, "long_name": long_name})
+        data["exponent_trusted"] = (
+            "method",
+            np.array(exponents["trusted"], bool),
+            {"long_name": "converged (equations) or reliable (Wolf)"},
         )
     spread = measures.get("bifurcation_spread")
     if spread:

@@ -20,8 +20,8 @@ run as a campaign) and ``study.toml`` with
   :mod:`workbench.study._claims`), with an optional ``reason`` (the cause shown, with its
   evidence, when the claim is not reproduced) and ``evidence`` (``contact`` or
   ``strobe_contact``: which measured numbers support the reason);
-- ``[flutter]``: where the friction-coefficient study will report the onset of the flutter
-  instability (``parameter``, ``cases``, ``method``); nothing is computed for it yet.
+- ``[flutter]``: the friction-coefficient study's flutter analysis (``parameter``, ``cases``,
+  ``method``): the Jacobian's eigenvalues at continuous contact against the parameter.
 """
 
 from __future__ import annotations

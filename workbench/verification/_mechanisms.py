@@ -3,10 +3,8 @@ placement, ideal joints, clearance joints, drives and the slider (:class:`Mechan
 description per model, and which scenes can be rebuilt at all.
 
 Only the initial placement and velocities come from the workbench's kinematics; the engine then
-holds the bodies to its own constraints. The nine-bar's placement reads its position analysis
-(``workbench.models.ninebar._kinematics``) and its geometry block: the one place where the
-verification reaches into a model's private modules, until the nine-bar exports its body
-placement (noted in the issue-19 hand-over).
+holds the bodies to its own constraints. The nine-bar's placement is its public
+:func:`workbench.models.ninebar.placement`.
 """
 
 from __future__ import annotations
@@ -17,8 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workbench.models import get_model
-from workbench.models._clearance import stiffness as joint_stiffness
+from workbench.models import get_model, joint_stiffness
 from workbench.scene import Scene
 
 __all__ = ["MECHANISMS", "Body", "Mechanism", "Point", "check_scene"]
@@ -61,77 +58,45 @@ class Mechanism:
 
 def ninebar_mechanism(scene: Scene) -> Mechanism:
     """The nine-bar mechanism at t = 0 (placement from the workbench's position analysis)."""
-    from workbench.models.ninebar._dynamics import N_GEO
-    from workbench.models.ninebar._geometry import BODY_NAMES
-    from workbench.models.ninebar._kinematics import (
-        CRANK1,
-        CRANK4,
-        G_L5,
-        G_O6X,
-        G_O6Y,
-        G_S0,
-        LINK2,
-        LINK3,
-        LINK8,
-        N_POINTS,
-        PANEL7,
-        PT_A,
-        PT_B,
-        PT_C,
-        PT_D,
-        PT_E,
-        PT_P,
-        ROCKER6,
-        SLIDER9,
-        jacobian,
-        positions,
-    )
+    from workbench.models.ninebar import BODY_INDEX, placement
 
     params = scene.resolved_parameters
     model = get_model("ninebar")
-    geo = model.problem(params, scene.effects, {}, ("torque",)).p[:N_GEO]
+    at = placement(params)
     omega = params["omega"]
-    q = np.array([params["theta10"], params["theta40"], 0.0, 0.0, 0.0, 0.0])
-    qd = np.array([-omega, omega, 0.0, 0.0, 0.0, 0.0])
-    pos = np.empty((8, 3))
-    pts = np.empty((N_POINTS, 2))
-    J = np.empty((8, 3, 6))
-    Jp = np.empty((N_POINTS, 2, 6))
-    if positions(q, geo, pos, pts) or jacobian(q, geo, J, Jp):
-        raise ValueError("the nine-bar mechanism does not assemble at its initial angles")
-    vel = J @ qd
     bodies = [
         Body(
             name,
             params[f"mass_{name}"],
             params.get(f"inertia_{name}", 0.0) or 1e-6,  # the slider's rotation is locked
-            tuple(pos[b]),
-            tuple(vel[b]),
+            tuple(at.position[b]),
+            tuple(at.velocity[b]),
         )
-        for b, name in enumerate(BODY_NAMES)
+        for b, name in enumerate(at.names)
     ]
-    A, B, P, C, D, E = (tuple(pts[i]) for i in (PT_A, PT_B, PT_P, PT_C, PT_D, PT_E))
-    o6 = (float(geo[G_O6X]), float(geo[G_O6Y]))
+    A, B, P, C, D, E = (at.points[k] for k in "ABPCDE")
+    o6 = at.ground["O6"]
     c = model.clearances(params)
-    s0 = float(geo[G_S0])
+    s0 = at.slider_offset
+    b = BODY_INDEX
     return Mechanism(
         bodies=bodies,
         revolutes=[
-            (None, CRANK1, (0.0, 0.0)),
-            (None, CRANK4, (float(geo[G_L5]), 0.0)),
-            (LINK2, LINK3, P),
-            (LINK2, PANEL7, P),
-            (None, ROCKER6, o6),
-            (ROCKER6, PANEL7, C),
-            (PANEL7, LINK8, D),
-            (LINK8, SLIDER9, E),
+            (None, b["crank1"], at.ground["O1"]),
+            (None, b["crank4"], at.ground["O5"]),
+            (b["link2"], b["link3"], P),
+            (b["link2"], b["panel7"], P),
+            (None, b["rocker6"], o6),
+            (b["rocker6"], b["panel7"], C),
+            (b["panel7"], b["link8"], D),
+            (b["link8"], b["slider9"], E),
         ],
         clearances={
-            "A": (CRANK1, LINK2, A, c["A"], joint_stiffness(params, c["A"])),
-            "B": (CRANK4, LINK3, B, c["B"], joint_stiffness(params, c["B"])),
+            "A": (b["crank1"], b["link2"], A, c["A"], joint_stiffness(params, c["A"])),
+            "B": (b["crank4"], b["link3"], B, c["B"], joint_stiffness(params, c["B"])),
         },
-        drives=[(CRANK1, -omega), (CRANK4, omega)],
-        slider=SLIDER9,
+        drives=[(b["crank1"], -omega), (b["crank4"], omega)],
+        slider=b["slider9"],
         slider_position=lambda x: s0 - (x - o6[0]),  # S9 = S0 - (x_E - x_O6)
         slider_sign=-1.0,
     )

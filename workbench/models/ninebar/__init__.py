@@ -6,5 +6,6 @@ Lankarani–Nikravesh contact and modified Coulomb / LuGre friction (:mod:`._dyn
 """
 
 from workbench.models.ninebar._model import JOINTS, NineBar
+from workbench.models.ninebar._placement import BODY_INDEX, Placement, placement
 
-__all__ = ["JOINTS", "NineBar"]
+__all__ = ["BODY_INDEX", "JOINTS", "NineBar", "Placement", "placement"]

@@ -12,6 +12,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from workbench.models._layout import named_values
+
 # order of the float64 geometry array passed to the compiled kinematics. The panel centroid is
 # the triangle centroid (C + P + D) / 3 (spec: Ls7 = 0.147 m from C), so it needs no field.
 GEOMETRY_FIELDS = (
@@ -35,6 +37,14 @@ GEOMETRY_FIELDS = (
     "Ls6",  # rocker 6 centroid from O6, m (R)
     "Ls8",  # link 8 centroid from D, m (R)
 )
+
+# entries that geometry_array appends, derived from the fields, so that the compiled kinematics
+# does not recompute them at every call
+DERIVED_FIELDS = (
+    "cos_beta",  # cos(beta)
+    "sin_beta",  # sin(beta)
+)
+ARRAY_FIELDS = GEOMETRY_FIELDS + DERIVED_FIELDS  # the geometry array's entries
 
 DEFAULT_GEOMETRY: dict[str, float] = {
     "L1": 0.045,
@@ -78,16 +88,13 @@ def geometry_array(values: Mapping[str, float] | None = None) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        float64[len(GEOMETRY_FIELDS)] in GEOMETRY_FIELDS order.
+        float64[len(ARRAY_FIELDS)]: the fields in GEOMETRY_FIELDS order, then DERIVED_FIELDS.
 
     Raises
     ------
     KeyError
         For a name that is not in GEOMETRY_FIELDS.
     """
-    merged = dict(DEFAULT_GEOMETRY)
-    for name, value in (values or {}).items():
-        if name not in merged:
-            raise KeyError(f"unknown nine-bar geometry field {name!r}; known: {GEOMETRY_FIELDS}")
-        merged[name] = value
-    return np.array([merged[f] for f in GEOMETRY_FIELDS], dtype=np.float64)
+    geo = named_values(GEOMETRY_FIELDS, DEFAULT_GEOMETRY, values, "nine-bar geometry field")
+    beta = geo[GEOMETRY_FIELDS.index("beta")]
+    return np.concatenate([geo, [math.cos(beta), math.sin(beta)]])

@@ -39,7 +39,18 @@ import math
 
 from numba import njit
 
-from workbench.models.ninebar._geometry import GEOMETRY_FIELDS
+from workbench.models._assur import (
+    arm_acceleration,
+    arm_velocity,
+    rrp_acceleration,
+    rrp_position,
+    rrp_velocity,
+    rrr_acceleration,
+    rrr_position,
+    rrr_velocity,
+)
+from workbench.models._reduced import store_column, store_pass
+from workbench.models.ninebar._geometry import ARRAY_FIELDS
 
 # -- points (rows of pts, Jp, gamp) --------------------------------------------------------------
 PT_A = 0  # bearing centre A on crank 1
@@ -65,9 +76,10 @@ FAIL_LINK8 = 3  # D-E: D is L8 or farther from the slider guide
 
 
 # -- indices into geo ----------------------------------------------------------------------------
-_G = {name: i for i, name in enumerate(GEOMETRY_FIELDS)}
+_G = {name: i for i, name in enumerate(ARRAY_FIELDS)}
 G_L1, G_L2, G_L3, G_L4, G_L5 = _G["L1"], _G["L2"], _G["L3"], _G["L4"], _G["L5"]
 G_L6, G_L71, G_L72, G_BETA, G_L8 = _G["L6"], _G["L71"], _G["L72"], _G["beta"], _G["L8"]
+G_COS_BETA, G_SIN_BETA = _G["cos_beta"], _G["sin_beta"]
 G_O6X, G_O6Y, G_S0 = _G["O6x"], _G["O6y"], _G["S0"]
 G_LS1, G_LS2, G_LS3, G_LS4 = _G["Ls1"], _G["Ls2"], _G["Ls3"], _G["Ls4"]
 G_LS6, G_LS8 = _G["Ls6"], _G["Ls8"]
@@ -77,236 +89,33 @@ G_LS6, G_LS8 = _G["Ls6"], _G["Ls8"]
 # dyads' rate factors f2, f3 (A'-P-B'), f6, f7 (O6-C-P), fw8, fs8 (D-E); the points A, A', B,
 # B', P, C, D, E.
 _N_STATE = 38
-_STATE_XE = _N_STATE - 2
+_THIRD = 1.0 / 3.0  # the panel's centroid is the mean of C, P, D
+_STATE_POINTS = _N_STATE - 2 * N_POINTS  # where the points begin
+_STATE_XE = _STATE_POINTS + 2 * PT_E
 _NO_STATE = (0.0,) * _N_STATE
 # Pass results are 40-tuples: per body (x, y, phi) in body order, then per point (x, y).
 _V_SLIDER_X = 3 * SLIDER9  # x of the slider in a pass result
 
 
 # ================================================================================================
-# Assur groups
-# ================================================================================================
-@njit(cache=True)
-def rrr_position(x1, y1, x2, y2, l1, l2, side):
-    """RRR dyad, position: the joint X with |X - P1| = l1 and |X - P2| = l2.
-
-    Intersection of two circles (the dyad of a four-bar loop; Hartenberg & Denavit 1964; Uicker,
-    Pennock & Shigley). Also returns the factors that solve the dyad's velocity and acceleration
-    equations, which depend on the position only.
-
-    Parameters
-    ----------
-    x1, y1, x2, y2 : float
-        Known joints P1, P2 (m).
-    l1, l2 : float
-        Link lengths from P1 and from P2 (m).
-    side : float
-        +1: X left of P1 -> P2 (cross(P2 - P1, X - P1) > 0); -1: right of it.
-
-    Returns
-    -------
-    (ok, c1, s1, c2, s2, f1, f2) : (bool, float, ...)
-        Unit vectors e1 = (c1, s1) = (X - P1) / l1 and e2 = (c2, s2) = (X - P2) / l2, and
-        f1 = 1 / (l1 sin(a2 - a1)), f2 = 1 / (l2 sin(a2 - a1)) (m-1) for the link angles a1, a2.
-        ok is False (the rest zero) where the circles do not meet in two points, or on NaN.
-    """
-    dx = x2 - x1
-    dy = y2 - y1
-    d2 = dx * dx + dy * dy
-    if not d2 > 0.0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    # X - P1 = a u + h perp(u), u = (P2 - P1) / d; with ta = a / d and th = h / d one division
-    # and one square root suffice
-    inv_d2 = 1.0 / d2
-    ta = 0.5 * (l1 * l1 - l2 * l2 + d2) * inv_d2
-    th2 = l1 * l1 * inv_d2 - ta * ta
-    if not th2 > 0.0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    th = side * math.sqrt(th2)
-    rx = ta * dx - th * dy
-    ry = ta * dy + th * dx
-    inv_l1 = 1.0 / l1
-    inv_l2 = 1.0 / l2
-    g = inv_d2 / th  # 1 / (d h), as sin(a2 - a1) = cross(e1, e2) = d h / (l1 l2)
-    return True, rx * inv_l1, ry * inv_l1, (rx - dx) * inv_l2, (ry - dy) * inv_l2, l2 * g, l1 * g
-
-
-@njit(cache=True)
-def rrr_velocity(c1, s1, c2, s2, f1, f2, v1x, v1y, v2x, v2y):
-    """RRR dyad, velocity: the link angular velocities from the known joints' velocities.
-
-    Solves the differentiated closure P1 + l1 e1 = P2 + l2 e2,
-    l1 w1 perp(e1) - l2 w2 perp(e2) = v2 - v1 with perp(c, s) = (-s, c), by projecting it on
-    e2 and on e1.
-
-    Parameters
-    ----------
-    c1, s1, c2, s2, f1, f2 : float
-        From :func:`rrr_position`.
-    v1x, v1y, v2x, v2y : float
-        Velocities of P1 and P2 (m s-1).
-
-    Returns
-    -------
-    (w1, w2) : (float, float)
-        Angular velocities of the links P1-X and P2-X (rad s-1).
-    """
-    rx = v2x - v1x
-    ry = v2y - v1y
-    return f1 * (rx * c2 + ry * s2), f2 * (rx * c1 + ry * s1)
-
-
-@njit(cache=True)
-def rrr_acceleration(c1, s1, c2, s2, f1, f2, l1, l2, w1, w2, a1x, a1y, a2x, a2y):
-    """RRR dyad, acceleration: the link angular accelerations.
-
-    Solves the closure differentiated twice, l1 al1 perp(e1) - l2 al2 perp(e2) =
-    a2 - a1 + l1 w1^2 e1 - l2 w2^2 e2, as in :func:`rrr_velocity`.
-
-    Parameters
-    ----------
-    c1, s1, c2, s2, f1, f2 : float
-        From :func:`rrr_position`.
-    l1, l2 : float
-        Link lengths (m).
-    w1, w2 : float
-        Link angular velocities from :func:`rrr_velocity` (rad s-1).
-    a1x, a1y, a2x, a2y : float
-        Accelerations of P1 and P2 (m s-2).
-
-    Returns
-    -------
-    (al1, al2) : (float, float)
-        Angular accelerations of the links P1-X and P2-X (rad s-2).
-    """
-    l1w2 = l1 * w1 * w1
-    l2w2 = l2 * w2 * w2
-    return rrr_velocity(
-        c1, s1, c2, s2, f1, f2, 0.0, 0.0,
-        a2x - a1x + l1w2 * c1 - l2w2 * c2, a2y - a1y + l1w2 * s1 - l2w2 * s2,
-    )  # fmt: skip
-
-
-@njit(cache=True)
-def rrp_position(xd, yd, gx, gy, ux, uy, length, side):
-    """RRP dyad, position: a link from the joint D to a slider joint E on a fixed guide.
-
-    E = G + sE u with |E - D| = length: intersection of a circle and a line (the dyad of a
-    slider-crank loop; Hartenberg & Denavit 1964; Uicker, Pennock & Shigley). Also returns the
-    factors that solve the velocity and acceleration equations.
-
-    Parameters
-    ----------
-    xd, yd : float
-        Known joint D (m).
-    gx, gy, ux, uy : float
-        A point G of the guide line (m) and its unit direction u.
-    length : float
-        Link length DE (m).
-    side : float
-        +1: E ahead of the foot of D along u; -1: behind it.
-
-    Returns
-    -------
-    (ok, c, s, sE, fw, fs) : (bool, float, ...)
-        Link unit vector (c, s) = (E - D) / length, slider coordinate sE along the guide (m),
-        fw = 1 / (length e.u) (m-1) and fs = 1 / (e.u). ok is False (the rest zero) where D is
-        ``length`` or farther from the guide, or on NaN.
-    """
-    wx = xd - gx
-    wy = yd - gy
-    dist = ux * wy - uy * wx  # signed distance of D from the guide
-    h2 = (length - dist) * (length + dist)
-    if not h2 > 0.0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0
-    h = side * math.sqrt(h2)  # sE - (D - G).u, and length e.u
-    se = wx * ux + wy * uy + h
-    fw = 1.0 / h
-    inv_l = 1.0 / length
-    return True, (se * ux - wx) * inv_l, (se * uy - wy) * inv_l, se, fw, length * fw
-
-
-@njit(cache=True)
-def rrp_velocity(c, s, fw, fs, ux, uy, vdx, vdy):
-    """RRP dyad, velocity: link angular velocity and slider velocity.
-
-    Solves the differentiated closure D + length e = G + sE u,
-    length w perp(e) - sE' u = -v_D, by projecting it on perp(u) and on e.
-
-    Parameters
-    ----------
-    c, s, fw, fs : float
-        From :func:`rrp_position`.
-    ux, uy : float
-        Guide direction (fixed guide).
-    vdx, vdy : float
-        Velocity of D (m s-1).
-
-    Returns
-    -------
-    (w, sdot) : (float, float)
-        Link angular velocity (rad s-1) and slider velocity along u (m s-1).
-    """
-    return fw * (uy * vdx - ux * vdy), fs * (vdx * c + vdy * s)
-
-
-@njit(cache=True)
-def rrp_acceleration(c, s, fw, fs, length, ux, uy, w, adx, ady):
-    """RRP dyad, acceleration: length al perp(e) - sE'' u = -a_D + length w^2 e.
-
-    Parameters
-    ----------
-    c, s, fw, fs : float
-        From :func:`rrp_position`.
-    length : float
-        Link length (m).
-    ux, uy : float
-        Guide direction (fixed guide).
-    w : float
-        Link angular velocity from :func:`rrp_velocity` (rad s-1).
-    adx, ady : float
-        Acceleration of D (m s-2).
-
-    Returns
-    -------
-    (al, sddot) : (float, float)
-        Link angular acceleration (rad s-2) and slider acceleration along u (m s-2).
-    """
-    lw2 = length * w * w
-    return rrp_velocity(c, s, fw, fs, ux, uy, adx - lw2 * c, ady - lw2 * s)
-
-
-@njit(cache=True)
-def _arm_velocity(vx, vy, length, w, c, s):
-    """Velocity of base + length e(angle) (m s-1)."""
-    return vx - length * w * s, vy + length * w * c
-
-
-@njit(cache=True)
-def _arm_acceleration(ax, ay, length, w, al, c, s):
-    """Acceleration of base + length e(angle) (m s-2)."""
-    lw2 = length * w * w
-    return ax - length * al * s - lw2 * c, ay + length * al * c - lw2 * s
-
-
-# ================================================================================================
 # the mechanism: configuration, then positions, velocities and bias accelerations of everything
 # ================================================================================================
-@njit(cache=True)
-def _configuration(q, geo):
-    """Assemble the mechanism at q: (code, state), state laid out as described at _N_STATE."""
-    c1 = math.cos(q[0])
-    s1 = math.sin(q[0])
-    c4 = math.cos(q[1])
-    s4 = math.sin(q[1])
+@njit(cache=True, inline="always")
+def configuration(th1, th4, x1, y1, x2, y2, geo):
+    """Assemble the mechanism at q = (th1, th4, x1, y1, x2, y2): (code, state), state laid out
+    as described at _N_STATE (all zero unless code is ASSEMBLED)."""
+    c1 = math.cos(th1)
+    s1 = math.sin(th1)
+    c4 = math.cos(th4)
+    s4 = math.sin(th4)
     xa = geo[G_L1] * c1
     ya = geo[G_L1] * s1
     xb = geo[G_L5] + geo[G_L4] * c4
     yb = geo[G_L4] * s4
-    xaj = xa + q[2]
-    yaj = ya + q[3]
-    xbj = xb + q[4]
-    ybj = yb + q[5]
+    xaj = xa + x1
+    yaj = ya + y1
+    xbj = xb + x2
+    ybj = yb + y2
     ok, c2, s2, c3, s3, f2, f3 = rrr_position(xaj, yaj, xbj, ybj, geo[G_L2], geo[G_L3], 1.0)
     if not ok:
         return FAIL_LINKS_23, _NO_STATE
@@ -321,8 +130,8 @@ def _configuration(q, geo):
     s7 = -scp
     xc = o6x + geo[G_L6] * c6
     yc = o6y + geo[G_L6] * s6
-    cb = math.cos(geo[G_BETA])
-    sb = math.sin(geo[G_BETA])
+    cb = geo[G_COS_BETA]
+    sb = geo[G_SIN_BETA]
     cd = c7 * cb - s7 * sb  # e(theta7 + beta)
     sd = s7 * cb + c7 * sb
     xd = xc + geo[G_L72] * cd
@@ -338,6 +147,32 @@ def _configuration(q, geo):
     return ASSEMBLED, state
 
 
+@njit(cache=True, inline="always")
+def point(state, i):
+    """Position (x, y) of point i (PT_*) of an assembled configuration, m."""
+    return state[_STATE_POINTS + 2 * i], state[_STATE_POINTS + 2 * i + 1]
+
+
+@njit(cache=True, inline="always")
+def centroids(geo, state):
+    """Centroid positions (x, y) in body order (m): the position pass without the angles."""
+    (
+        c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
+        f2, f3, f6, f7, fw8, fs8,
+        xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
+    ) = state  # fmt: skip
+    return (
+        geo[G_LS1] * c1, geo[G_LS1] * s1,
+        xaj + geo[G_LS2] * c2, yaj + geo[G_LS2] * s2,
+        xbj + geo[G_LS3] * c3, ybj + geo[G_LS3] * s3,
+        geo[G_L5] + geo[G_LS4] * c4, geo[G_LS4] * s4,
+        geo[G_O6X] + geo[G_LS6] * c6, geo[G_O6Y] + geo[G_LS6] * s6,
+        (xc + xp + xd) * _THIRD, (yc + yp + yd) * _THIRD,
+        xd + geo[G_LS8] * c8, yd + geo[G_LS8] * s8,
+        xe, ye,
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def _placement(q, geo, state):
     """Positions: body (x, y, phi) in body order, then the points (m, rad)."""
@@ -346,56 +181,58 @@ def _placement(q, geo, state):
         f2, f3, f6, f7, fw8, fs8,
         xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
     ) = state  # fmt: skip
+    g = centroids(geo, state)
     return (
-        geo[G_LS1] * c1, geo[G_LS1] * s1, q[0],
-        xaj + geo[G_LS2] * c2, yaj + geo[G_LS2] * s2, math.atan2(s2, c2),
-        xbj + geo[G_LS3] * c3, ybj + geo[G_LS3] * s3, math.atan2(s3, c3),
-        geo[G_L5] + geo[G_LS4] * c4, geo[G_LS4] * s4, q[1],
-        geo[G_O6X] + geo[G_LS6] * c6, geo[G_O6Y] + geo[G_LS6] * s6, math.atan2(s6, c6),
-        (xc + xp + xd) / 3.0, (yc + yp + yd) / 3.0, math.atan2(s7, c7),
-        xd + geo[G_LS8] * c8, yd + geo[G_LS8] * s8, math.atan2(s8, c8),
-        xe, ye, 0.0,
+        g[0], g[1], q[0],
+        g[2], g[3], math.atan2(s2, c2),
+        g[4], g[5], math.atan2(s3, c3),
+        g[6], g[7], q[1],
+        g[8], g[9], math.atan2(s6, c6),
+        g[10], g[11], math.atan2(s7, c7),
+        g[12], g[13], math.atan2(s8, c8),
+        g[14], g[15], 0.0,
         xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
     )  # fmt: skip
 
 
-@njit(cache=True)
-def _velocities(geo, state, w1, w4, vx1, vy1, vx2, vy2):
-    """Velocity analysis for qd = (w1, w4, vx1, vy1, vx2, vy2): rates laid out as _placement."""
+@njit(cache=True, inline="always")
+def velocities(geo, state, w1, w4, vx1, vy1, vx2, vy2):
+    """Velocity analysis for qd = (w1, w4, vx1, vy1, vx2, vy2): rates laid out as _placement.
+    Linear in qd: with a unit rate it is a column of the Jacobian."""
     (
         c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
         f2, f3, f6, f7, fw8, fs8,
         xa, ya, xaj, yaj, xb, yb, xbj, ybj, xp, yp, xc, yc, xd, yd, xe, ye,
     ) = state  # fmt: skip
     l2 = geo[G_L2]
-    vax, vay = _arm_velocity(0.0, 0.0, geo[G_L1], w1, c1, s1)
-    vbx, vby = _arm_velocity(0.0, 0.0, geo[G_L4], w4, c4, s4)
+    vax, vay = arm_velocity(0.0, 0.0, geo[G_L1], w1, c1, s1)
+    vbx, vby = arm_velocity(0.0, 0.0, geo[G_L4], w4, c4, s4)
     vajx = vax + vx1
     vajy = vay + vy1
     vbjx = vbx + vx2
     vbjy = vby + vy2
     w2, w3 = rrr_velocity(c2, s2, c3, s3, f2, f3, vajx, vajy, vbjx, vbjy)
-    vpx, vpy = _arm_velocity(vajx, vajy, l2, w2, c2, s2)
+    vpx, vpy = arm_velocity(vajx, vajy, l2, w2, c2, s2)
     w6, w7 = rrr_velocity(c6, s6, -c7, -s7, f6, f7, 0.0, 0.0, vpx, vpy)
-    vcx, vcy = _arm_velocity(0.0, 0.0, geo[G_L6], w6, c6, s6)
-    vdx, vdy = _arm_velocity(vcx, vcy, geo[G_L72], w7, cd, sd)
+    vcx, vcy = arm_velocity(0.0, 0.0, geo[G_L6], w6, c6, s6)
+    vdx, vdy = arm_velocity(vcx, vcy, geo[G_L72], w7, cd, sd)
     w8, vex = rrp_velocity(c8, s8, fw8, fs8, 1.0, 0.0, vdx, vdy)
-    v1x, v1y = _arm_velocity(0.0, 0.0, geo[G_LS1], w1, c1, s1)
-    v2x, v2y = _arm_velocity(vajx, vajy, geo[G_LS2], w2, c2, s2)
-    v3x, v3y = _arm_velocity(vbjx, vbjy, geo[G_LS3], w3, c3, s3)
-    v4x, v4y = _arm_velocity(0.0, 0.0, geo[G_LS4], w4, c4, s4)
-    v6x, v6y = _arm_velocity(0.0, 0.0, geo[G_LS6], w6, c6, s6)
-    v8x, v8y = _arm_velocity(vdx, vdy, geo[G_LS8], w8, c8, s8)
+    v1x, v1y = arm_velocity(0.0, 0.0, geo[G_LS1], w1, c1, s1)
+    v2x, v2y = arm_velocity(vajx, vajy, geo[G_LS2], w2, c2, s2)
+    v3x, v3y = arm_velocity(vbjx, vbjy, geo[G_LS3], w3, c3, s3)
+    v4x, v4y = arm_velocity(0.0, 0.0, geo[G_LS4], w4, c4, s4)
+    v6x, v6y = arm_velocity(0.0, 0.0, geo[G_LS6], w6, c6, s6)
+    v8x, v8y = arm_velocity(vdx, vdy, geo[G_LS8], w8, c8, s8)
     return (
         v1x, v1y, w1, v2x, v2y, w2, v3x, v3y, w3, v4x, v4y, w4, v6x, v6y, w6,
-        (vcx + vpx + vdx) / 3.0, (vcy + vpy + vdy) / 3.0, w7, v8x, v8y, w8, vex, 0.0, 0.0,
+        (vcx + vpx + vdx) * _THIRD, (vcy + vpy + vdy) * _THIRD, w7, v8x, v8y, w8, vex, 0.0, 0.0,
         vax, vay, vajx, vajy, vbx, vby, vbjx, vbjy, vpx, vpy, vcx, vcy, vdx, vdy, vex, 0.0,
     )  # fmt: skip
 
 
-@njit(cache=True)
-def _bias(geo, state, rates):
-    """Acceleration analysis at qdd = 0 for the rates of _velocities: laid out as _placement."""
+@njit(cache=True, inline="always")
+def bias(geo, state, rates):
+    """Acceleration analysis at qdd = 0 for the rates of velocities: laid out as _placement."""
     (
         c1, s1, c4, s4, c2, s2, c3, s3, c6, s6, c7, s7, cd, sd, c8, s8,
         f2, f3, f6, f7, fw8, fs8,
@@ -410,60 +247,38 @@ def _bias(geo, state, rates):
     w8 = rates[3 * LINK8 + 2]
     l2 = geo[G_L2]
     # the journal centres accelerate as the bearing centres when qdd = 0
-    aax, aay = _arm_acceleration(0.0, 0.0, geo[G_L1], w1, 0.0, c1, s1)
-    abx, aby = _arm_acceleration(0.0, 0.0, geo[G_L4], w4, 0.0, c4, s4)
+    aax, aay = arm_acceleration(0.0, 0.0, geo[G_L1], w1, 0.0, c1, s1)
+    abx, aby = arm_acceleration(0.0, 0.0, geo[G_L4], w4, 0.0, c4, s4)
     al2, al3 = rrr_acceleration(c2, s2, c3, s3, f2, f3, l2, geo[G_L3], w2, w3, aax, aay, abx, aby)
-    apx, apy = _arm_acceleration(aax, aay, l2, w2, al2, c2, s2)
+    apx, apy = arm_acceleration(aax, aay, l2, w2, al2, c2, s2)
     al6, al7 = rrr_acceleration(
         c6, s6, -c7, -s7, f6, f7, geo[G_L6], geo[G_L71], w6, w7, 0.0, 0.0, apx, apy
     )
-    acx, acy = _arm_acceleration(0.0, 0.0, geo[G_L6], w6, al6, c6, s6)
-    adx, ady = _arm_acceleration(acx, acy, geo[G_L72], w7, al7, cd, sd)
+    acx, acy = arm_acceleration(0.0, 0.0, geo[G_L6], w6, al6, c6, s6)
+    adx, ady = arm_acceleration(acx, acy, geo[G_L72], w7, al7, cd, sd)
     al8, aex = rrp_acceleration(c8, s8, fw8, fs8, geo[G_L8], 1.0, 0.0, w8, adx, ady)
-    a1x, a1y = _arm_acceleration(0.0, 0.0, geo[G_LS1], w1, 0.0, c1, s1)
-    a2x, a2y = _arm_acceleration(aax, aay, geo[G_LS2], w2, al2, c2, s2)
-    a3x, a3y = _arm_acceleration(abx, aby, geo[G_LS3], w3, al3, c3, s3)
-    a4x, a4y = _arm_acceleration(0.0, 0.0, geo[G_LS4], w4, 0.0, c4, s4)
-    a6x, a6y = _arm_acceleration(0.0, 0.0, geo[G_LS6], w6, al6, c6, s6)
-    a8x, a8y = _arm_acceleration(adx, ady, geo[G_LS8], w8, al8, c8, s8)
+    a1x, a1y = arm_acceleration(0.0, 0.0, geo[G_LS1], w1, 0.0, c1, s1)
+    a2x, a2y = arm_acceleration(aax, aay, geo[G_LS2], w2, al2, c2, s2)
+    a3x, a3y = arm_acceleration(abx, aby, geo[G_LS3], w3, al3, c3, s3)
+    a4x, a4y = arm_acceleration(0.0, 0.0, geo[G_LS4], w4, 0.0, c4, s4)
+    a6x, a6y = arm_acceleration(0.0, 0.0, geo[G_LS6], w6, al6, c6, s6)
+    a8x, a8y = arm_acceleration(adx, ady, geo[G_LS8], w8, al8, c8, s8)
     return (
         a1x, a1y, 0.0, a2x, a2y, al2, a3x, a3y, al3, a4x, a4y, 0.0, a6x, a6y, al6,
-        (acx + apx + adx) / 3.0, (acy + apy + ady) / 3.0, al7, a8x, a8y, al8, aex, 0.0, 0.0,
+        (acx + apx + adx) * _THIRD, (acy + apy + ady) * _THIRD, al7, a8x, a8y, al8, aex, 0.0, 0.0,
         aax, aay, aax, aay, abx, aby, abx, aby, apx, apy, acx, acy, adx, ady, aex, 0.0,
     )  # fmt: skip
 
 
 @njit(cache=True)
-def _store(values, body, point):
-    """Write a pass result into body[8, 3] and point[N_POINTS, 2]."""
-    for b in range(N_BODIES):
-        for r in range(3):
-            body[b, r] = values[3 * b + r]
-    for i in range(N_POINTS):
-        for r in range(2):
-            point[i, r] = values[3 * N_BODIES + 2 * i + r]
-
-
-@njit(cache=True)
-def _store_column(values, J, Jp, k):
-    """Write a velocity pass into column k of J[8, 3, 6] and Jp[N_POINTS, 2, 6]."""
-    for b in range(N_BODIES):
-        for r in range(3):
-            J[b, r, k] = values[3 * b + r]
-    for i in range(N_POINTS):
-        for r in range(2):
-            Jp[i, r, k] = values[3 * N_BODIES + 2 * i + r]
-
-
-@njit(cache=True)
 def _store_jacobian(geo, state, J, Jp):
     """J and Jp column by column: the velocity analysis for each unit coordinate rate."""
-    _store_column(_velocities(geo, state, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0), J, Jp, 0)
-    _store_column(_velocities(geo, state, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0), J, Jp, 1)
-    _store_column(_velocities(geo, state, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), J, Jp, 2)
-    _store_column(_velocities(geo, state, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0), J, Jp, 3)
-    _store_column(_velocities(geo, state, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0), J, Jp, 4)
-    _store_column(_velocities(geo, state, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0), J, Jp, 5)
+    store_column(velocities(geo, state, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0), J, Jp, 0)
+    store_column(velocities(geo, state, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0), J, Jp, 1)
+    store_column(velocities(geo, state, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), J, Jp, 2)
+    store_column(velocities(geo, state, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0), J, Jp, 3)
+    store_column(velocities(geo, state, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0), J, Jp, 4)
+    store_column(velocities(geo, state, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0), J, Jp, 5)
 
 
 # ================================================================================================
@@ -477,7 +292,7 @@ def positions(q, geo, pos, pts):
     ----------
     q : float64[6]
         (theta1, theta4, x1, y1, x2, y2) [rad, rad, m, m, m, m].
-    geo : float64[len(GEOMETRY_FIELDS)]
+    geo : float64[len(ARRAY_FIELDS)]
         Geometry (m, rad), see :func:`workbench.models.ninebar._geometry.geometry_array`.
     pos : float64[8, 3] (out)
         Centroid x, y (m) and angle phi (rad) per body.
@@ -489,9 +304,9 @@ def positions(q, geo, pos, pts):
     int
         ASSEMBLED (0), or the FAIL_* code of the group that does not close (outputs untouched).
     """
-    code, state = _configuration(q, geo)
+    code, state = configuration(q[0], q[1], q[2], q[3], q[4], q[5], geo)
     if code == ASSEMBLED:
-        _store(_placement(q, geo, state), pos, pts)
+        store_pass(_placement(q, geo, state), pos, pts)
     return code
 
 
@@ -503,7 +318,7 @@ def jacobian(q, geo, J, Jp):
     ----------
     q : float64[6]
         Coordinates [rad, rad, m, m, m, m].
-    geo : float64[len(GEOMETRY_FIELDS)]
+    geo : float64[len(ARRAY_FIELDS)]
         Geometry (m, rad).
     J : float64[8, 3, 6] (out)
         J[b, r, k] = d pos[b, r] / d q[k] (m rad-1, 1, rad m-1 as the units require).
@@ -515,7 +330,7 @@ def jacobian(q, geo, J, Jp):
     int
         ASSEMBLED (0) or a FAIL_* code (outputs untouched).
     """
-    code, state = _configuration(q, geo)
+    code, state = configuration(q[0], q[1], q[2], q[3], q[4], q[5], geo)
     if code == ASSEMBLED:
         _store_jacobian(geo, state, J, Jp)
     return code
@@ -529,7 +344,7 @@ def bias_acceleration(q, qd, geo, gam, gamp):
     ----------
     q, qd : float64[6]
         Coordinates [rad, rad, m, m, m, m] and their rates [rad s-1, rad s-1, m s-1, ...].
-    geo : float64[len(GEOMETRY_FIELDS)]
+    geo : float64[len(ARRAY_FIELDS)]
         Geometry (m, rad).
     gam : float64[8, 3] (out)
         Body accelerations (m s-2, m s-2, rad s-2) for qdd = 0: acc = J @ qdd + gam.
@@ -541,22 +356,23 @@ def bias_acceleration(q, qd, geo, gam, gamp):
     int
         ASSEMBLED (0) or a FAIL_* code (outputs untouched).
     """
-    code, state = _configuration(q, geo)
+    code, state = configuration(q[0], q[1], q[2], q[3], q[4], q[5], geo)
     if code == ASSEMBLED:
-        rates = _velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
-        _store(_bias(geo, state, rates), gam, gamp)
+        rates = velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
+        store_pass(bias(geo, state, rates), gam, gamp)
     return code
 
 
 @njit(cache=True)
-def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp):
-    """Positions, Jacobians and bias accelerations in one pass (the dynamics' entry point).
+def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp, vel, velp):
+    """Positions, Jacobians, velocities and bias accelerations in one pass (the record-time
+    dynamics' entry point).
 
     Parameters
     ----------
     q, qd : float64[6]
         Coordinates [rad, rad, m, m, m, m] and their rates.
-    geo : float64[len(GEOMETRY_FIELDS)]
+    geo : float64[len(ARRAY_FIELDS)]
         Geometry (m, rad).
     pos, pts : float64[8, 3], float64[N_POINTS, 2] (out)
         As in :func:`positions`.
@@ -564,18 +380,22 @@ def kinematics(q, qd, geo, pos, pts, J, Jp, gam, gamp):
         As in :func:`jacobian`.
     gam, gamp : float64[8, 3], float64[N_POINTS, 2] (out)
         As in :func:`bias_acceleration`.
+    vel, velp : float64[8, 3], float64[N_POINTS, 2] (out)
+        Velocities J @ qd of the bodies (m s-1, m s-1, rad s-1) and points (m s-1), from the
+        velocity pass (as the lean right-hand side computes them).
 
     Returns
     -------
     int
         ASSEMBLED (0) or a FAIL_* code (outputs untouched).
     """
-    code, state = _configuration(q, geo)
+    code, state = configuration(q[0], q[1], q[2], q[3], q[4], q[5], geo)
     if code == ASSEMBLED:
-        _store(_placement(q, geo, state), pos, pts)
+        store_pass(_placement(q, geo, state), pos, pts)
         _store_jacobian(geo, state, J, Jp)
-        rates = _velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
-        _store(_bias(geo, state, rates), gam, gamp)
+        rates = velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
+        store_pass(rates, vel, velp)
+        store_pass(bias(geo, state, rates), gam, gamp)
     return code
 
 
@@ -587,7 +407,7 @@ def slider(q, qd, qdd, geo):
     ----------
     q, qd, qdd : float64[6]
         Coordinates [rad, rad, m, m, m, m] and their first and second time derivatives.
-    geo : float64[len(GEOMETRY_FIELDS)]
+    geo : float64[len(ARRAY_FIELDS)]
         Geometry (m, rad).
 
     Returns
@@ -600,11 +420,11 @@ def slider(q, qd, qdd, geo):
     ValueError
         Where the mechanism does not assemble at q.
     """
-    code, state = _configuration(q, geo)
+    code, state = configuration(q[0], q[1], q[2], q[3], q[4], q[5], geo)
     if code != ASSEMBLED:
         raise ValueError("the nine-bar mechanism does not assemble at q")
-    rates = _velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
-    forced = _velocities(geo, state, qdd[0], qdd[1], qdd[2], qdd[3], qdd[4], qdd[5])
-    bias = _bias(geo, state, rates)
+    rates = velocities(geo, state, qd[0], qd[1], qd[2], qd[3], qd[4], qd[5])
+    forced = velocities(geo, state, qdd[0], qdd[1], qdd[2], qdd[3], qdd[4], qdd[5])
+    acc = bias(geo, state, rates)
     s = geo[G_S0] - (state[_STATE_XE] - geo[G_O6X])
-    return s, -rates[_V_SLIDER_X], -(forced[_V_SLIDER_X] + bias[_V_SLIDER_X])
+    return s, -rates[_V_SLIDER_X], -(forced[_V_SLIDER_X] + acc[_V_SLIDER_X])

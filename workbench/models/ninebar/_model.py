@@ -7,32 +7,34 @@ import math
 import numpy as np
 
 from workbench.models import register
-from workbench.models._base import Effect, Model, Parameter, Problem
+from workbench.models._base import Effect, Model, Parameter
 from workbench.models._clearance import (
-    ENERGY_STATES,
-    FRICTION_CODES,
     FRICTION_EFFECT,
-    check_records,
     clearance_states,
     contact_parameters,
-    failure_messages,
-    friction_block,
+    joint_block,
+    mechanism_derive,
     mechanism_outputs,
-    state_scales,
+    mechanism_parameters,
+    mechanism_problem,
     validate_joint,
 )
-from workbench.models._clearance import stiffness as joint_stiffness
-from workbench.models._reduced import N_FP
 from workbench.models.ninebar import _dynamics as dyn
 from workbench.models.ninebar._geometry import (
     BODY_NAMES,
     DEFAULT_GEOMETRY,
-    GEOMETRY_FIELDS,
     INERTIAS,
     MASSES,
+    geometry_array,
 )
 
 JOINTS = ("A", "B")
+
+
+def geometry_of(params) -> np.ndarray:
+    """The geometry block (m, rad) of the kinematics for the model's resolved parameters."""
+    return geometry_array({f: params[name] for name, f, _, _ in _GEOMETRY_PARAMETERS})
+
 
 # scene name, geometry field, long name, units
 _GEOMETRY_PARAMETERS = (
@@ -56,7 +58,6 @@ _GEOMETRY_PARAMETERS = (
     ("rocker6_centroid", "Ls6", "distance of the rocker 6 centroid from O6", "m"),
     ("link8_centroid", "Ls8", "distance of the link 8 centroid from D", "m"),
 )
-_GEOMETRY_BY_FIELD = {f: name for name, f, _, _ in _GEOMETRY_PARAMETERS}
 
 
 def _parameters() -> tuple[Parameter, ...]:
@@ -154,118 +155,31 @@ class NineBar(Model):
 
     # -- building ------------------------------------------------------------------------------
     def problem(self, params, effects, initial, requested):
-        joints = effects["clearance"]
-        lugre = effects["friction"] == "lugre"
-        energy = "driver_work" in requested or "dissipated_energy" in requested
-        states = list(self.states(effects))
-        y0 = [float(initial.get(q.name, 0.0)) for q in states]
-        if energy:
-            states += ENERGY_STATES
-            y0 += [0.0, 0.0]
-        p = np.zeros(dyn.N_P)
-        for i, f in enumerate(GEOMETRY_FIELDS):
-            p[i] = params[_GEOMETRY_BY_FIELD[f]] if f in _GEOMETRY_BY_FIELD else DEFAULT_GEOMETRY[f]
-        for b, body in enumerate(BODY_NAMES):
-            p[dyn.P_MASS + b] = params[f"mass_{body}"]
-            p[dyn.P_INERTIA + b] = params.get(f"inertia_{body}", 0.0)
-        g = params["gravity"] if effects["gravity"] else 0.0
-        p[dyn.P_GX] = g * math.cos(params["gravity_angle"])
-        p[dyn.P_GY] = g * math.sin(params["gravity_angle"])
-        p[dyn.P_OMEGA] = params["omega"]
-        p[dyn.P_TH10] = params["theta10"]
-        p[dyn.P_TH40] = params["theta40"]
-        stiffness = {}
-        for j, (name, c) in enumerate(self.clearances(params).items()):
-            base = dyn.P_JOINT + j * dyn.N_PJ
-            r1 = params["bearing_radius"]
-            k = joint_stiffness(params, c)
-            stiffness[name] = k
-            p[base + dyn.PJ_R1] = r1
-            p[base + dyn.PJ_R2] = r1 - c
-            p[base + dyn.PJ_C] = c
-            p[base + dyn.PJ_K] = k
-            p[base + dyn.PJ_N] = params["contact_exponent"]
-            p[base + dyn.PJ_CE] = params["restitution"]
-            p[base + dyn.PJ_DMAX] = params["max_penetration"]
-        p[dyn.P_CF : dyn.P_CF + N_FP] = friction_block(params)
-        p[dyn.P_VFLOOR] = params["impact_velocity_floor"]
-
-        nf = 2 * len(joints)
-        ip = np.full(dyn.N_IP, -1, np.int64)
-        ip[dyn.IP_HAS] = int("A" in joints)
-        ip[dyn.IP_HAS + 1] = int("B" in joints)
-        ip[dyn.IP_FRICTION] = FRICTION_CODES[effects["friction"]]
-        ip[dyn.IP_ENERGY] = int(energy)
-        ip[dyn.IP_NF] = nf
-        for i, j in enumerate(joints):
-            ix = 2 + 2 * JOINTS.index(j)
-            ip[dyn.IP_FREE + 2 * i] = ix
-            ip[dyn.IP_FREE + 2 * i + 1] = ix + 1
-            if lugre:
-                ip[dyn.IP_Z + JOINTS.index(j)] = 2 * nf + i
-        if energy:
-            ip[dyn.IP_W] = 2 * nf + (len(joints) if lugre else 0)
-        c_min = min(self.clearances(params)[j] for j in joints) if joints else 1.0
-        bristles = joints if lugre else ()  # the LuGre bristle states are stiff (ARK548)
-        codes = failure_messages(
-            "the mechanism cannot be assembled at this configuration (a loop does not close)"
+        clearances = self.clearances(params)
+        p = dyn.P.pack(
+            {
+                "geometry": geometry_of(params),
+                **mechanism_parameters(params, effects, BODY_NAMES),
+                "theta10": params["theta10"],
+                "theta40": params["theta40"],
+                "joint": np.concatenate([joint_block(params, clearances[j]) for j in JOINTS]),
+            }
         )
-        return Problem(
+        return mechanism_problem(
             hooks="workbench.models.ninebar._dynamics",
-            states=tuple(states),
-            y0=np.array(y0, dtype=float),
+            effects=effects,
+            initial=initial,
+            requested=requested,
+            joints=JOINTS,
+            clearances=clearances,
+            omega=params["omega"],
             p=p,
-            ip=ip,
-            aux0=np.zeros(2),
-            event_direction=np.array([1, -1] * len(joints), dtype=np.int64),
-            atol_scale=state_scales(states, c_min, params["omega"]),
-            t0=0.0,
-            work_size=dyn.WORK_SIZE,
-            failure=lambda code: codes.get(code, f"model failure code {code}"),
-            data={"stiffness": stiffness, "joints": joints},
-            stiff_states=[ip[dyn.IP_Z + JOINTS.index(j)] for j in bristles],
-            stiff_slots=[dyn.W_JOINT + JOINTS.index(j) * dyn.N_WJ + dyn.WJ_DECAY for j in bristles],
-            implicit_slot=dyn.O_HG,
+            IP=dyn.IP,
+            work=dyn.W,
+            n_driven=2,
+            assembly="the mechanism cannot be assembled at this configuration (a loop does not "
+            "close)",
         )
 
     def derive(self, problem, t, Y, AUX, requested):
-        ws = _workspaces(problem, t, Y, AUX)
-        joints = problem.data["joints"]
-        jcols = [JOINTS.index(j) for j in joints]
-
-        def per_joint(slot):
-            return np.stack([ws[:, dyn.W_JOINT + j * dyn.N_WJ + slot] for j in jcols], axis=1)
-
-        out = {}
-        if joints:
-            out.update(
-                clearance_x=per_joint(dyn.WJ_X),
-                clearance_y=per_joint(dyn.WJ_Y),
-                clearance_vx=per_joint(dyn.WJ_VX),
-                clearance_vy=per_joint(dyn.WJ_VY),
-                eccentricity=per_joint(dyn.WJ_E),
-                penetration=np.maximum(per_joint(dyn.WJ_DELTA), 0.0),
-                contact_force=per_joint(dyn.WJ_FN),
-                friction_force=per_joint(dyn.WJ_FT),
-            )
-            iz = problem.ip[dyn.IP_Z : dyn.IP_Z + 2]
-            if iz.max() >= 0:
-                out["lugre_z"] = np.stack([Y[:, iz[j]] for j in jcols], axis=1)
-            iw = problem.ip[dyn.IP_W]
-            if iw >= 0:
-                out["driver_work"] = Y[:, iw] - Y[0, iw]
-                out["dissipated_energy"] = Y[:, iw + 1] - Y[0, iw + 1]
-        out["torque"] = ws[:, dyn.W_TAU : dyn.W_TAU + 2]
-        out["slider_position"] = ws[:, dyn.W_SLIDER]
-        out["slider_velocity"] = ws[:, dyn.W_SLIDER + 1]
-        out["slider_acceleration"] = ws[:, dyn.W_SLIDER + 2]
-        out["kinetic_energy"] = ws[:, dyn.W_KE]
-        out["potential_energy"] = ws[:, dyn.W_PE]
-        return {k: v for k, v in out.items() if k in requested}
-
-
-def _workspaces(problem: Problem, t, Y, AUX) -> np.ndarray:
-    """The model's workspace (dyn.W_* layout) at every record."""
-    ws = np.empty((t.size, dyn.N_W))
-    check_records(problem, t, Y, dyn.evaluate_many(t, Y, problem.p, problem.ip, AUX, ws))
-    return ws
+        return mechanism_derive(problem, t, Y, AUX, requested, dyn.evaluate_many, dyn.RECORD)

@@ -1,0 +1,199 @@
+"""What keeps a store of files honest: one writer at a time (an advisory lock) and checksums.
+
+A *store* is a directory that one process writes over a long time (a campaign's blocks, an
+accuracy study's runs) and that a later process resumes from. Two processes writing one store
+would mix their files, so each holds :func:`store_lock` for its whole lifetime; a file reused on
+resume is first checked against the SHA-256 recorded when it was written (:func:`sha256_file`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+import errno
+import hashlib
+import json
+import os
+import socket
+import warnings
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "ArchiveError",
+    "StoreLocked",
+    "StoreWarning",
+    "file_problem",
+    "mapping_diff",
+    "sha256_file",
+    "store_lock",
+]
+
+LOCK_NAME = "lock"
+
+
+class ArchiveError(ValueError):
+    """A file or store cannot be used as asked: not a readable netCDF file, or a store that
+    another process is writing. The message names the path and what to do."""
+
+
+class StoreLocked(ArchiveError):
+    """The store is held by another live process (named by ``pid`` and ``host``)."""
+
+    def __init__(self, message: str, pid: int | None, host: str | None) -> None:
+        super().__init__(message)
+        self.pid = pid
+        self.host = host
+
+
+class StoreWarning(UserWarning):
+    """A file of a store cannot be reused (missing, corrupt, never committed) and is recomputed,
+    or a stale lock was taken over."""
+
+
+def sha256_file(path: str | os.PathLike) -> str:
+    """Hex SHA-256 digest of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def file_problem(path: str | os.PathLike, expected: str | None) -> str | None:
+    """Why the file of a store at ``path`` cannot be reused, or None if it can: ``expected`` is
+    the SHA-256 recorded when it was committed (None if it never was; then a file there is an
+    uncommitted left-over, and no file is simply work to do)."""
+    path = Path(path)
+    if expected is None:
+        if path.exists():
+            return (
+                "was written but never committed (no checksum in the manifest: the process "
+                "stopped before recording it)"
+            )
+        return None
+    if not path.is_file():
+        return "is missing"
+    try:
+        actual = sha256_file(path)
+    except OSError as exc:
+        return f"is unreadable ({exc})"
+    return None if actual == expected else "is corrupt: checksum mismatch"
+
+
+def _short(v: Any) -> str:
+    if isinstance(v, list | tuple) and len(v) > 4:
+        return f"[{len(v)} values from {v[0]!r} to {v[-1]!r}]"
+    return repr(v)
+
+
+def mapping_diff(old: Mapping, new: Mapping, prefix: str = "") -> list[str]:
+    """Lines ``key: old -> new`` for every dotted key whose value differs (nested mappings)."""
+    out = []
+    for k in list(old) + [k for k in new if k not in old]:
+        key = f"{prefix}{k}"
+        a, b = old.get(k, "<absent>"), new.get(k, "<absent>")
+        if isinstance(a, Mapping) and isinstance(b, Mapping):
+            out += mapping_diff(a, b, key + ".")
+        elif a != b:
+            out.append(f"{key}: {_short(a)} -> {_short(b)}")
+    return out
+
+
+def _read_holder(fd: int) -> dict:
+    """The holder recorded in an open lock file ({} if empty or unreadable)."""
+    try:
+        raw = os.pread(fd, 4096, 0)
+        holder = json.loads(raw.decode()) if raw.strip() else {}
+    except (OSError, ValueError):
+        return {}
+    return holder if isinstance(holder, dict) else {}
+
+
+def _describe(holder: dict) -> str:
+    if not holder:
+        return "a process that recorded no pid"
+    since = f", since {holder['started']}" if holder.get("started") else ""
+    return f"process {holder.get('pid')} on host {holder.get('host')!r}{since}"
+
+
+@contextlib.contextmanager
+def store_lock(directory: str | os.PathLike, what: str = "store") -> Iterator[dict]:
+    """Hold the advisory lock of a store directory (``fcntl.flock`` on ``DIRECTORY/lock``) for
+    the duration of the ``with`` block.
+
+    The lock file records the holder's pid, host and start time, so that a refused process can
+    name it. The kernel drops an ``flock`` when its holder dies (whatever the signal), so a lock
+    file left by a dead process is stale by construction: it is taken over with a
+    :class:`StoreWarning` that names the previous holder.
+
+    Parameters
+    ----------
+    directory : str or PathLike
+        The store directory (created if missing).
+    what : str
+        What the store is, for the message (e.g. ``"campaign store '/x/sweep.nc'"``).
+
+    Yields
+    ------
+    dict
+        The previous holder recorded in a stale lock file (``pid``, ``host``, ``started``), or
+        an empty dict.
+
+    Raises
+    ------
+    StoreLocked
+        Another live process holds the lock (the message names its pid and host).
+    """
+    import fcntl  # POSIX only; imported here so that the module loads everywhere
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / LOCK_NAME
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = _read_holder(fd)
+            os.close(fd)
+            if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise
+            raise StoreLocked(
+                f"the {what} is in use by {_describe(holder)} (lock file {str(path)!r}); one "
+                "process writes a store at a time: wait for it to finish or stop it, or choose "
+                "another output path",
+                holder.get("pid"),
+                holder.get("host"),
+            ) from None
+        # A releasing holder unlinks the file: the inode locked must still be the one at path.
+        try:
+            same = os.fstat(fd).st_ino == os.stat(path).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    previous = _read_holder(fd)
+    if previous:
+        warnings.warn(
+            StoreWarning(
+                f"took over the lock of the {what} left by {_describe(previous)}, which no "
+                "longer runs"
+            ),
+            stacklevel=3,
+        )
+    me = {
+        "pid": os.getpid(),
+        "host": socket.gethostname(),
+        "started": datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
+    }
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, (json.dumps(me) + "\n").encode(), 0)
+    try:
+        yield previous
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+        os.close(fd)  # releases the lock
