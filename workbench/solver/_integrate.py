@@ -53,7 +53,7 @@ from workbench.solver._tangent import state_scale
 
 __all__ = ["COMPILED_METHODS", "METHODS", "integrate"]
 
-_METHOD_IDS = {"auto": AUTO, "dop853": DOP853, "dopri5": DOPRI5, "ark548": ARK548, "radau": RADAU5}
+_METHOD_IDS = {"dop853": DOP853, "dopri5": DOPRI5, "ark548": ARK548, "radau": RADAU5, "auto": AUTO}
 COMPILED_METHODS = tuple(_METHOD_IDS)
 # every method a scene may name
 METHODS = COMPILED_METHODS + tuple(f"scipy:{m}" for m in _scipy_backend.METHODS)
