@@ -210,9 +210,12 @@ def main() -> None:
         default=0.01,
         help="fraction of the 1 um LuGre cycle measured by every method (0.01)",
     )
+    ap.add_argument(
+        "--parts", default="sweep,rest,lugre,fig32", help="sections of --stiff (all four)"
+    )
     args = ap.parse_args()
     if args.stiff:
-        stiff_main(args.repeats, args.lugre_fraction)
+        stiff_main(args.repeats, args.lugre_fraction, args.parts)
         return
     _register_reference_hooks()
     print(
@@ -287,8 +290,21 @@ def main() -> None:
         stiff_remedy()
 
 
-def stiff_main(repeats: int, lugre_fraction: float) -> None:
-    """The implicit method and the automatic switching (issue 16 items 2-3)."""
+def stiff_main(repeats: int, lugre_fraction: float, parts: str = "sweep,rest,lugre,fig32") -> None:
+    """The implicit method and the automatic switching (issue 16 items 2-3); ``parts`` selects
+    the sections."""
+    if "sweep" in parts:
+        _sweep(repeats)
+    if "rest" in parts:
+        _from_rest()
+    if "lugre" in parts:
+        lugre_micron(lugre_fraction)
+    if "fig32" in parts:
+        fig32_estimate()
+
+
+def _sweep(repeats: int) -> None:
+    """DOP853, Radau IIA and auto over SWEEP_PI, one cycle each from a common state."""
     print(
         "--- automatic switching over the Fig. 32 range of omega: the default scene (0.5 mm, "
         "Coulomb, rtol 1e-6), one cycle from the state after one cycle (DOP853 at rtol 1e-9), "
@@ -300,6 +316,10 @@ def stiff_main(repeats: int, lugre_fraction: float) -> None:
         reps = repeats if w >= 0.5 else max(1, repeats // 2)
         rows = {m: _timed(start, t_rec, m, 1, reps, 1e-6) for m in ("dop853", "radau", "auto")}
         print(_stiff_row(f"{w:.1f} pi", rows))
+
+
+def _from_rest() -> None:
+    """DOP853, Radau IIA and auto at 0.1 pi and 0.2 pi over the first two cycles from rest."""
     print(
         "--- omega = 0.1 pi and 0.2 pi from rest (1 + 1 cycles: the transient included), "
         "evaluations per cycle"
@@ -309,8 +329,6 @@ def stiff_main(repeats: int, lugre_fraction: float) -> None:
             m: solve("coulomb", m, 1, 1, 1, omega=w * math.pi) for m in ("dop853", "radau", "auto")
         }
         print(_stiff_row(f"{w:.1f} pi", rows))
-    lugre_micron(lugre_fraction)
-    fig32_estimate()
 
 
 #: omega / pi of the sweep over the range of the paper's Fig. 32
@@ -354,9 +372,10 @@ def lugre_micron(fraction: float) -> None:
         f"--- LuGre, 1 um clearance, omega 0.5 pi, rtol 1e-7: the first {fraction:g} cycle "
         "from rest, CPU s per cycle (extrapolated from the fraction)"
     )
+    prob, t_rec = problem("lugre", 1, spp=400, **params)
+    part = t_rec[t_rec <= prob.t0 + fraction * 4.0 + 1e-12]  # the period is 4 s
     rows = {
-        m: solve("lugre", m, fraction, 0, 1, rtol=1e-7, **params)
-        for m in ("dop853", "ark548", "radau", "auto")
+        m: _timed(prob, part, m, fraction, 1, 1e-7) for m in ("dop853", "ark548", "radau", "auto")
     }
     for m, r in rows.items():
         print(
