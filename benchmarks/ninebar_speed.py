@@ -18,12 +18,24 @@ alone, each figure the range over repeats, every baseline measured in the same r
 5. LuGre: ARK548 (the bristles implicit; the best method at rtol 1e-6, see README "Stiff LuGre
    bristles") and DOP853, 2 + 10 cycles.
 
-Targets (one quiet core): <= 0.04 s per cycle (Coulomb DOP853), <= 0.1 s per cycle (LuGre).
+6. the implicit method (Radau IIA, ``radau``) and the automatic switching (``auto``) against
+   DOP853 over omega = 0.1 pi .. 3 pi: one cycle of the default scene from the state after one
+   cycle (a common start), and the 0.1 pi and 0.2 pi points from rest;
+7. LuGre at 1 um clearance, omega 0.5 pi, rtol 1e-7: the first ``--lugre-fraction`` of a cycle
+   by every method, and a whole cycle by ``auto``;
+8. the paper's Fig. 32 (300 points x 200 cycles on 2 workers) estimated from the CPU time per
+   cycle measured at 9 values of omega on studies/bifurcation_speed/sweep.toml, from rest and
+   past 3 settling cycles.
+
+Targets (one quiet core): <= 0.04 s per cycle (Coulomb DOP853), <= 0.1 s per cycle (LuGre);
+``auto`` >= 10x fewer evaluations than DOP853 at 0.1 pi and 0.2 pi, >= 10x faster on the 1 um
+LuGre case, Fig. 32 <= 20 min.
 With ``--accuracy`` also the short-horizon error of DOP853 and ARK548 at rtol 1e-6 and 1e-8
 against DOP853 at 1e-11 (first 30 ms, ``workbench.accuracy``), which backs the choice of ARK548.
 
-Run: ``python benchmarks/ninebar_speed.py [--repeats N] [--accuracy]`` (3-6 min; the first run
-also compiles the kernels, ~2-4 min).
+Run: ``python benchmarks/ninebar_speed.py [--repeats N] [--accuracy]`` (8-12 min; the first run
+also compiles the kernels, ~3-6 min); ``--stiff [--parts sweep,rest,lugre,fig32]`` runs only
+sections 6-8.
 """
 
 from __future__ import annotations
