@@ -125,9 +125,10 @@ def _timed(prob, t_rec, method: str, n: float, repeats: int, rtol: float) -> dic
         "steps": st["steps"] / n,
         "evals": st["rhs_evaluations"] / n,
         "events": st["events"] / n,
-        "switches": st["switches_to_implicit"] + st["switches_to_explicit"],
-        "implicit_time": st["implicit_time"],
-        "jacobians": st["jacobians"] / n,
+        # the implicit method's statistics (none for scipy's methods)
+        "switches": st.get("switches_to_implicit", 0) + st.get("switches_to_explicit", 0),
+        "implicit_time": st.get("implicit_time", 0.0),
+        "jacobians": st.get("jacobians", 0) / n,
     }
 
 
