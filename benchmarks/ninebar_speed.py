@@ -175,7 +175,7 @@ def plain_python(friction: str, horizon: float) -> dict:
         "import json, sys, time\n"
         f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
         "from ninebar_speed import problem\n"
-        "from workbench.solver._simulate import integrate\n"
+        "from workbench.solver import integrate\n"
         f"prob, t = problem({friction!r}, 1)\n"
         f"t = t[t <= {horizon!r}]\n"
         "c0 = time.process_time()\n"
