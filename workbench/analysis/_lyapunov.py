@@ -58,12 +58,13 @@ class Window:
 
     def solve(self, problem: Problem, t_rec: np.ndarray, rtol: float) -> RunResult:
         """Integrate a problem derived from this window's (a tangent system, copies) with the
-        window's explicit method (ARK548's implicit stages are the model's, not the derived
-        system's) at ``rtol`` (``atol`` in proportion); raises on a failed run."""
+        window's explicit method (DOP853 for ARK548, whose implicit stages are the model's, not
+        the derived system's, and for Radau IIA and ``auto``, whose Jacobian is the model's) at
+        ``rtol`` (``atol`` in proportion); raises on a failed run."""
         res = integrate(
             problem,
             t_rec,
-            method=self.method if self.method != "ark548" else "dop853",
+            method=self.method if self.method in ("dop853", "dopri5") else "dop853",
             rtol=rtol,
             atol=self.atol * rtol / self.rtol,
             max_step=self.max_step,

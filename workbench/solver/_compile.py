@@ -87,7 +87,8 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    return _specialise("_kernel", "kernel", hooks, {"HOOKS": hooks})
+    modules = {"HOOKS": hooks, "JACOBIAN": jacobian_for(hooks).__name__}
+    return _specialise("_kernel", "kernel", hooks, modules)
 
 
 @cache
@@ -98,10 +99,18 @@ def jacobian_for(hooks: str) -> ModuleType:
     that an analytic Jacobian can be checked against it). See
     :mod:`workbench.solver._jacobian_template`.
     """
-    analytic = hasattr(importlib.import_module(hooks), "jacobian")
+    analytic = _defines_jacobian(importlib.import_module(hooks))
     modules = {"HOOKS": hooks, "JACOBIAN": hooks if analytic else _PLACEHOLDER}
     flags = {"HAS_ANALYTIC": analytic}
     return _specialise("_jacobian_template", "jacobian", hooks, modules, flags)
+
+
+def _defines_jacobian(module: ModuleType) -> bool:
+    """Whether ``module`` defines its own ``jacobian`` hook (a derived system's module may
+    import another module's ``jacobian`` under that name, e.g. the tangent system)."""
+    fn = getattr(module, "jacobian", None)
+    py_func = getattr(fn, "py_func", fn)
+    return fn is not None and getattr(py_func, "__module__", None) == module.__name__
 
 
 @cache

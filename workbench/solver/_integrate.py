@@ -10,15 +10,61 @@ import numpy as np
 
 from workbench.solver import _scipy_backend
 from workbench.solver._compile import kernel_for
+from workbench.solver._loop import (
+    ARK548,
+    AUTO,
+    CT_F_INSIDE,
+    CT_H,
+    CT_T,
+    DONE,
+    DOP853,
+    DOPRI5,
+    IS_JAC,
+    IS_LU,
+    IS_NEWTON,
+    IS_NEWTON_FAIL,
+    IS_RHS,
+    IS_STEPS,
+    IS_TO_EXPLICIT,
+    IS_TO_IMPLICIT,
+    MAX_STEPS,
+    MODEL_FAILURE,
+    NON_FINITE,
+    PAUSED,
+    RADAU5,
+    RC_TIME_IMPLICIT,
+    ST_EVENT_RETRIES,
+    ST_EVENTS,
+    ST_MODEL_CODE,
+    ST_RECORDED,
+    ST_REJECTED,
+    ST_RHS,
+    ST_STEPS,
+    STEP_UNDERFLOW,
+    TERMINATED,
+    Settings,
+    allocate,
+    hooks_of,
+    implicit_of,
+)
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, Status, solver_stats
+from workbench.solver._tangent import state_scale
 
 __all__ = ["COMPILED_METHODS", "METHODS", "integrate"]
 
-_METHOD_IDS = {"dop853": 1, "dopri5": 0, "ark548": 2}  # the kernel's DOP853, DOPRI5, ARK548
+_METHOD_IDS = {"dop853": DOP853, "dopri5": DOPRI5, "ark548": ARK548, "radau": RADAU5, "auto": AUTO}
 COMPILED_METHODS = tuple(_METHOD_IDS)
 # every method a scene may name
 METHODS = COMPILED_METHODS + tuple(f"scipy:{m}" for m in _scipy_backend.METHODS)
+_STATUS = {
+    DONE: Status.OK,
+    TERMINATED: Status.TERMINATED,
+    MAX_STEPS: Status.MAX_STEPS,
+    STEP_UNDERFLOW: Status.STEP_UNDERFLOW,
+    NON_FINITE: Status.NON_FINITE,
+    MODEL_FAILURE: Status.MODEL_FAILURE,
+}
 
 
 def integrate(
@@ -40,7 +86,8 @@ def integrate(
     t_rec : array_like
         Record times, s, ascending, the first at or after ``problem.t0``.
     method : str
-        ``"dop853"``, ``"dopri5"``, ``"ark548"`` (compiled) or ``"scipy:<solve_ivp method>"``.
+        ``"auto"`` (DOP853 and Radau IIA, switched on measured stiffness), ``"dop853"``,
+        ``"dopri5"``, ``"ark548"``, ``"radau"`` (compiled) or ``"scipy:<solve_ivp method>"``.
     rtol, atol : float
         Tolerances; ``atol`` is multiplied per state by ``problem.atol_scale``.
     max_step : float
@@ -81,112 +128,63 @@ def integrate(
         return RunResult(t_rec, np.empty((t_rec.size, 0)), AUX, stats0, time=float(t_rec[-1]))
     k = kernel_for(problem.hooks)
     mid = _METHOD_IDS[method]
-    n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
-    y = problem.y0.copy()
-    aux = problem.aux0.copy()
-    work = np.zeros(max(problem.work_size, 1))
-    f = np.empty(n)
-    g = np.empty(ne)
-    stats = np.zeros(k.N_STATS, np.int64)
-    ctrl = np.zeros(k.N_CTRL + problem.stiff_states.size)
-    Y = np.full((t_rec.size, n), np.nan)
-    AUX = np.full((t_rec.size, na), np.nan)
+    settings = Settings(mid, float(rtol), atol_arr, float(max_step), int(max_steps), t_rec)
+    hooks = hooks_of(problem)
+    state = allocate(problem, t_rec.size)
+    implicit = _implicit(problem, settings)
     t_end = float(t_rec[-1])
-    _compiled(k, mid, problem, rtol, atol_arr, max_step)
+    _compiled(k, problem, settings)
     wall0 = _time.perf_counter()
-    code = k.start(
-        problem.t0, y, problem.p, problem.ip, aux, work, f, g, stats, problem.stiff_slots, ctrl
-    )
-    ctrl[k.CT_F_INSIDE] = 1.0 if code == EVENT_INSIDE_STEP else 0.0
+    code = k.start(problem.t0, hooks, state)
+    state.ctrl[CT_F_INSIDE] = 1.0 if code == EVENT_INSIDE_STEP else 0.0
     if code != 0 and code != EVENT_INSIDE_STEP:
         message = f"the model cannot start at t = {problem.t0:g} s: {problem.failure(code)}"
-        state = problem.state_dict(y)
+        state_d = problem.state_dict(state.y)
         return RunResult(
-            t_rec, Y, AUX, stats0, Status.MODEL_FAILURE, message, 0, problem.t0, state, code
-        )
-    h0 = k.initial_step(
-        mid,
-        problem.t0,
-        y,
-        f,
-        problem.p,
-        problem.ip,
-        aux,
-        work,
-        rtol,
-        atol_arr,
-        max_step,
-        t_end,
-        stats,
-    )
-    ctrl[k.CT_T] = problem.t0
-    ctrl[k.CT_H] = h0
+            t_rec, state.Yrec, state.AUXrec, stats0, Status.MODEL_FAILURE, message, 0,
+            problem.t0, state_d, code,
+        )  # fmt: skip
+    h0 = k.initial_step(mid, problem.t0, t_end, settings, hooks, state)
+    state.ctrl[CT_T] = problem.t0
+    state.ctrl[CT_H] = h0
     chunk = (t_end - problem.t0) / 100.0 if progress is not None else math.inf
     t_pause = problem.t0 + chunk
     while True:
-        code = k.advance(
-            mid,
-            t_end,
-            t_pause,
-            t_rec,
-            problem.p,
-            problem.ip,
-            rtol,
-            atol_arr,
-            max_step,
-            max_steps,
-            problem.event_direction,
-            ctrl,
-            y,
-            f,
-            aux,
-            work,
-            g,
-            stats,
-            Y,
-            AUX,
-            problem.stiff_states,
-            problem.stiff_slots,
-            problem.implicit_slot,
-        )
+        code = k.advance(t_end, t_pause, settings, hooks, state, implicit)
         if progress is not None:
-            progress(float(ctrl[k.CT_T]))
-        if code != k.PAUSED:
+            progress(float(state.ctrl[CT_T]))
+        if code != PAUSED:
             break
         t_pause += chunk
+    stats, ctrl, y = state.stats, state.ctrl, state.y
+    Y, AUX = state.Yrec, state.AUXrec
     st = solver_stats(
         method,
         rtol,
         atol,
         max_step,
-        steps=int(stats[k.ST_STEPS]),
-        rejected_steps=int(stats[k.ST_REJECTED]),
-        rhs_evaluations=int(stats[k.ST_RHS]),
-        events=int(stats[k.ST_EVENTS]),
-        event_retries=int(stats[k.ST_EVENT_RETRIES]),
+        steps=int(stats[ST_STEPS]),
+        rejected_steps=int(stats[ST_REJECTED]),
+        rhs_evaluations=int(stats[ST_RHS]),
+        events=int(stats[ST_EVENTS]),
+        event_retries=int(stats[ST_EVENT_RETRIES]),
         wall_time=_time.perf_counter() - wall0,
     )
-    status = {
-        k.DONE: Status.OK,
-        k.TERMINATED: Status.TERMINATED,
-        k.MAX_STEPS: Status.MAX_STEPS,
-        k.STEP_UNDERFLOW: Status.STEP_UNDERFLOW,
-        k.NON_FINITE: Status.NON_FINITE,
-        k.MODEL_FAILURE: Status.MODEL_FAILURE,
-    }[code]
-    t_now = float(ctrl[k.CT_T])
-    n_rec = int(stats[k.ST_RECORDED])
+    st.update(_implicit_stats(implicit, float(ctrl[CT_T]) - problem.t0))
+    status = _STATUS[code]
+    t_now = float(ctrl[CT_T])
+    n_rec = int(stats[ST_RECORDED])
     if status is Status.TERMINATED:
         t_rec, Y, AUX = t_rec[:n_rec], Y[:n_rec], AUX[:n_rec]
     if not status.failed:
         return RunResult(t_rec, Y, AUX, st, status, "", n_rec, t_now)
-    model_code = int(stats[k.ST_MODEL_CODE]) if status is Status.MODEL_FAILURE else 0
+    model_code = int(stats[ST_MODEL_CODE]) if status is Status.MODEL_FAILURE else 0
     explanation = problem.failure(model_code) if model_code else ""
-    state = problem.state_dict(y)
+    where = problem.state_dict(y)
     message = failure_message(
-        status, t_now, state, h=float(ctrl[k.CT_H]), max_steps=max_steps, explanation=explanation
+        status, t_now, where, h=float(ctrl[CT_H]), max_steps=max_steps, explanation=explanation
     )
-    return RunResult(t_rec, Y, AUX, st, status, message, n_rec, t_now, state, model_code)
+    return RunResult(t_rec, Y, AUX, st, status, message, n_rec, t_now, where, model_code)
 
 
 def failure_message(
@@ -213,40 +211,46 @@ def failure_message(
     )
 
 
-def _compiled(k, mid, problem, rtol, atol_arr, max_step) -> None:
+def _implicit(problem: Problem, settings: Settings):
+    """The implicit method's arrays for Radau IIA and the automatic method, else None (the
+    loop is then compiled without the implicit method)."""
+    if settings.method not in (RADAU5, AUTO):
+        return None
+    return implicit_of(problem, settings.rtol, settings.atol, state_scale(problem), settings.method)
+
+
+def _implicit_stats(implicit, duration: float) -> dict:
+    """The implicit method's and the automatic switching's statistics (zeros for an explicit
+    method): Jacobian evaluations, LU decompositions (a real and a complex one each), Newton
+    iterations and the steps they failed, implicit steps, evaluations and simulated time (s),
+    the explicit method's simulated time (s), and the switches either way."""
+    if implicit is None:
+        counts = np.zeros(9, np.int64)
+        t_implicit = 0.0
+    else:
+        counts, t_implicit = implicit.stats, float(implicit.rc[RC_TIME_IMPLICIT])
+    return {
+        "jacobians": int(counts[IS_JAC]),
+        "lu_decompositions": int(counts[IS_LU]),
+        "newton_iterations": int(counts[IS_NEWTON]),
+        "newton_failures": int(counts[IS_NEWTON_FAIL]),
+        "implicit_steps": int(counts[IS_STEPS]),
+        "implicit_rhs_evaluations": int(counts[IS_RHS]),
+        "implicit_time": t_implicit,
+        "explicit_time": max(duration - t_implicit, 0.0),
+        "switches_to_implicit": int(counts[IS_TO_IMPLICIT]),
+        "switches_to_explicit": int(counts[IS_TO_EXPLICIT]),
+    }
+
+
+def _compiled(k, problem: Problem, settings: Settings) -> None:
     """Compile (or load from cache) every kernel entry point before the clock starts, so that
     the recorded wall time is integration only."""
-    n, na, ne = problem.y0.size, problem.aux0.size, problem.event_direction.size
-    y, f, aux = problem.y0.copy(), np.empty(n), problem.aux0.copy()
-    g, stats = np.empty(ne), np.zeros(k.N_STATS, np.int64)
-    ctrl = np.zeros(k.N_CTRL + problem.stiff_states.size)
-    work = np.zeros(max(problem.work_size, 1))
-    p, ip, t0 = problem.p, problem.ip, problem.t0
-    ctrl[k.CT_T] = t0
-    k.start(t0, y, p, ip, aux, work, f, g, stats, problem.stiff_slots, ctrl)
-    k.initial_step(mid, t0, y, f, p, ip, aux, work, 1e-3, atol_arr, max_step, t0 + 1.0, stats)
-    k.advance(
-        mid,
-        t0,
-        t0,
-        np.zeros(0),
-        p,
-        ip,
-        1e-3,
-        atol_arr,
-        max_step,
-        1,
-        problem.event_direction,
-        ctrl,
-        y,
-        f,
-        aux,
-        work,
-        g,
-        stats,
-        np.empty((0, n)),
-        np.empty((0, na)),
-        problem.stiff_states,
-        problem.stiff_slots,
-        problem.implicit_slot,
-    )
+    hooks = hooks_of(problem)
+    state = allocate(problem, 0)
+    t0 = problem.t0
+    state.ctrl[CT_T] = t0
+    k.start(t0, hooks, state)
+    k.initial_step(settings.method, t0, t0 + 1.0, settings, hooks, state)
+    short = settings._replace(max_steps=1, t_rec=np.zeros(0))
+    k.advance(t0, t0, short, hooks, state, _implicit(problem, settings))

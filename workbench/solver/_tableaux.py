@@ -169,3 +169,57 @@ ARK_GAMMA = float(_ARK_AI[1][1])
 SAFETY = 0.9
 MIN_FACTOR = 0.2
 MAX_FACTOR = 10.0
+
+
+def _radau_iia() -> dict[str, np.ndarray | float]:
+    """Radau IIA of order 5 (s = 3; Hairer & Wanner 1996, Sec. IV.5, Table 5.6) in the form of
+    their code RADAU5 (Sec. IV.8): the transformation T that block-diagonalises A^-1 into the
+    real eigenvalue gamma and the complex pair alpha +- i beta, so that the Newton system of the
+    3n stage increments splits into one real and one complex n x n system; the error estimate's
+    weights (Eq. 8.20, divided by gamma0 = 1 / gamma); and the collocation polynomial's
+    coefficients for dense output.
+
+    T is normalised as in ``scipy.integrate.Radau``: its last row is (1, 1, 0), i.e. the
+    eigenvectors' last components are 1.
+    """
+    s6 = np.sqrt(6.0)
+    c = np.array([(4.0 - s6) / 10.0, (4.0 + s6) / 10.0, 1.0])
+    a = np.array(
+        [
+            [(88.0 - 7.0 * s6) / 360.0, (296.0 - 169.0 * s6) / 1800.0, (-2.0 + 3.0 * s6) / 225.0],
+            [(296.0 + 169.0 * s6) / 1800.0, (88.0 + 7.0 * s6) / 360.0, (-2.0 - 3.0 * s6) / 225.0],
+            [(16.0 - s6) / 36.0, (16.0 + s6) / 36.0, 1.0 / 9.0],
+        ]
+    )
+    lam, vec = np.linalg.eig(np.linalg.inv(a))
+    real = int(np.argmin(np.abs(lam.imag)))
+    pair = int(np.argmax(lam.imag))  # alpha + i beta, beta > 0
+    v_real = vec[:, real].real / vec[2, real].real
+    v_pair = vec[:, pair] / vec[2, pair]
+    t = np.column_stack([v_real, v_pair.real, v_pair.imag])
+    # the collocation polynomial u(t0 + x h) = y0 + sum_k q_k x^(k+1) through u(c_i) = y0 + Z_i:
+    # q_k = sum_i P[i, k] Z_i with P = V^-T, V[i, k] = c_i^(k+1)
+    vander = np.column_stack([c, c**2, c**3])
+    return {
+        "A": a,
+        "C": c,
+        "T": t,
+        "TI": np.linalg.inv(t),
+        "GAMMA": float(lam[real].real),
+        "ALPHA": float(lam[pair].real),
+        "BETA": float(lam[pair].imag),
+        "E": np.array([-13.0 - 7.0 * s6, -13.0 + 7.0 * s6, -1.0]) / 3.0,
+        "P": np.linalg.inv(vander).T.copy(),
+    }
+
+
+_RADAU = _radau_iia()
+RADAU_A = _c(_RADAU["A"])
+RADAU_C = _c(_RADAU["C"])
+RADAU_T = _c(_RADAU["T"])
+RADAU_TI = _c(_RADAU["TI"])
+RADAU_E = _c(_RADAU["E"])
+RADAU_P = _c(_RADAU["P"])
+RADAU_GAMMA = _RADAU["GAMMA"]  # real eigenvalue of A^-1 (3.6378...)
+RADAU_ALPHA = _RADAU["ALPHA"]  # complex pair alpha +- i beta of A^-1
+RADAU_BETA = _RADAU["BETA"]
