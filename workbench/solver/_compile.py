@@ -2,8 +2,9 @@
 
 Numba cannot cache a compiled function that receives other compiled functions as arguments or
 closes over them (its cache then recompiles every process, seconds each time). Instead a template
-(the integration loop :mod:`workbench.solver._kernel`, the Jacobian
-:mod:`workbench.solver._jacobian_template`, the tangent system
+(the integration loop :mod:`workbench.solver._kernel` with the steps it takes,
+:mod:`workbench.solver._steps_template` and :mod:`workbench.solver._implicit_template`, the
+Jacobian :mod:`workbench.solver._jacobian_template`, the tangent system
 :mod:`workbench.solver._tangent_template`, side-by-side copies
 :mod:`workbench.solver._copies_template`) is written once per model into the cache directory
 with its hook imports pointing at the model's module, and imported from there as a module of the
@@ -30,7 +31,14 @@ _HERE = Path(__file__).parent
 # read at import, like the package digest that keys the cache, so that both describe one source
 _SOURCES = {
     name: (_HERE / f"{name}.py").read_text()
-    for name in ("_kernel", "_jacobian_template", "_tangent_template", "_copies_template")
+    for name in (
+        "_kernel",
+        "_steps_template",
+        "_implicit_template",
+        "_jacobian_template",
+        "_tangent_template",
+        "_copies_template",
+    )
 }
 _PLACEHOLDER = "workbench.solver._hooks_template"
 
@@ -87,7 +95,15 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    modules = {"HOOKS": hooks, "JACOBIAN": jacobian_for(hooks).__name__}
+    steps = _specialise("_steps_template", "steps", hooks, {"HOOKS": hooks}).__name__
+    jacobian = jacobian_for(hooks).__name__
+    implicit = _specialise(
+        "_implicit_template",
+        "implicit",
+        hooks,
+        {"JACOBIAN": jacobian, "STEPS": steps},
+    ).__name__
+    modules = {"HOOKS": hooks, "STEPS": steps, "IMPLICIT": implicit}
     return _specialise("_kernel", "kernel", hooks, modules)
 
 
