@@ -176,6 +176,9 @@ def test_an_error_stops_the_blocks_in_flight(tmp_path):
         }
     )
     store = tmp_path / "c.nc"
+    # compile the model's kernel first (forked workers inherit it): the time bound below is
+    # for stopping the blocks, not for a cold compile on a loaded machine
+    workbench.simulate(scene.replace(sweep={}, run={"duration": 1e-3}, record={"dt": 5e-4}))
     t0 = time.monotonic()
     with (
         dask.config.set({"multiprocessing.context": "fork"}),  # the workers know the model
