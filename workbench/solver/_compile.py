@@ -101,7 +101,7 @@ def kernel_for(hooks: str) -> ModuleType:
         "_implicit_template",
         "implicit",
         hooks,
-        {"JACOBIAN": jacobian, "STEPS": steps},
+        {"HOOKS": hooks, "JACOBIAN": jacobian, "STEPS": steps},
     ).__name__
     modules = {"HOOKS": hooks, "STEPS": steps, "IMPLICIT": implicit}
     return _specialise("_kernel", "kernel", hooks, modules)

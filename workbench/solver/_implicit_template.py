@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from workbench.solver._hooks_template import rhs  # @@HOOKS@@
 from workbench.solver._jacobian_template import HAS_ANALYTIC, jacobian  # @@JACOBIAN@@
 from workbench.solver._loop import (
     CT_NONFINITE,
@@ -64,7 +65,6 @@ from workbench.solver._radau import (
 )
 from workbench.solver._steps_template import (  # @@STEPS@@
     _any_crossed,
-    _call_rhs,
 )
 from workbench.solver._tableaux import (
     RADAU_C,
@@ -75,7 +75,8 @@ from workbench.solver._tableaux import (
 def _jacobian(t, m, st, im):
     """The model's Jacobian at the current point into im.J (analytic, or central differences
     of rhs: 2n evaluations, counted), and its spectral radius. Returns the hook code."""
-    code = jacobian(t, st.y, m.p, m.ip, st.aux, m.work, im.jac_scale, im.J)
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
+    code = jacobian(t, st.y, p, ip, st.aux, work, im.jac_scale, im.J)
     im.stats[IS_JAC] += 1
     if not HAS_ANALYTIC:
         st.stats[ST_RHS] += 2 * st.y.size
@@ -97,6 +98,7 @@ def _newton(t, h, fnewt, m, st, im, ytmp):
     the step times ``ratio``) or FAILED (retry with half the step); whether an inner stage
     returned EVENT_INSIDE_STEP at the last iteration; a model failure code (0 if none).
     """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     y = st.y
     n = y.size
     rc = im.rc
@@ -112,7 +114,7 @@ def _newton(t, h, fnewt, m, st, im, ytmp):
                 ytmp[i] = y[i] + im.Z[j, i]
             st.stats[ST_RHS] += 1
             im.stats[IS_RHS] += 1
-            code = _call_rhs(t + RADAU_C[j] * h, ytmp, m, st.aux, im.Fs[j])
+            code = rhs(t + RADAU_C[j] * h, ytmp, p, ip, st.aux, work, im.Fs[j])
             if code == EVENT_INSIDE_STEP:
                 inside = inside or j < 2  # the last stage is the step's end, tested there
             elif code != 0:
@@ -158,6 +160,7 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
     :func:`_explicit_attempts`; the accepted step's stage increments are in im.Z, the derivative
     at its end in im.f_new.
     """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     y = st.y
     y_new = w.y_new
     ytmp = w.ytmp
@@ -218,7 +221,7 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
                 ytmp[i] = y[i] + im.e[i]
             stats[ST_RHS] += 1
             ist[IS_RHS] += 1
-            code = _call_rhs(t, ytmp, m, st.aux, im.Fs[0])
+            code = rhs(t, ytmp, p, ip, st.aux, work, im.Fs[0])
             if code == 0 or code == EVENT_INSIDE_STEP:
                 refine_error(im.Fs[0], im.ez, im.LUr, im.pivr, im.e)
                 err = scaled_rms(im.e, y, y_new, im.rtol, im.atol)
@@ -238,7 +241,7 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
         # the derivative at the end: the next step's error estimate, and the event protocol
         stats[ST_RHS] += 1
         ist[IS_RHS] += 1
-        code = _call_rhs(t_new, y_new, m, st.aux, im.f_new)
+        code = rhs(t_new, y_new, p, ip, st.aux, work, im.f_new)
         inside_end = code == EVENT_INSIDE_STEP
         if code != 0 and not inside_end:
             last_code = code

@@ -55,7 +55,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import apply_event, event_values  # @@HOOKS@@
+from workbench.solver._hooks_template import apply_event, event_values, rhs  # @@HOOKS@@
 from workbench.solver._implicit_template import (  # @@IMPLICIT@@
     _radau_attempts,
 )
@@ -123,7 +123,6 @@ from workbench.solver._radau import (
     implicit_test,
 )
 from workbench.solver._steps_template import (  # @@STEPS@@
-    _call_rhs,
     _dense_prepare,
     _explicit_attempts,
     _locate,
@@ -137,11 +136,12 @@ def start(t, m, st):
     """Derivative, event functions and stiff decay rates (into ``ctrl[N_CTRL:]``) at the
     point (t, st.y, st.aux). Returns the hook code (0, a failure code, or EVENT_INSIDE_STEP when
     the point lies beyond an event surface)."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     st.stats[ST_RHS] += 1
-    code = _call_rhs(t, st.y, m, st.aux, st.f)
-    read_decay(m.work, m.stiff_slot, st.ctrl[N_CTRL:])
+    code = rhs(t, st.y, p, ip, st.aux, work, st.f)
+    read_decay(work, m.stiff_slot, st.ctrl[N_CTRL:])
     if st.g_old.size > 0:
-        event_values(t, st.y, m.p, m.ip, st.aux, m.work, st.g_old)
+        event_values(t, st.y, p, ip, st.aux, work, st.g_old)
     return code
 
 
@@ -149,6 +149,7 @@ def start(t, m, st):
 def initial_step(method, t0, t_end, s, m, st):
     """Initial step size (Hairer et al. 1993, Sec. II.4, "starting step size") from the point
     (t0, st.y) with derivative st.f, s."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     y0 = st.y
     f0 = st.f
     n = y0.size
@@ -169,7 +170,7 @@ def initial_step(method, t0, t_end, s, m, st):
     for i in range(n):
         y1[i] = y0[i] + h0 * f0[i]
     st.stats[ST_RHS] += 1
-    _call_rhs(t0 + h0, y1, m, st.aux, f1)
+    rhs(t0 + h0, y1, p, ip, st.aux, work, f1)
     d2 = initial_difference(y0, f0, f1, s.rtol, s.atol, h0)
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -178,7 +179,7 @@ def initial_step(method, t0, t_end, s, m, st):
     return min(100.0 * h0, h1, interval, s.max_step)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # no call boundary per step
 def _attempts(current, t, t_end, h_abs, f_inside, s, m, st, im, w):
     """A step of the method in use (``current``): Radau IIA or an explicit pair."""
     if im is not None:
@@ -187,7 +188,7 @@ def _attempts(current, t, t_end, h_abs, f_inside, s, m, st, im, w):
     return _explicit_attempts(current, t, t_end, h_abs, f_inside, s, m, st, w)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # no call boundary per step
 def _switch(current, h, h_next, s, st, im, K, before):
     """The automatic method's stiffness tests after an accepted step (see
     :func:`workbench.solver._radau.explicit_test` and ``implicit_test``). Returns the method
@@ -222,17 +223,24 @@ def advance(t_end, t_pause, s, m, st, im):
     an unbroken one. Records ``Yrec[i] = y(t_rec[i])`` and ``AUXrec[i] = aux(t_rec[i])``.
     Returns DONE, PAUSED, TERMINATED or a negative failure code.
     """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     current = s.method
     if im is not None:
         current = int(im.rc[RC_CURRENT])
+    # the arrays taken out of the tuples once (an access in the loop costs a pair of atomic
+    # reference-count operations)
     y = st.y
     aux = st.aux
     ctrl = st.ctrl
     stats = st.stats
     g_old = st.g_old
+    Yrec = st.Yrec
+    AUXrec = st.AUXrec
+    f = st.f
+    ev_dir = m.ev_dir
     t_rec = s.t_rec
     n = y.size
-    ne = m.ev_dir.size
+    ne = ev_dir.size
     nrec = t_rec.size
     ms = m.stiff_idx.size
     decay = ctrl[N_CTRL : N_CTRL + ms]
@@ -252,14 +260,15 @@ def advance(t_end, t_pause, s, m, st, im):
     yint = w.yint
     g_new = w.g_new
     gtmp = w.gtmp
+    decay_new = w.decay_new
     t = ctrl[CT_T]
     h_abs = ctrl[CT_H]
     f_inside = ctrl[CT_F_INSIDE] > 0.0
     i_rec = stats[ST_RECORDED]
     status = DONE
     while i_rec < nrec and t_rec[i_rec] <= t:
-        st.Yrec[i_rec, :] = y
-        st.AUXrec[i_rec, :] = aux
+        Yrec[i_rec, :] = y
+        AUXrec[i_rec, :] = aux
         i_rec += 1
     while True:
         if t >= t_end:
@@ -297,9 +306,9 @@ def advance(t_end, t_pause, s, m, st, im):
         fired = -1
         t_stop = t_new
         if ne > 0:
-            event_values(t_new, y_new, m.p, m.ip, aux, m.work, g_new)
+            event_values(t_new, y_new, p, ip, aux, work, g_new)
             for k in range(ne):
-                if crossed(m.ev_dir[k], g_old[k], g_new[k]):
+                if crossed(ev_dir[k], g_old[k], g_new[k]):
                     if not dense_ready:
                         code = _dense_prepare(current, t, h, m, st, w, im)
                         if code != 0:
@@ -317,7 +326,7 @@ def advance(t_end, t_pause, s, m, st, im):
                 break
         while i_rec < nrec and t_rec[i_rec] <= t_stop:
             if t_rec[i_rec] == t_new and fired < 0:
-                st.Yrec[i_rec, :] = y_new
+                Yrec[i_rec, :] = y_new
             else:
                 if not dense_ready:
                     code = _dense_prepare(current, t, h, m, st, w, im)
@@ -327,8 +336,8 @@ def advance(t_end, t_pause, s, m, st, im):
                         break
                     dense_ready = True
                 dense_eval(current, t, h, y, F, t_rec[i_rec], yint)
-                st.Yrec[i_rec, :] = yint
-            st.AUXrec[i_rec, :] = aux
+                Yrec[i_rec, :] = yint
+            AUXrec[i_rec, :] = aux
             i_rec += 1
         if status == MODEL_FAILURE:
             break
@@ -346,17 +355,17 @@ def advance(t_end, t_pause, s, m, st, im):
                 y[:] = yint
             t = t_stop
             stats[ST_EVENTS] += 1
-            stop = apply_event(fired, t, y, m.p, m.ip, aux, m.work)
+            stop = apply_event(fired, t, y, p, ip, aux, work)
             # simultaneous events: any other event function that has crossed by t_stop has its
             # root there too (within the root's tolerance, or the same double), so its update
             # is applied now; left for the next step, it would start beyond its surface and
             # never fire
             if ne > 1:
-                event_values(t, y, m.p, m.ip, aux, m.work, gtmp)
+                event_values(t, y, p, ip, aux, work, gtmp)
                 for k in range(ne):
-                    if k != fired and crossed(m.ev_dir[k], g_old[k], gtmp[k]):
+                    if k != fired and crossed(ev_dir[k], g_old[k], gtmp[k]):
                         stats[ST_EVENTS] += 1
-                        if apply_event(k, t, y, m.p, m.ip, aux, m.work) != 0:
+                        if apply_event(k, t, y, p, ip, aux, work) != 0:
                             stop = 1
             if im is not None:
                 forget_jacobian(im.rc)  # the discrete state, and with it the rhs, changed
@@ -374,11 +383,11 @@ def advance(t_end, t_pause, s, m, st, im):
             y[:] = y_new
             if current == RADAU5:
                 if im is not None:
-                    st.f[:] = im.f_new
-                    read_decay(m.work, m.stiff_slot, decay)
+                    f[:] = im.f_new
+                    read_decay(work, m.stiff_slot, decay)
             else:
-                st.f[:] = K[n_stages(current)]
-                decay[:] = w.decay_new
+                f[:] = K[n_stages(current)]
+                decay[:] = decay_new
             f_inside = inside_end
             if ne > 0:
                 g_old[:] = g_new

@@ -64,11 +64,6 @@ from workbench.solver._tableaux import (
 
 
 @njit(cache=True)
-def _call_rhs(t, y, m, aux, dydt):
-    return rhs(t, y, m.p, m.ip, aux, m.work, dydt)
-
-
-@njit(cache=True)
 def _rk_step(method, t, h, m, st, w):
     """One RK step from (t, st.y, st.f); stages in K, derivative at the step's end in K[ns]
     (FSAL).
@@ -80,18 +75,21 @@ def _rk_step(method, t, h, m, st, w):
     code (0 if none) and whether an intermediate stage, and the step's end, returned
     EVENT_INSIDE_STEP.
     """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     y = st.y
     aux = st.aux
     stats = st.stats
     K = w.K
     ytmp = w.ytmp
     y_new = w.y_new
+    f = st.f
+    stiff_idx = m.stiff_idx
     ns = n_stages(method)
     n = y.size
-    ms = m.stiff_idx.size
+    ms = stiff_idx.size
     inside_stage = False
     for i in range(n):
-        K[0, i] = st.f[i]
+        K[0, i] = f[i]
     for s in range(1, ns):
         if method == DOP853:
             stage_point(K, DOP853_A[s], s, h, y, ytmp)
@@ -101,7 +99,7 @@ def _rk_step(method, t, h, m, st, w):
             c = ARK_C[s]
             # stiff states: B_k = y_k + h sum_{j<s} AI_sj f_k(Y_j)
             for k in range(ms):
-                i = m.stiff_idx[k]
+                i = stiff_idx[k]
                 acc = 0.0
                 for j in range(s):
                     acc += ARK_AI[s, j] * K[j, i]
@@ -111,11 +109,11 @@ def _rk_step(method, t, h, m, st, w):
             c = RK45_C[s]
         stats[ST_RHS] += 1
         if method == ARK548 and m.implicit_slot >= 0:
-            m.work[m.implicit_slot] = h * ARK_GAMMA  # rhs solves Y_k = B_k + h gamma f_k(Y)
-            code = _call_rhs(t + c * h, ytmp, m, aux, K[s])
-            m.work[m.implicit_slot] = 0.0
+            work[m.implicit_slot] = h * ARK_GAMMA  # rhs solves Y_k = B_k + h gamma f_k(Y)
+            code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
+            work[m.implicit_slot] = 0.0
         else:
-            code = _call_rhs(t + c * h, ytmp, m, aux, K[s])
+            code = rhs(t + c * h, ytmp, p, ip, aux, work, K[s])
         if code == EVENT_INSIDE_STEP:
             inside_stage = True
         elif code != 0:
@@ -127,8 +125,8 @@ def _rk_step(method, t, h, m, st, w):
     else:
         stage_point(K, RK45_B, ns, h, y, y_new)
     stats[ST_RHS] += 1
-    code = _call_rhs(t + h, y_new, m, aux, K[ns])
-    read_decay(m.work, m.stiff_slot, w.decay_new)
+    code = rhs(t + h, y_new, p, ip, aux, work, K[ns])
+    read_decay(work, m.stiff_slot, w.decay_new)
     if code == EVENT_INSIDE_STEP:
         return 0, inside_stage, True
     return code, inside_stage, False
@@ -140,6 +138,7 @@ def _dense_prepare(method, t, h, m, st, w, im):
     hook code. DOP853 needs 3 extra stages, ARK548 one extra derivative (at t + h/3, see
     :func:`workbench.solver._numerics.ark_quartic`), Radau IIA none (its collocation
     polynomial)."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     if im is not None:
         if method == RADAU5:
             dense_coefficients(im.Z, w.F)
@@ -154,14 +153,14 @@ def _dense_prepare(method, t, h, m, st, w, im):
             s = 13 + r
             stage_point(K, DOP853_A_EXTRA[r], s, h, y, ytmp)
             st.stats[ST_RHS] += 1
-            code = _call_rhs(t + DOP853_C_EXTRA[r] * h, ytmp, m, st.aux, K[s])
+            code = rhs(t + DOP853_C_EXTRA[r] * h, ytmp, p, ip, st.aux, work, K[s])
             if code != 0 and code != EVENT_INSIDE_STEP:
                 return code
         dop853_dense(K, h, y, y_new, F)
     elif method == ARK548:
         ark_cubic(K, h, y, y_new, F, ytmp)
         st.stats[ST_RHS] += 1
-        code = _call_rhs(t + h / 3.0, ytmp, m, st.aux, K[9])
+        code = rhs(t + h / 3.0, ytmp, p, ip, st.aux, work, K[9])
         if code != 0 and code != EVENT_INSIDE_STEP:
             return code
         ark_quartic(K, h, F, m.stiff_idx)
@@ -174,9 +173,10 @@ def _dense_prepare(method, t, h, m, st, w, im):
 def _any_crossed(t, y, m, aux, g_old, g):
     """Whether any event function crosses between ``g_old`` and its values at (t, y), which are
     written into ``g``."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     if m.ev_dir.size == 0:
         return False
-    event_values(t, y, m.p, m.ip, aux, m.work, g)
+    event_values(t, y, p, ip, aux, work, g)
     for k in range(m.ev_dir.size):
         if crossed(m.ev_dir[k], g_old[k], g[k]):
             return True
@@ -190,6 +190,7 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, m, aux, yint, gtm
     Returns the right end of the final bracket, where the event function already has its
     post-crossing sign, so that the event does not fire again at the same root.
     """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     side = 0
     tol = root_tolerance(t_a, t_b, h)
     for _ in range(200):
@@ -197,7 +198,7 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, m, aux, yint, gtm
             break
         t_m = illinois_point(t_a, g_a, t_b, g_b)
         dense_eval(method, t_old, h, y_old, F, t_m, yint)
-        event_values(t_m, yint, m.p, m.ip, aux, m.work, gtmp)
+        event_values(t_m, yint, p, ip, aux, work, gtmp)
         t_a, g_a, t_b, g_b, side = illinois_update(t_a, g_a, t_b, g_b, side, t_m, gtmp[k])
     return t_b
 
@@ -210,10 +211,16 @@ def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
     taken, the last model failure code met, the accepted step's end and size, the next step
     size, and whether the accepted step's end returned EVENT_INSIDE_STEP.
     """
+    # the arrays taken out of the tuples once: each access of a tuple's array in the loop
+    # would cost a pair of atomic reference-count operations
     stats = st.stats
     ctrl = st.ctrl
+    y = st.y
+    K = w.K
+    y_new = w.y_new
+    stiff_idx = m.stiff_idx
     exponent = -1.0 / 8.0 if method == DOP853 else -1.0 / 5.0
-    ms = m.stiff_idx.size
+    ms = stiff_idx.size
     decay = ctrl[N_CTRL : N_CTRL + ms]
     min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
     rejected = False
@@ -232,7 +239,7 @@ def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
             last_code = code
             err = np.inf
         else:
-            err = error_norm(method, w.K, h, st.y, w.y_new, s.rtol, s.atol, m.stiff_idx, decay)
+            err = error_norm(method, K, h, y, y_new, s.rtol, s.atol, stiff_idx, decay)
             if not np.isfinite(err):
                 ctrl[CT_NONFINITE] = 1.0
                 err = np.inf
@@ -241,7 +248,7 @@ def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
             and not f_inside
             and (
                 (inside_stage and not inside_end)
-                or (inside_end and not _any_crossed(t_new, w.y_new, m, st.aux, st.g_old, w.g_new))
+                or (inside_end and not _any_crossed(t_new, y_new, m, st.aux, st.g_old, w.g_new))
             )
         ):
             # a stage lay beyond an event surface that both ends of the step are short of:
