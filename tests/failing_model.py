@@ -62,10 +62,7 @@ class Failing(Model):
         Parameter("mode", 0.0, "1", "value of the workbench.Status to end with, 6 a bug", 0, 6),
         Parameter("t_fail", 0.5, "s", "time of the failure", lower=0.0, lower_open=True),
     )
-    _STATES = (Quantity("y", "1", "state"),)
-
-    def states(self, effects):
-        return self._STATES
+    fixed_states = (Quantity("y", "1", "state"),)
 
     def problem(self, params, effects, initial, requested):
         mode = int(params["mode"])
@@ -74,7 +71,7 @@ class Failing(Model):
         y0 = math.sqrt(params["t_fail"]) if mode == STEP_UNDERFLOW else 2.0
         return Problem(
             hooks=__name__,
-            states=self._STATES,
+            states=self.fixed_states,
             y0=np.array([initial.get("y", y0)]),
             p=np.array([params["t_fail"]]),
             ip=np.array([mode]),

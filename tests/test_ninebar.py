@@ -8,7 +8,7 @@ from helpers import ENERGY, IDEAL_SLIDER_PEAKS, energy_residual
 
 import workbench
 from workbench.models import get_model
-from workbench.models._reduced import JOINT
+from workbench.models._mechanism_layouts import JOINT
 from workbench.models.ninebar import _dynamics as dyn
 from workbench.models.ninebar._geometry import geometry_array
 from workbench.models.ninebar._kinematics import N_POINTS, PT_E, kinematics

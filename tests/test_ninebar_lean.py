@@ -20,7 +20,7 @@ import pytest
 
 import workbench
 from workbench.models._layout import layout
-from workbench.models._reduced import JOINT
+from workbench.models._mechanism_layouts import JOINT
 from workbench.run import prepare
 from workbench.solver import EVENT_INSIDE_STEP, integrate
 

@@ -11,7 +11,7 @@ from workbench.cli import main
 from workbench.study import available_studies, load_study, run_study, write_report
 from workbench.study._claims import evaluate_claim
 from workbench.study._measure import contact_fraction, energy_per_cycle, force_percentiles
-from workbench.study._run import _sweep_contact, _sweep_summary
+from workbench.study._numbers import sweep_contact, sweep_summary
 from workbench.study._stats import VERDICTS, compare_samples, sign_test_zero
 
 PAPER_STUDIES = {
@@ -289,10 +289,10 @@ def test_contact_measures_on_a_known_duty_cycle():
 def test_friction_sweep_summary_report_and_figure(tmp_path):
     study = load_study("friction_coefficient")
     runs = {case: _synthetic_sweep() for case in study.cases}
-    sweeps = _sweep_contact(study, runs)
+    sweeps = sweep_contact(study, runs)
     assert set(sweeps) == {"c_0.02mm", "c_0.1mm"}
     assert sweeps["c_0.1mm"].attrs["clearance"] == 1e-4
-    d = _sweep_summary(sweeps["c_0.02mm"])
+    d = sweep_summary(sweeps["c_0.02mm"])
     assert d["contact_fraction"]["units"] == "1" and d["driver_work_per_cycle"]["units"] == "J"
     np.testing.assert_allclose(d["dissipated_energy_per_cycle"]["median"], [0.09, 0.9, 1.8])
     summary = {

@@ -1,5 +1,6 @@
 """What the ``workbench`` command shows a person, shared by its subcommands: argument types that
-refuse bad values in one line, warnings as one line each, and the notice before a first compile.
+refuse bad values in one line, warnings as one line each, the notice before a first compile, a
+result written with its figure beside it, and the one line that says how many parts failed.
 """
 
 from __future__ import annotations
@@ -10,13 +11,17 @@ import math
 import sys
 import warnings
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 __all__ = [
     "announce_compile",
     "float_list",
     "one_line_warnings",
+    "output_and_figure",
     "positive_float",
     "positive_int",
+    "report_failures",
+    "save_with_figure",
 ]
 
 # Measured with a cold cache on the shared 2-core machine (load ~5): duffing 15 s, ninebar and
@@ -88,3 +93,31 @@ def announce_compile(scene, out: Callable[[str], None] | None = None) -> bool:
     )
     (out or (lambda s: print(s, file=sys.stderr, flush=True)))(text)
     return True
+
+
+def output_and_figure(output, overwrite: bool) -> tuple[Path, Path]:
+    """The netCDF file of ``-o/--output`` and the PNG beside it, both checked before any work
+    (:func:`workbench.archive.check_output_file`)."""
+    from workbench.archive import check_output_file
+
+    out = check_output_file(output, "-o/--output", overwrite=overwrite)
+    figure = check_output_file(
+        out.with_suffix(".png"), "-o/--output (its figure)", overwrite=overwrite
+    )
+    return out, figure
+
+
+def save_with_figure(ds, out: Path, figure: Path, what: str, draw: Callable) -> None:
+    """Write ``ds`` to ``out`` and ``draw(ds)`` to ``figure``, saying where each went."""
+    from workbench.archive import save_run
+
+    save_run(ds, out)
+    print(f"{what} -> {out}")
+    draw(ds).savefig(figure, dpi=120)
+    print(f"figure: {figure}")
+
+
+def report_failures(command: str, failures: str, code: int) -> None:
+    """Say on stderr ``workbench COMMAND: FAILURES; exit code CODE`` (``failures`` says how
+    many of what failed)."""
+    print(f"workbench {command}: {failures}; exit code {code}", file=sys.stderr)

@@ -90,6 +90,24 @@ def _check_embedding_args(s, delay: int, max_dim: int, what: str) -> None:
     require_samples(s, max_dim * delay + 20, f"{what} with delay={delay}, max_dim={max_dim}")
 
 
+def _added_coordinate(
+    v: np.ndarray, d: int, delay: int, theiler: int, points: int | None, p: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """What the (d+1)-th delay coordinate adds to nearest neighbours in d dimensions.
+
+    Over the reference points of the d-dimensional embedding that have a (d+1)-th coordinate
+    (:func:`_reference_points`), each with a nearest neighbour more than ``theiler`` samples
+    away (norm ``p``): their distance in d dimensions and the distance of the (d+1)-th
+    coordinates."""
+    Y = embed(v, d, delay)[: v.size - d * delay]  # points with a (d+1)-th coordinate
+    ref = _reference_points(Y.shape[0], points)
+    j, r = nearest_neighbours(Y, theiler, p=p, query=ref)
+    a = np.arange(Y.shape[0]) if ref is None else ref
+    valid = j >= 0
+    a, b = a[valid], j[valid]
+    return r[valid], np.abs(v[a + d * delay] - v[b + d * delay])
+
+
 def embedding_fnn(
     x,
     *,
@@ -137,14 +155,7 @@ def embedding_fnn(
     dims = np.arange(1, max_dim + 1)
     fractions = np.full(dims.size, np.nan)
     for i, d in enumerate(dims):
-        Y = embed(v, int(d), delay)[: v.size - int(d) * delay]  # points with a (d+1)-th coordinate
-        ref = _reference_points(Y.shape[0], points)
-        j, r = nearest_neighbours(Y, theiler, query=ref)
-        a = np.arange(Y.shape[0]) if ref is None else ref
-        valid = j >= 0
-        a, b = a[valid], j[valid]
-        extra = np.abs(v[a + d * delay] - v[b + d * delay])
-        r = r[valid]
+        r, extra = _added_coordinate(v, int(d), delay, theiler, points, 2)
         r1 = np.sqrt(r**2 + extra**2)
         false = (extra > rtol * r) | (r1 > atol * sd)
         fractions[i] = float(false.mean()) if false.size else np.nan
@@ -225,15 +236,11 @@ def embedding_cao(
     E = np.full(dims.size + 1, np.nan)
     Es = np.full(dims.size + 1, np.nan)
     for i, d in enumerate(np.arange(1, max_dim + 2)):
-        Y = embed(v, int(d), delay)[: v.size - int(d) * delay]
-        ref = _reference_points(Y.shape[0], points)
-        j, r = nearest_neighbours(Y, theiler, p=np.inf, query=ref)
-        a = np.arange(Y.shape[0]) if ref is None else ref
-        ok = (j >= 0) & (r > 0)
-        a, b = a[ok], j[ok]
-        extra = np.abs(v[a + d * delay] - v[b + d * delay])
-        r_next = np.maximum(r[ok], extra)
-        E[i] = float(np.mean(r_next / r[ok]))
+        r, extra = _added_coordinate(v, int(d), delay, theiler, points, np.inf)
+        ok = r > 0
+        r, extra = r[ok], extra[ok]
+        r_next = np.maximum(r, extra)
+        E[i] = float(np.mean(r_next / r))
         Es[i] = float(np.mean(extra))
     E1 = E[1:] / E[:-1]
     E2 = Es[1:] / Es[:-1]

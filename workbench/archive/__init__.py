@@ -8,6 +8,7 @@ from workbench.archive._integrity import (
     StoreWarning,
     file_problem,
     mapping_diff,
+    read_manifest,
     sha256_file,
     store_lock,
 )
@@ -24,6 +25,7 @@ __all__ = [
     "file_problem",
     "mapping_diff",
     "open_run",
+    "read_manifest",
     "save_run",
     "sha256_file",
     "store_lock",

@@ -26,6 +26,7 @@ __all__ = [
     "StoreWarning",
     "file_problem",
     "mapping_diff",
+    "read_manifest",
     "sha256_file",
     "store_lock",
 ]
@@ -80,6 +81,31 @@ def file_problem(path: str | os.PathLike, expected: str | None) -> str | None:
     except OSError as exc:
         return f"is unreadable ({exc})"
     return None if actual == expected else "is corrupt: checksum mismatch"
+
+
+def read_manifest(
+    path: str | os.PathLike, format: str, what: str, error: type[Exception] = ArchiveError
+) -> dict:
+    """The JSON manifest of a store at ``path``, which must have ``"format": format``.
+
+    Raises ``error`` naming the path when the file cannot be read or parsed, or holds another
+    format; the message says that ``restart=True`` (CLI ``--restart``) starts ``what`` (e.g.
+    ``"the campaign"``) afresh.
+    """
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise error(
+            f"{str(path)!r} cannot be read ({exc}); pass restart=True (CLI --restart) to start "
+            f"{what} afresh"
+        ) from None
+    if not isinstance(data, dict) or data.get("format") != format:
+        found = data.get("format") if isinstance(data, dict) else None
+        raise error(
+            f"{str(path)!r} has format {found!r}, expected {format!r}; pass restart=True (CLI "
+            f"--restart) to start {what} afresh, or choose another output path"
+        )
+    return data
 
 
 def _short(v: Any) -> str:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from workbench._console import positive_float, positive_int
+from workbench._console import positive_float, positive_int, report_failures
 from workbench._exit_codes import UsageError, worst_exit_code
 from workbench.campaign._block import INVALID, STATUS, failed
 
@@ -83,11 +83,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             for f, name in STATUS.items()
             if failed(np.array([f]))[0] and (flags == f).any()
         )
-        print(
-            f"workbench campaign: {n_failed} of {flags.size} points failed ({counts}); "
-            f"exit code {code}",
-            file=sys.stderr,
-        )
+        report_failures("campaign", f"{n_failed} of {flags.size} points failed ({counts})", code)
     return code
 
 

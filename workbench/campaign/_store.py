@@ -36,6 +36,7 @@ from workbench.archive import (
     check_output_file,
     file_problem,
     mapping_diff,
+    read_manifest,
     store_lock,
     write_text_atomic,
 )
@@ -168,20 +169,7 @@ class Store:
                     "discard them, or choose another output path"
                 )
             return None
-        try:
-            data = json.loads(self.manifest_path.read_text())
-        except (OSError, ValueError) as exc:
-            raise CampaignError(
-                f"{str(self.manifest_path)!r} cannot be read ({exc}); pass restart=True (CLI "
-                "--restart) to start the campaign afresh"
-            ) from None
-        if not isinstance(data, dict) or data.get("format") != FORMAT:
-            data = data if isinstance(data, dict) else {}
-            raise CampaignError(
-                f"{str(self.manifest_path)!r} has format {data.get('format')!r}, expected "
-                f"{FORMAT!r}; pass restart=True (CLI --restart) to start the campaign afresh"
-            )
-        return data
+        return read_manifest(self.manifest_path, FORMAT, "the campaign", CampaignError)
 
     def write_manifest(self, scene: Scene, grid: SweepGrid, chunk: int, cid: str) -> dict:
         data = {

@@ -85,6 +85,10 @@ class Model:
     reference: ClassVar[str] = ""
     parameters: ClassVar[tuple[Parameter, ...]] = ()
     effects: ClassVar[tuple[Effect, ...]] = ()
+    #: the state and the outputs of a model whose variables do not depend on its effects (a
+    #: model whose do overrides :meth:`states` and :meth:`outputs` instead)
+    fixed_states: ClassVar[tuple[Quantity, ...] | None] = None
+    fixed_outputs: ClassVar[tuple[Quantity, ...]] = ()
 
     # -- declarations -------------------------------------------------------------------------
     def parameter(self, name: str) -> Parameter:
@@ -101,12 +105,15 @@ class Model:
         return {e.name: e.default for e in self.effects}
 
     def states(self, effects: Mapping[str, Any]) -> tuple[Quantity, ...]:
-        """The integrated state for these effects."""
-        raise NotImplementedError
+        """The integrated state for these effects (:attr:`fixed_states` unless overridden)."""
+        if self.fixed_states is None:
+            raise NotImplementedError
+        return self.fixed_states
 
     def outputs(self, effects: Mapping[str, Any]) -> tuple[Quantity, ...]:
-        """Derived output variables available for these effects (besides the states)."""
-        return ()
+        """Derived output variables available for these effects (besides the states;
+        :attr:`fixed_outputs` unless overridden)."""
+        return self.fixed_outputs
 
     def coords(self, effects: Mapping[str, Any]) -> dict[str, tuple[list, dict]]:
         """Coordinates of the model's extra dims: name -> (values, attrs)."""

@@ -64,24 +64,21 @@ class BouncingBall(Model):
             "rest_speed", 1e-6, "m s-1", "rebound speed below which the ball is at rest", lower=0.0
         ),
     )
-    _STATES = (Quantity("h", "m", "height above the floor"), Quantity("v", "m s-1", "velocity"))
-    _OUTPUTS = (
+    fixed_states = (
+        Quantity("h", "m", "height above the floor"),
+        Quantity("v", "m s-1", "velocity"),
+    )
+    fixed_outputs = (
         Quantity("bounces", "1", "number of bounces so far"),
         Quantity("last_bounce_time", "s", "time of the last bounce"),
     )
-
-    def states(self, effects):
-        return self._STATES
-
-    def outputs(self, effects):
-        return self._OUTPUTS
 
     def problem(self, params, effects, initial, requested):
         y0 = np.array([initial.get("h", params["h0"]), initial.get("v", 0.0)])
         p = np.array([params["g"], params["restitution"], params["rest_speed"]])
         return Problem(
             hooks=__name__,
-            states=self._STATES,
+            states=self.fixed_states,
             y0=y0,
             p=p,
             aux0=np.array([0.0, np.nan]),

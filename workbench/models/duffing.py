@@ -13,7 +13,7 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import Model, Parameter, Problem, Quantity
-from workbench.models._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
 @njit(cache=True)
@@ -54,13 +54,10 @@ class Duffing(Model):
         Parameter("x0", 1.0, "m", "initial displacement"),
         Parameter("v0", 0.0, "m s-1", "initial velocity"),
     )
-    _STATES = (
+    fixed_states = (
         Quantity("x", "m", "displacement"),
         Quantity("v", "m s-1", "velocity"),
     )
-
-    def states(self, effects):
-        return self._STATES
 
     def forcing_period(self, params):
         return 2.0 * math.pi / params["omega"]
@@ -68,4 +65,4 @@ class Duffing(Model):
     def problem(self, params, effects, initial, requested):
         p = np.array([params[k] for k in ("delta", "alpha", "beta", "gamma", "omega")])
         y0 = [initial.get("x", params["x0"]), initial.get("v", params["v0"])]
-        return Problem(hooks=__name__, states=self._STATES, y0=np.array(y0), p=p)
+        return Problem(hooks=__name__, states=self.fixed_states, y0=np.array(y0), p=p)

@@ -89,19 +89,15 @@ class FreeJournal(Model):
         *(p for p in contact_parameters(0.5e-3, 0.0) if p.name in _CONTACT),
         Parameter("speed", 0.5, "m s-1", "initial radial speed (along +x from the centre)"),
     )
-    _STATES = (
+    fixed_states = (
         Quantity("x", "m", "journal centre x"),
         Quantity("y", "m", "journal centre y"),
         Quantity("vx", "m s-1", "journal velocity x"),
         Quantity("vy", "m s-1", "journal velocity y"),
     )
-    _OUTPUTS = (Quantity("onset_velocity", "m s-1", "normal velocity at the last contact onset"),)
-
-    def states(self, effects):
-        return self._STATES
-
-    def outputs(self, effects):
-        return self._OUTPUTS
+    fixed_outputs = (
+        Quantity("onset_velocity", "m s-1", "normal velocity at the last contact onset"),
+    )
 
     def problem(self, params, effects, initial, requested):
         c = params["clearance"]
@@ -118,12 +114,12 @@ class FreeJournal(Model):
                 params["impact_velocity_floor"],
             ]
         )
-        y0 = np.array([initial.get(s.name, 0.0) for s in self._STATES])
+        y0 = np.array([initial.get(s.name, 0.0) for s in self.fixed_states])
         if "vx" not in initial:
             y0[2] = params["speed"]
         return Problem(
             hooks=__name__,
-            states=self._STATES,
+            states=self.fixed_states,
             y0=y0,
             p=p,
             aux0=np.array([0.0, np.nan]),

@@ -11,7 +11,7 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import Model, Parameter, Problem, Quantity
-from workbench.models._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
 @njit(cache=True)
@@ -54,16 +54,13 @@ class Lorenz(Model):
         Parameter("y0", 1.0, "1", "initial y"),
         Parameter("z0", 1.0, "1", "initial z"),
     )
-    _STATES = (
+    fixed_states = (
         Quantity("x", "1", "convection intensity"),
         Quantity("y", "1", "horizontal temperature difference"),
         Quantity("z", "1", "vertical temperature difference"),
     )
 
-    def states(self, effects):
-        return self._STATES
-
     def problem(self, params, effects, initial, requested):
         p = np.array([params["sigma"], params["rho"], params["beta"]])
         y0 = [initial.get(s, params[s + "0"]) for s in ("x", "y", "z")]
-        return Problem(hooks=__name__, states=self._STATES, y0=np.array(y0), p=p)
+        return Problem(hooks=__name__, states=self.fixed_states, y0=np.array(y0), p=p)

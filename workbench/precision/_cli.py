@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
-from workbench._console import announce_compile, float_list, positive_float
+from workbench._console import (
+    announce_compile,
+    float_list,
+    output_and_figure,
+    positive_float,
+    report_failures,
+    save_with_figure,
+)
 from workbench._exit_codes import worst_exit_code
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
-    from workbench.archive import check_output_file, save_run
     from workbench.plot import work_precision_figure
     from workbench.precision import DEFAULT_METHODS, DEFAULT_TOLERANCES, accuracy, recommend
     from workbench.scene import load_scene
@@ -18,10 +23,7 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     methods = [m.strip() for m in args.methods.split(",")] if args.methods else DEFAULT_METHODS
     tolerances = args.tolerances or DEFAULT_TOLERANCES
-    out = check_output_file(args.output, "-o/--output", overwrite=args.overwrite)
-    figure = check_output_file(
-        out.with_suffix(".png"), "-o/--output (its figure)", overwrite=args.overwrite
-    )
+    out, figure = output_and_figure(args.output, args.overwrite)
     store = out.with_name(out.name + ".runs")
     announce_compile(scene)
     wp = accuracy(
@@ -32,10 +34,7 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
         store=store,
         restart=args.restart,
     )
-    save_run(wp, out)
-    print(f"work-precision study -> {out}")
-    work_precision_figure(wp).savefig(figure, dpi=120)
-    print(f"figure: {figure}")
+    save_with_figure(wp, out, figure, "work-precision study", work_precision_figure)
     try:
         r = recommend(wp, args.target)
         print(
@@ -55,10 +54,11 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
             for r in wp.rtol.values
             if int(wp.status.sel(solver_method=m, rtol=r)) > 1
         ]
-        print(
-            f"workbench accuracy: {len(failed)} of {flags.size} settings failed: "
-            f"{'; '.join(failed[:4])}{' ...' if len(failed) > 4 else ''}; exit code {code}",
-            file=sys.stderr,
+        report_failures(
+            "accuracy",
+            f"{len(failed)} of {flags.size} settings failed: "
+            f"{'; '.join(failed[:4])}{' ...' if len(failed) > 4 else ''}",
+            code,
         )
     return code
 

@@ -32,6 +32,7 @@ from workbench.archive import (
     file_problem,
     mapping_diff,
     open_run,
+    read_manifest,
     save_run,
     sha256_file,
     store_lock,
@@ -66,18 +67,7 @@ class StudyStore:
         if not path.is_file():
             self._save()
             return
-        try:
-            stored = json.loads(path.read_text())
-        except (OSError, ValueError) as exc:
-            raise ArchiveError(
-                f"{str(path)!r} cannot be read ({exc}); pass restart=True (CLI --restart) to "
-                "start the study afresh"
-            ) from None
-        if not isinstance(stored, dict) or stored.get("format") != FORMAT:
-            raise ArchiveError(
-                f"{str(path)!r} is not the manifest of a work-precision study ({FORMAT!r}); "
-                "pass restart=True (CLI --restart) to start afresh, or choose another output"
-            )
+        stored = read_manifest(path, FORMAT, "the work-precision study")
         if stored.get("identity") != self.identity:
             lines = mapping_diff(stored.get("identity", {}), self.identity)
             shown = "\n  ".join(lines[:12]) + ("\n  ..." if len(lines) > 12 else "")

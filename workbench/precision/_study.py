@@ -31,17 +31,24 @@ import os
 import time as _time
 import warnings
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
 from functools import partial
-from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
 
+from workbench.precision._measures import (
+    ERRORS,
+    LIMIT_BITS,
+    LIMIT_FACTOR,
+    measure,
+    records_within,
+    reference_limited,
+    short_horizon,
+    strobe,
+)
 from workbench.precision._store import study_store
 from workbench.run import (
-    divergence_time,
     provenance,
     run_status,
     separation,
@@ -53,91 +60,14 @@ from workbench.run import (
 from workbench.scene import SceneSource, load_scene
 from workbench.solver import Status
 
-__all__ = [
-    "DEFAULT_METHODS",
-    "DEFAULT_TOLERANCES",
-    "LIMIT_FACTOR",
-    "REFERENCE_FLOOR",
-    "REFERENCE_MIN_TOL",
-    "Recommendation",
-    "accuracy",
-    "recommend",
-    "short_horizon",
-]
+__all__ = ["DEFAULT_METHODS", "DEFAULT_TOLERANCES", "REFERENCE_MIN_TOL", "accuracy"]
 
 DEFAULT_METHODS = ("dop853", "dopri5", "scipy:DOP853", "scipy:Radau", "scipy:LSODA")
 DEFAULT_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
-_ERRORS = ("short_error", "peak_error", "events_error", "statistic_error")
 _COSTS = ("wall_time", "steps", "rhs_evaluations")  # of the long run; solver_<name> attributes
-# The reference must be exact to this fraction of a variable's range over the short horizon:
-# 1000x below the 1e-3 error targets `recommend` is meant for.
-REFERENCE_FLOOR = 1e-6
 RTOL_MIN = 1e-14  # the smallest rtol a scene accepts (solver.rtol)
 # The tightest default reference: its twin (10x tighter) is then still at RTOL_MIN.
 REFERENCE_MIN_TOL = 1e-13
-# An error within this factor of the reference's own error is flagged: it is not resolved.
-LIMIT_FACTOR = 3.0
-_LIMIT_BITS = {"short_error": 1, "peak_error": 2}
-
-
-def _strobe(ds: xr.Dataset) -> xr.Dataset:
-    spp = int(ds.attrs.get("samples_per_period", 1))
-    return ds.isel(time=slice(None, None, spp))
-
-
-def short_horizon(
-    ref_short: xr.Dataset, probe: xr.Dataset, twin: xr.Dataset | None = None
-) -> float:
-    """Half the divergence time of the reference and a looser probe (s), cut where the
-    reference and a tighter ``twin`` separate by REFERENCE_FLOOR; the whole record if they never
-    diverge; at least 10 records."""
-    t = ref_short.time.values - ref_short.time.values[0]
-    limit = 0.5 * divergence_time(probe, ref_short)
-    if twin is not None:
-        # the last record before the twin's separation exceeds the floor
-        over = np.flatnonzero(separation(twin, ref_short) > REFERENCE_FLOOR)
-        if over.size:
-            limit = min(limit, t[max(over[0] - 1, 0)])
-    return float(min(t[-1], max(limit, t[min(10, t.size - 1)])))
-
-
-def _records_within(ref_short: xr.Dataset, horizon: float) -> int:
-    """Number of records of the short runs that lie within ``horizon`` (s) of their start."""
-    return int(np.searchsorted(ref_short.time.values - ref_short.time.values[0], horizon, "right"))
-
-
-def _measure(
-    short: xr.Dataset,
-    long: xr.Dataset,
-    ref_short: xr.Dataset,
-    ref_long: xr.Dataset,
-    periods: float,
-    horizon: float,
-) -> dict[str, float]:
-    peak_err, stat_err = 0.0, 0.0
-    n = _records_within(ref_short, horizon)
-    short, ref_short = short.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))
-    short_err = float(np.max(separation(short, ref_short)))
-    for name in ref_short.data_vars:
-        r = ref_short[name].values
-        peak_ref = float(np.nanmax(np.abs(r)))
-        if peak_ref > 0:
-            peak = float(np.nanmax(np.abs(short[name].values)))
-            peak_err = max(peak_err, abs(peak - peak_ref) / peak_ref)
-    s, sr = _strobe(long), _strobe(ref_long)
-    for name in sr.data_vars:
-        spread = float(sr[name].std()) or 1.0
-        d_mean = abs(float(s[name].mean() - sr[name].mean())) / spread
-        d_std = abs(float(s[name].std() - sr[name].std())) / spread
-        stat_err = max(stat_err, d_mean, d_std)
-    ev, ev_ref = long.attrs["solver_events"] / periods, ref_long.attrs["solver_events"] / periods
-    events_err = abs(ev - ev_ref) / ev_ref if ev_ref else float(ev != ev_ref)
-    return {
-        "short_error": short_err,
-        "peak_error": peak_err,
-        "events_error": events_err,
-        "statistic_error": stat_err,
-    }
 
 
 def _check_settings(
@@ -341,7 +271,7 @@ class _Study:
             horizon = short_horizon(ref_short, probe, twin)
         ref_error = math.nan
         if twin is not None:
-            n = _records_within(ref_short, horizon)
+            n = records_within(ref_short, horizon)
             ref_error = float(
                 np.max(separation(twin.isel(time=slice(0, n)), ref_short.isel(time=slice(0, n))))
             )
@@ -351,7 +281,7 @@ class _Study:
         self.horizon, self.ref_short, self.ref_long = horizon, ref_short, ref_long
 
         shape = (len(methods), len(tolerances))
-        out = {k: np.full(shape, np.nan) for k in (*_COSTS, *_ERRORS)}
+        out = {k: np.full(shape, np.nan) for k in (*_COSTS, *ERRORS)}
         status = np.zeros(shape, np.int8)
         failures = np.full(shape, "", dtype=object)
         solver_warnings = np.full(shape, "", dtype=object)
@@ -374,10 +304,10 @@ class _Study:
                     )
                     cost = "stored" if reused else f"{_time.perf_counter() - t0:.1f} s"
                     bar.write(f"{method:14s} rtol {tol:7.0e}: {what} ({cost})")
-        limited = _reference_limited(out, tolerances, self.ref_tol, ref_error)
+        limited = reference_limited(out, tolerances, self.ref_tol, ref_error)
         ds = _dataset(methods, tolerances, out, status, failures, solver_warnings, limited)
         return ds.assign_attrs(
-            statistic_noise_floor=1.0 / math.sqrt(_strobe(ref_long).sizes["time"]),
+            statistic_noise_floor=1.0 / math.sqrt(strobe(ref_long).sizes["time"]),
             reference_method=self.ref_method,
             reference_tolerance=self.ref_tol,
             reference_wall_time=ref_long.attrs["solver_wall_time"],
@@ -403,22 +333,8 @@ class _Study:
         if failed is not None:
             return rec | {"status": int(run_status(failed)), "failure": failed.attrs["run_message"]}
         rec |= {k: float(long.attrs[f"solver_{k}"]) for k in _COSTS}
-        errors = _measure(short, long, self.ref_short, self.ref_long, self.periods, self.horizon)
+        errors = measure(short, long, self.ref_short, self.ref_long, self.periods, self.horizon)
         return rec | {k: float(v) for k, v in errors.items()}
-
-
-def _reference_limited(
-    out: dict[str, np.ndarray], tolerances: Sequence[float], ref_tol: float, ref_error: float
-) -> np.ndarray:
-    """CF flag masks per setting: 1 short error, 2 peak error at the reference's limit."""
-    flags = np.zeros(out["short_error"].shape, np.int8)
-    if math.isnan(ref_error):  # the reference's own error is unknown: judge by tolerance
-        near = np.asarray(tolerances) < 100 * ref_tol
-        flags[:, near] = _LIMIT_BITS["short_error"] | _LIMIT_BITS["peak_error"]
-        return flags
-    for name, bit in _LIMIT_BITS.items():
-        flags |= np.where(out[name] <= LIMIT_FACTOR * ref_error, bit, 0).astype(np.int8)
-    return flags
 
 
 def _dataset(methods, tolerances, out, status, failures, solver_warnings, limited) -> xr.Dataset:
@@ -444,8 +360,8 @@ def _dataset(methods, tolerances, out, status, failures, solver_warnings, limite
         {
             "long_name": "errors that lie at the reference's own limit (not resolved)",
             "units": "1",
-            "flag_masks": np.array(list(_LIMIT_BITS.values()), np.int8),
-            "flag_meanings": " ".join(f"{k}_at_reference_limit" for k in _LIMIT_BITS),
+            "flag_masks": np.array(list(LIMIT_BITS.values()), np.int8),
+            "flag_meanings": " ".join(f"{k}_at_reference_limit" for k in LIMIT_BITS),
             "comment": f"set where the error is within {LIMIT_FACTOR:g}x the reference's own "
             "error (reference_error); recommend() does not use such errors",
         },
@@ -471,131 +387,4 @@ def _dataset(methods, tolerances, out, status, failures, solver_warnings, limite
                 {"long_name": "rtol = atol", "units": "1"},
             ),
         },
-    )
-
-
-@dataclass(frozen=True)
-class Recommendation:
-    """The setting :func:`recommend` picks: a value, not a study (the evidence is the study).
-
-    Attributes
-    ----------
-    method : str
-        Solver method.
-    rtol : float
-        rtol = atol of the setting.
-    wall_time : float
-        Solver wall time of the study's long run at this setting, s.
-    errors : Mapping[str, float]
-        The errors that decided (dimensionless; see :func:`accuracy`).
-    target : float
-        The target every one of them is below.
-
-    The repr is one line that reads as the choice, e.g.
-    ``Recommendation(method='dop853', rtol=1e-08, wall_time=0.0123 s, short_error=2.1e-09,
-    peak_error=3.4e-10, target=1e-06)``.
-    """
-
-    method: str
-    rtol: float
-    wall_time: float
-    errors: Mapping[str, float] = field(hash=False)
-    target: float
-
-    def __repr__(self) -> str:
-        errors = ", ".join(f"{k}={v:.2g}" for k, v in self.errors.items())
-        return (
-            f"Recommendation(method={self.method!r}, rtol={self.rtol:g}, "
-            f"wall_time={self.wall_time:.3g} s, {errors}, target={self.target:g})"
-        )
-
-
-def _limited(wp: xr.Dataset, errors: Sequence[str]) -> xr.DataArray:
-    """Settings whose errors among ``errors`` are flagged at the reference's limit (a study
-    without the flag, from before it existed, has none flagged)."""
-    if "at_reference_limit" not in wp:
-        return xr.zeros_like(wp.status, dtype=bool)
-    mask = sum(_LIMIT_BITS.get(e, 0) for e in errors)
-    return (wp.at_reference_limit & mask) != 0
-
-
-def _where(selected: xr.DataArray) -> list[tuple[str, float]]:
-    idx = np.argwhere(selected.transpose("solver_method", "rtol").values)
-    return [(str(selected.solver_method.values[i]), float(selected.rtol.values[j])) for i, j in idx]
-
-
-def recommend(
-    wp: xr.Dataset, target: float, *, errors: Sequence[str] = ("short_error", "peak_error")
-) -> Recommendation:
-    """The cheapest (method, tolerance) of a work-precision study whose errors are all below
-    ``target``.
-
-    By default the deterministic errors (a) and (b) decide; the long-run statistic and the event
-    count of a chaotic run have a sampling-noise floor (about ``statistic_noise_floor`` in the
-    study's attributes) that no tolerance removes. A setting whose deciding errors are flagged
-    in ``at_reference_limit`` (within 3x of the reference's own error) is never recommended:
-    its error measures the reference.
-
-    Parameters
-    ----------
-    wp : xarray.Dataset
-        From :func:`accuracy`.
-    target : float
-        Largest acceptable error (dimensionless).
-    errors : sequence of str
-        The error variables that must all be below ``target``.
-
-    Returns
-    -------
-    Recommendation
-        A frozen dataclass rather than a Dataset: it is one choice read off the study, whose
-        evidence (every error and cost) is ``wp`` itself.
-
-    Raises
-    ------
-    ValueError
-        If no setting meets the target, naming the best error reached; or if only settings at
-        the reference's limit do, naming them.
-
-    Examples
-    --------
-    >>> wp = accuracy({"model": {"name": "duffing"}, "run": {"cycles": 5}},
-    ...               methods=["dop853"], tolerances=[1e-4, 1e-8])
-    >>> r = recommend(wp, 1e-6)
-    >>> r.method, r.rtol
-    ('dop853', 1e-08)
-    """
-    worst = wp[list(errors)].to_array("error").max("error")
-    meets = (worst < target) & (wp.status == 0)
-    limited = _limited(wp, errors)
-    ok = meets & ~limited
-    if not bool(ok.any()):
-        if bool(meets.any()):
-            ref_error = wp.attrs.get("reference_error", math.nan)
-            ref_tol = wp.attrs.get("reference_tolerance", math.nan)
-            shown = ", ".join(
-                f"{m} {r:g} ({float(worst.sel(solver_method=m, rtol=r)):.2g})"
-                for m, r in _where(meets & limited)
-            )
-            raise ValueError(
-                f"the settings that reach errors below target={target!r} ({shown}) are at the "
-                f"reference's limit (reference_error {ref_error:.2g} at rtol {ref_tol:g}): "
-                "their errors "
-                "measure the reference, not the setting. Run the study with a tighter reference "
-                "(at least 100x below the tolerances that matter)"
-            )
-        best = float(worst.min())
-        raise ValueError(
-            f"no setting reaches errors below target={target!r}; the best is "
-            f"{best:.3g}: loosen the target or add tighter tolerances"
-        )
-    cost = wp.wall_time.where(ok)
-    idx = np.unravel_index(int(np.nanargmin(cost.values)), cost.shape)
-    pick = wp.isel(solver_method=idx[0], rtol=idx[1])
-    return Recommendation(
-        method=str(pick.solver_method.values),
-        rtol=float(pick.rtol),
-        wall_time=float(pick.wall_time),
-        errors=MappingProxyType({e: float(pick[e]) for e in errors}),
-        target=float(target),
     )

@@ -8,21 +8,13 @@ from __future__ import annotations
 
 from numba import njit
 
+from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+
 
 @njit(cache=True)
 def rhs(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
     for i in range(y.size):
         dydt[i] = -y[i]
-    return 0
-
-
-@njit(cache=True)
-def event_values(t, y, p, ip, aux, work, g):  # noqa: ARG001
-    return None
-
-
-@njit(cache=True)
-def apply_event(k, t, y, p, ip, aux, work):  # noqa: ARG001
     return 0
 
 

@@ -5,10 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import sys
 import time as _time
 
-from workbench._console import positive_int
+from workbench._console import positive_int, report_failures
 from workbench._exit_codes import worst_exit_code
 
 
@@ -67,10 +66,10 @@ def _cmd_study(args: argparse.Namespace) -> int:
         f"workers, {_time.perf_counter() - t_all:.1f} s"
     )
     if code:
-        print(
-            f"workbench study: {n_failed} of {runs} runs failed (their status and message are in "
-            f"the case archives); exit code {code}",
-            file=sys.stderr,
+        report_failures(
+            "study",
+            f"{n_failed} of {runs} runs failed (their status and message are in the case archives)",
+            code,
         )
     return code
 

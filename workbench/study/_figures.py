@@ -217,35 +217,31 @@ def _first_member(ctx) -> xr.Dataset:
     return next(iter(ctx["members"].values()))
 
 
-def _phase(spec, ctx):
-    ds = _first_member(ctx).isel(realisation=0)
-    fig, axes = _grid4(spec, "phase portraits of the clearance coordinates (realisation 0)")
+def _phase_planes(spec, title: str, ds: xr.Dataset, samples, *fmt, **style):
+    """One panel per clearance coordinate: its rate against it (mm), at the points ``samples``
+    picks from a variable (every record, or the stroboscopic samples)."""
+    fig, axes = _grid4(spec, title)
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
-        x = select(ds, var, where)
-        v = select(ds, var.replace("clearance_", "clearance_v"), where)
-        ax.plot(x * 1e3, v, lw=0.2)
+        x = samples(select(ds, var, where))
+        v = samples(select(ds, var.replace("clearance_", "clearance_v"), where))
+        ax.plot(x.values.ravel() * 1e3, v.values.ravel(), *fmt, **style)
         ax.set_xlabel(f"{label}: {axis_label(x).replace('[m]', '[mm]')}", fontsize=8)
         ax.set_ylabel(axis_label(v), fontsize=8)
         ax.grid(alpha=0.3)
     fig.tight_layout()
     return fig
+
+
+def _phase(spec, ctx):
+    ds = _first_member(ctx).isel(realisation=0)
+    title = "phase portraits of the clearance coordinates (realisation 0)"
+    return _phase_planes(spec, title, ds, lambda da: da, lw=0.2)
 
 
 def _poincare(spec, ctx):
     ds = _first_member(ctx)
-    fig, axes = _grid4(
-        spec,
-        f"stroboscopic Poincaré maps (one point per crank period; {_realisations_note(ctx)})",
-    )
-    for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
-        x = strobe(ds, select(ds, var, where))
-        v = strobe(ds, select(ds, var.replace("clearance_", "clearance_v"), where))
-        ax.plot(x.values.ravel() * 1e3, v.values.ravel(), ".", ms=2)
-        ax.set_xlabel(f"{label}: {axis_label(x).replace('[m]', '[mm]')}", fontsize=8)
-        ax.set_ylabel(axis_label(v), fontsize=8)
-        ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
+    title = f"stroboscopic Poincaré maps (one point per crank period; {_realisations_note(ctx)})"
+    return _phase_planes(spec, title, ds, lambda da: strobe(ds, da), ".", ms=2)
 
 
 def _lle(spec, ctx):

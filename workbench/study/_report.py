@@ -342,7 +342,7 @@ def _sweep_table(case: str, d: dict) -> list[str]:
 
 def _flutter_section(spec: dict) -> list[str]:
     """The flutter of the sliding contact against the friction coefficient (see
-    ``workbench.study._run._flutter``)."""
+    ``workbench.study._flutter.flutter``)."""
     if spec.get("status") != "computed":
         return []
     param = spec["parameter"]

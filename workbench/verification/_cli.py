@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from workbench._console import float_list, positive_float
+from workbench._console import float_list, output_and_figure, positive_float, save_with_figure
 from workbench._exit_codes import UsageError
 
 
@@ -64,24 +64,17 @@ def _print_tables(ds) -> None:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
-    from workbench import load_scene, save_run
-    from workbench.archive import check_output_file
+    from workbench import load_scene
     from workbench.plot import verification_figure
     from workbench.verification import verify
 
     scene = load_scene(args.scene)
-    out = check_output_file(args.output, "-o/--output", overwrite=args.overwrite)
-    figure = check_output_file(
-        out.with_suffix(".png"), "-o/--output (its figure)", overwrite=args.overwrite
-    )
+    out, figure = output_and_figure(args.output, args.overwrite)
     try:
         ds = verify(scene, horizon=args.horizon, steps=args.steps, record_dt=args.record_dt)
     except (ValueError, RuntimeError, ImportError) as exc:
         raise UsageError(str(exc)) from None
-    save_run(ds, out)
-    print(f"verification -> {out}")
-    verification_figure(ds).savefig(figure, dpi=120)
-    print(f"figure: {figure}")
+    save_with_figure(ds, out, figure, "verification", verification_figure)
     _print_tables(ds)
     print(
         "\nwall time [s]: "

@@ -39,8 +39,9 @@ import numpy as np
 from numba import njit
 
 from workbench.models._base import EVENT_INSIDE_STEP
+from workbench.models._contact_events import contact_event, contact_event_values
 from workbench.models._layout import layout
-from workbench.models._reduced import (
+from workbench.models._mechanism_layouts import (
     CODE_ASSEMBLY,
     CODE_NONFINITE,
     CODE_PENETRATION,
@@ -48,22 +49,20 @@ from workbench.models._reduced import (
     FRICTION,
     JOINT,
     JOINT_RECORD,
+    index_fields,
+    record_fields,
+    work_fields,
+)
+from workbench.models._record import evaluate_mechanism, kinematic_arrays, rates_from_record
+from workbench.models._reduced import (
     column_force,
-    contact_event,
-    contact_event_values,
     dissipated_power,
     driver_power,
-    evaluate_mechanism,
     friction_parameters,
-    index_fields,
     joint_parameters,
-    kinematic_arrays,
     lean_joint,
     pass_term,
-    rates_from_record,
-    record_fields,
     spd4_solve,
-    work_fields,
 )
 from workbench.models.ninebar._geometry import ARRAY_FIELDS, GEOMETRY_FIELDS
 from workbench.models.ninebar._kinematics import (
@@ -107,7 +106,7 @@ P = layout(
         ("friction", FRICTION.size),
     ],
 )
-# integer parameters ip (fields: workbench.models._reduced.index_fields)
+# integer parameters ip (fields: workbench.models._mechanism_layouts.index_fields)
 IP = layout("NineBarIndices", index_fields(N_JOINTS))
 # workspace of `evaluate` (and the hooks' work array): the record, then scratch
 _RECORD_FIELDS = record_fields(N_Q, 2, N_JOINTS)
@@ -342,7 +341,8 @@ def rhs(t, y, p, ip, aux, work, dydt):
 @njit(cache=True)
 def event_values(t, y, p, ip, aux, work, g):
     """Penetration e - c (m) of each joint with a clearance, twice: its contact onset (rising
-    zero) and end (falling zero); see :func:`workbench.models._reduced.contact_event_values`."""
+    zero) and end (falling zero); see
+    :func:`workbench.models._contact_events.contact_event_values`."""
     contact_event_values(y, p, ip, g, P, IP, N_JOINTS)
 
 

@@ -49,7 +49,7 @@ from workbench.models._assur import (
     rrr_position,
     rrr_velocity,
 )
-from workbench.models._reduced import store_column, store_pass
+from workbench.models._record import store_column, store_pass
 from workbench.models.ninebar._geometry import ARRAY_FIELDS
 
 # -- points (rows of pts, Jp, gamp) --------------------------------------------------------------

@@ -7,18 +7,14 @@ import math
 import numpy as np
 
 from workbench.models import register
-from workbench.models._base import Effect, Model, Parameter
+from workbench.models._base import Effect, Parameter
 from workbench.models._clearance import (
     FRICTION_EFFECT,
-    clearance_states,
     contact_parameters,
     joint_block,
-    mechanism_derive,
-    mechanism_outputs,
-    mechanism_parameters,
-    mechanism_problem,
     validate_joint,
 )
+from workbench.models._mechanism import Mechanism, body_parameters, mechanism_parameters
 from workbench.models.ninebar import _dynamics as dyn
 from workbench.models.ninebar._geometry import (
     BODY_NAMES,
@@ -66,19 +62,7 @@ def _parameters() -> tuple[Parameter, ...]:
     for name, fieldname, long_name, units in _GEOMETRY_PARAMETERS:
         bounds = {} if fieldname in ("O6x", "O6y", "S0", "beta") else pos
         out.append(Parameter(name, DEFAULT_GEOMETRY[fieldname], units, long_name, **bounds))
-    for b, body in enumerate(BODY_NAMES):
-        out.append(Parameter(f"mass_{body}", MASSES[b], "kg", f"mass of {body}", **pos))
-    for b, body in enumerate(BODY_NAMES):
-        if INERTIAS[b] > 0:
-            out.append(
-                Parameter(
-                    f"inertia_{body}",
-                    INERTIAS[b],
-                    "kg m2",
-                    f"centroidal moment of inertia of {body}",
-                    **pos,
-                )
-            )
+    out += body_parameters(BODY_NAMES, MASSES, INERTIAS)
     out += [
         Parameter(
             "omega",
@@ -104,7 +88,7 @@ def _parameters() -> tuple[Parameter, ...]:
 
 
 @register
-class NineBar(Model):
+class NineBar(Mechanism):
     """Two-DOF nine-bar mechanism with revolute clearance joints A and B (Chen et al. 2019)."""
 
     name = "ninebar"
@@ -123,24 +107,15 @@ class NineBar(Model):
         Effect("gravity", True, "bool", "apply gravity"),
     )
 
+    joints = JOINTS
+    cranks = ("1", "4")
+    slider = "slider displacement S9"
+    assembly = "the mechanism cannot be assembled at this configuration (a loop does not close)"
+    dynamics = dyn
+
     # -- declarations -------------------------------------------------------------------------
-    def states(self, effects):
-        return tuple(clearance_states(effects["clearance"], effects["friction"]))
-
-    def outputs(self, effects):
-        return mechanism_outputs(effects, "slider displacement S9")
-
     def variables(self, effects):
         return {q.name: q for q in self.outputs(effects)}
-
-    def coords(self, effects):
-        return {
-            "joint": (list(effects["clearance"]), {"long_name": "clearance joint", "units": "1"}),
-            "crank": (["1", "4"], {"long_name": "driven crank", "units": "1"}),
-        }
-
-    def forcing_period(self, params):
-        return 2.0 * math.pi / params["omega"]
 
     def clearances(self, params) -> dict[str, float]:
         """Clearance of each joint, m."""
@@ -154,9 +129,9 @@ class NineBar(Model):
             validate_joint(params, c, key)
 
     # -- building ------------------------------------------------------------------------------
-    def problem(self, params, effects, initial, requested):
+    def pack(self, params, effects):
         clearances = self.clearances(params)
-        p = dyn.P.pack(
+        return dyn.P.pack(
             {
                 "geometry": geometry_of(params),
                 **mechanism_parameters(params, effects, BODY_NAMES),
@@ -165,21 +140,3 @@ class NineBar(Model):
                 "joint": np.concatenate([joint_block(params, clearances[j]) for j in JOINTS]),
             }
         )
-        return mechanism_problem(
-            hooks="workbench.models.ninebar._dynamics",
-            effects=effects,
-            initial=initial,
-            requested=requested,
-            joints=JOINTS,
-            clearances=clearances,
-            omega=params["omega"],
-            p=p,
-            IP=dyn.IP,
-            work=dyn.W,
-            n_driven=2,
-            assembly="the mechanism cannot be assembled at this configuration (a loop does not "
-            "close)",
-        )
-
-    def derive(self, problem, t, Y, AUX, requested):
-        return mechanism_derive(problem, t, Y, AUX, requested, dyn.evaluate_many, dyn.RECORD)

@@ -21,8 +21,9 @@ import numpy as np
 from numba import njit
 
 from workbench.models._base import EVENT_INSIDE_STEP
+from workbench.models._contact_events import contact_event, contact_event_values
 from workbench.models._layout import layout
-from workbench.models._reduced import (
+from workbench.models._mechanism_layouts import (
     CODE_ASSEMBLY,
     CODE_NONFINITE,
     CODE_PENETRATION,
@@ -30,22 +31,20 @@ from workbench.models._reduced import (
     FRICTION,
     JOINT,
     JOINT_RECORD,
+    index_fields,
+    record_fields,
+    work_fields,
+)
+from workbench.models._record import evaluate_mechanism, kinematic_arrays, rates_from_record
+from workbench.models._reduced import (
     column_force,
-    contact_event,
-    contact_event_values,
     dissipated_power,
     driver_power,
-    evaluate_mechanism,
     friction_parameters,
-    index_fields,
     joint_parameters,
-    kinematic_arrays,
     lean_joint,
     pass_term,
-    rates_from_record,
-    record_fields,
     spd4_solve,
-    work_fields,
 )
 from workbench.models.slider_crank._geometry import GEOMETRY_FIELDS
 from workbench.models.slider_crank._kinematics import (
@@ -234,7 +233,8 @@ def rhs(t, y, p, ip, aux, work, dydt):
 @njit(cache=True)
 def event_values(t, y, p, ip, aux, work, g):
     """Penetration e - c (m) of each joint with a clearance, twice: its contact onset (rising
-    zero) and end (falling zero); see :func:`workbench.models._reduced.contact_event_values`."""
+    zero) and end (falling zero); see
+    :func:`workbench.models._contact_events.contact_event_values`."""
     contact_event_values(y, p, ip, g, P, IP, N_JOINTS)
 
 

@@ -32,7 +32,7 @@ from workbench.models._assur import (
     rrp_position,
     rrp_velocity,
 )
-from workbench.models._reduced import store_column, store_pass
+from workbench.models._record import store_column, store_pass
 from workbench.models.slider_crank._geometry import GEOMETRY_FIELDS
 
 # -- points (rows of pts, Jp, gamp) --------------------------------------------------------------

@@ -15,18 +15,14 @@ import math
 
 from workbench._errors import SceneError
 from workbench.models import register
-from workbench.models._base import Effect, Model, Parameter
+from workbench.models._base import Effect, Parameter
 from workbench.models._clearance import (
     FRICTION_EFFECT,
-    clearance_states,
     contact_parameters,
     joint_block,
-    mechanism_derive,
-    mechanism_outputs,
-    mechanism_parameters,
-    mechanism_problem,
     validate_joint,
 )
+from workbench.models._mechanism import Mechanism, body_parameters, mechanism_parameters
 from workbench.models.slider_crank import _dynamics as dyn
 from workbench.models.slider_crank._geometry import (
     BODY_NAMES,
@@ -52,19 +48,9 @@ def _parameters() -> tuple[Parameter, ...]:
         Parameter(name, DEFAULT_GEOMETRY[f], "m", long_name, **_POS)
         for name, f, long_name in _GEOMETRY_PARAMETERS
     ]
-    for b, body in enumerate(BODY_NAMES):
-        out.append(Parameter(f"mass_{body}", MASSES[b], "kg", f"mass of the {body}", **_POS))
-    for b, body in enumerate(BODY_NAMES):
-        if INERTIAS[b] > 0:
-            out.append(
-                Parameter(
-                    f"inertia_{body}",
-                    INERTIAS[b],
-                    "kg m2",
-                    f"centroidal inertia of the {body}",
-                    **_POS,
-                )
-            )
+    out += body_parameters(
+        BODY_NAMES, MASSES, INERTIAS, "mass of the {}", "centroidal inertia of the {}"
+    )
     out += [
         Parameter("omega", 5000 * 2 * math.pi / 60, "rad s-1", "crank speed (5000 rpm)", **_POS),
         Parameter("theta10", 0.0, "rad", "initial crank angle"),
@@ -81,7 +67,7 @@ def _parameters() -> tuple[Parameter, ...]:
 
 
 @register
-class SliderCrank(Model):
+class SliderCrank(Mechanism):
     """Slider-crank with a revolute clearance joint between rod and slider (Flores et al. 2006)."""
 
     name = "slider_crank"
@@ -100,20 +86,11 @@ class SliderCrank(Model):
         Effect("gravity", True, "bool", "apply gravity"),
     )
 
-    def states(self, effects):
-        return tuple(clearance_states(effects["clearance"], effects["friction"]))
-
-    def outputs(self, effects):
-        return mechanism_outputs(effects, "slider position s (pin B on the x axis)")
-
-    def coords(self, effects):
-        return {
-            "joint": (list(effects["clearance"]), {"long_name": "clearance joint", "units": "1"}),
-            "crank": (["1"], {"long_name": "driven crank", "units": "1"}),
-        }
-
-    def forcing_period(self, params):
-        return 2.0 * math.pi / params["omega"]
+    joints = JOINTS
+    cranks = ("1",)
+    slider = "slider position s (pin B on the x axis)"
+    assembly = "the rod cannot reach the slider guide (|y - L1 sin theta1| >= L2)"
+    dynamics = dyn
 
     def clearances(self, params) -> dict[str, float]:
         """Clearance of each joint, m."""
@@ -128,8 +105,8 @@ class SliderCrank(Model):
                 f"({params['crank_length']!r} m) for the crank to turn fully",
             )
 
-    def problem(self, params, effects, initial, requested):
-        p = dyn.P.pack(
+    def pack(self, params, effects):
+        return dyn.P.pack(
             {
                 "geometry": geometry_array({f: params[n] for n, f, _ in _GEOMETRY_PARAMETERS}),
                 **mechanism_parameters(params, effects, BODY_NAMES),
@@ -137,20 +114,3 @@ class SliderCrank(Model):
                 "joint": joint_block(params, params["clearance"]),
             }
         )
-        return mechanism_problem(
-            hooks="workbench.models.slider_crank._dynamics",
-            effects=effects,
-            initial=initial,
-            requested=requested,
-            joints=JOINTS,
-            clearances=self.clearances(params),
-            omega=params["omega"],
-            p=p,
-            IP=dyn.IP,
-            work=dyn.W,
-            n_driven=1,
-            assembly="the rod cannot reach the slider guide (|y - L1 sin theta1| >= L2)",
-        )
-
-    def derive(self, problem, t, Y, AUX, requested):
-        return mechanism_derive(problem, t, Y, AUX, requested, dyn.evaluate_many, dyn.RECORD)
