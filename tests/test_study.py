@@ -373,3 +373,12 @@ def test_quick_study_run_and_report(tmp_path):
 def test_cli_study_list(capsys):
     assert main(["study", "list"]) == 0
     assert "bifurcation_speed" in capsys.readouterr().out
+
+
+def test_exponent_numbers_are_written_as_json():
+    """The exponent table's values and attributes (numpy or Python scalars, NaN) become JSON
+    values: a Python float attribute once stopped ``make studies`` at the chaos study."""
+    from workbench.study._numbers import _native
+
+    values = [_native(v) for v in (1.0, np.float32(2.5), np.nan, np.bool_(True), "n", 3)]
+    assert json.dumps(values) == '[1.0, 2.5, null, true, "n", 3]'
