@@ -39,6 +39,7 @@ from workbench.solver._loop import (
     ST_REJECTED,
     ST_RHS,
 )
+from workbench.solver._numerics import min_step, trial_step
 from workbench.solver._problem import EVENT_INSIDE_STEP
 from workbench.solver._radau import (
     CONVERGED,
@@ -168,7 +169,7 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
     rc = im.rc
     ist = im.stats
     stats = st.stats
-    min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+    h_min = min_step(t)
     for i in range(n):
         im.scale[i] = im.atol[i] + im.rtol * abs(y[i])
     fnewt = newton_tolerance(im.rtol)
@@ -178,12 +179,9 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
     h = 0.0
     t_new = t
     while True:
-        if h_abs < min_step:
+        if h_abs < h_min:
             return True, last_code, t_new, h, h_abs, False
-        t_new = t + h_abs
-        if t_new > t_end:
-            t_new = t_end
-        h = t_new - t
+        t_new, h = trial_step(t, t_end, h_abs)
         if rc[RC_JAC] == 0.0:
             code = _jacobian(t, m, st, im)
             if code > 0:

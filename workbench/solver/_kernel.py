@@ -112,6 +112,7 @@ from workbench.solver._numerics import (
     dop853_stiffness,
     initial_difference,
     initial_norms,
+    min_step,
     n_stages,
     read_decay,
 )
@@ -280,11 +281,11 @@ def advance(t_end, t_pause, s, m, st, im):
         if stats[ST_STEPS] >= s.max_steps:
             status = MAX_STEPS
             break
-        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        h_min = min_step(t)
         if h_abs > s.max_step:
             h_abs = s.max_step
-        elif h_abs < min_step:
-            h_abs = min_step
+        elif h_abs < h_min:
+            h_abs = h_min
         before = (stats[ST_RHS], 0, 0)
         if im is not None:
             before = (stats[ST_RHS], im.stats[IS_RHS], im.stats[IS_LU])

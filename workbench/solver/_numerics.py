@@ -110,6 +110,21 @@ def error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
     return np.sqrt(acc / n)
 
 
+@njit(cache=True, inline="always")
+def min_step(t):
+    """The smallest step (s) from time t (s): ten units in the last place of t."""
+    return 10.0 * abs(np.nextafter(t, np.inf) - t)
+
+
+@njit(cache=True, inline="always")
+def trial_step(t, t_end, h_abs):
+    """The end (s) and size (s) of a trial step of h_abs (s) from t, not beyond t_end."""
+    t_new = t + h_abs
+    if t_new > t_end:
+        t_new = t_end
+    return t_new, t_new - t
+
+
 @njit(cache=True)
 def step_factor(err, exponent, rejected):
     """Step-size ratio after an accepted step with error ``err`` < 1 (no growth right after a

@@ -35,12 +35,14 @@ from workbench.solver._numerics import (
     error_norm,
     illinois_point,
     illinois_update,
+    min_step,
     n_stages,
     read_decay,
     reject_factor,
     root_tolerance,
     stage_point,
     step_factor,
+    trial_step,
 )
 from workbench.solver._problem import EVENT_INSIDE_STEP
 from workbench.solver._radau import (
@@ -222,18 +224,15 @@ def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
     exponent = -1.0 / 8.0 if method == DOP853 else -1.0 / 5.0
     ms = stiff_idx.size
     decay = ctrl[N_CTRL : N_CTRL + ms]
-    min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+    h_min = min_step(t)
     rejected = False
     last_code = 0
     h = 0.0
     t_new = t
     while True:
-        if h_abs < min_step:
+        if h_abs < h_min:
             return True, last_code, t_new, h, h_abs, False
-        t_new = t + h_abs
-        if t_new > t_end:
-            t_new = t_end
-        h = t_new - t
+        t_new, h = trial_step(t, t_end, h_abs)
         code, inside_stage, inside_end = _rk_step(method, t, h, m, st, w)
         if code != 0:
             last_code = code
