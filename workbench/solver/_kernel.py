@@ -303,45 +303,38 @@ def advance(t_end, t_pause, s, m, st, im):
             break
         ctrl[CT_NONFINITE] = 0.0
         stats[ST_STEPS] += 1
-        dense_ready = False
         fired = -1
         t_stop = t_new
+        # the dense output is needed where an event function crossed (to locate its root) or a
+        # record lies inside the step (the records before an event's root lie before t_new)
+        dense = i_rec < nrec and t_rec[i_rec] < t_new
         if ne > 0:
             event_values(t_new, y_new, p, ip, aux, work, g_new)
             for k in range(ne):
                 if crossed(ev_dir[k], g_old[k], g_new[k]):
-                    if not dense_ready:
-                        code = _dense_prepare(current, t, h, m, st, w, im)
-                        if code != 0:
-                            stats[ST_MODEL_CODE] = code
-                            status = MODEL_FAILURE
-                            break
-                        dense_ready = True
-                    t_k = _locate(
-                        current, k, t, h, y, F, t, g_old[k], t_new, g_new[k], m, aux, yint, gtmp
-                    )
-                    if fired < 0 or t_k < t_stop:
-                        fired = k
-                        t_stop = t_k
-            if status == MODEL_FAILURE:
+                    dense = True
+        if dense:
+            code = _dense_prepare(current, t, h, m, st, w, im)
+            if code != 0:
+                stats[ST_MODEL_CODE] = code
+                status = MODEL_FAILURE
                 break
+        for k in range(ne):
+            if crossed(ev_dir[k], g_old[k], g_new[k]):
+                t_k = _locate(
+                    current, k, t, h, y, F, t, g_old[k], t_new, g_new[k], m, aux, yint, gtmp
+                )
+                if fired < 0 or t_k < t_stop:
+                    fired = k
+                    t_stop = t_k
         while i_rec < nrec and t_rec[i_rec] <= t_stop:
             if t_rec[i_rec] == t_new and fired < 0:
                 Yrec[i_rec, :] = y_new
             else:
-                if not dense_ready:
-                    code = _dense_prepare(current, t, h, m, st, w, im)
-                    if code != 0:
-                        stats[ST_MODEL_CODE] = code
-                        status = MODEL_FAILURE
-                        break
-                    dense_ready = True
                 dense_eval(current, t, h, y, F, t_rec[i_rec], yint)
                 Yrec[i_rec, :] = yint
             AUXrec[i_rec, :] = aux
             i_rec += 1
-        if status == MODEL_FAILURE:
-            break
         if im is not None:
             if current == RADAU5:
                 im.rc[RC_TIME_IMPLICIT] += t_stop - t
