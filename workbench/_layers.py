@@ -11,7 +11,7 @@ from __future__ import annotations
 __all__ = ["LAYERS", "layer_of"]
 
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("base", ("workbench._cache", "workbench._layers")),
+    ("base", ("workbench._cache", "workbench._layers", "workbench._sources")),
     ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators
     ("models", ("workbench.models", "workbench._errors")),  # build Problems
     ("scene", ("workbench.scene",)),  # validated against the models

@@ -24,6 +24,7 @@ from workbench.campaign._store import (
     Store,
     SweepGrid,
     campaign_id,
+    code_of,
     expand_sweep,
     format_point,
 )
@@ -194,7 +195,8 @@ def _run_locked(
         cid = manifest["campaign_id"]
     st.remove_temporaries()
     blocks = grid.blocks(chunk)
-    done = st.verified_blocks(manifest, blocks)
+    code = code_of(scene)
+    done = st.verified_blocks(manifest, blocks, code)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -218,7 +220,7 @@ def _run_locked(
         bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
 
         def commit(result: dict) -> None:
-            st.commit(manifest, result["block"], result["sha256"])
+            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
             if bar is not None:
                 bar.update(result["points"])
 
@@ -252,6 +254,9 @@ def _run_locked(
             "campaign_wall_time": time.perf_counter() - wall0,
             "campaign_block_sha256": " ".join(
                 manifest["checksums"][str(i)] for i in range(len(blocks))
+            ),
+            "code_digests": " ".join(
+                sorted({manifest["code_digests"][str(i)] for i in range(len(blocks))})
             ),
         },
         in_memory,

@@ -12,7 +12,11 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
         block-00001.nc        ...
 
 A block is *committed* when its checksum is in the manifest; on resume a block is reused only
-if its file's SHA-256 matches, otherwise it is named and recomputed.
+if its file's SHA-256 matches, otherwise it is named and recomputed. The manifest also records,
+per block, the digest of the code that computed it (:func:`code_of`; the block file carries it
+as the attribute ``code_digest``): a block computed by other code (a model's default edited, a
+``git pull``) is named and recomputed on resume, so an archive never mixes results of two
+versions of the code. Its attribute ``code_digests`` lists the digests it holds.
 """
 
 from __future__ import annotations
@@ -30,7 +34,6 @@ from pathlib import Path
 
 import numpy as np
 
-from workbench._cache import package_digest
 from workbench.archive import (
     StoreWarning,
     check_output_file,
@@ -41,10 +44,17 @@ from workbench.archive import (
     write_text_atomic,
 )
 from workbench.models import get_model
-from workbench.run import REALISATION_ATTRS
+from workbench.run import REALISATION_ATTRS, results_digest
 from workbench.scene import RUN_SWEEP_KEYS, Scene, SceneError, scene_from_toml
 
-__all__ = ["CampaignError", "CampaignWarning", "Store", "SweepGrid", "expand_sweep"]
+__all__ = [
+    "CampaignError",
+    "CampaignWarning",
+    "Store",
+    "SweepGrid",
+    "code_of",
+    "expand_sweep",
+]
 
 FORMAT = "workbench-campaign 2"  # 2: block checksums, lock
 _BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
@@ -57,7 +67,7 @@ class CampaignError(ValueError):
 
 
 class CampaignWarning(StoreWarning):
-    """Something about a campaign deserves attention (failed points, a changed package)."""
+    """Something about a campaign deserves attention (failed points, blocks recomputed)."""
 
 
 @dataclass(frozen=True)
@@ -131,6 +141,12 @@ def format_point(point: Mapping[str, float]) -> str:
     return ", ".join(f"{k}={v:.6g}" for k, v in point.items())
 
 
+def code_of(scene: Scene) -> str:
+    """Digest of the code that computes a block of ``scene``'s campaign (the run layer, the
+    model, the kernels and the block task; :func:`workbench.run.results_digest`)."""
+    return results_digest(scene.model, "workbench.campaign._block")
+
+
 def campaign_id(scene: Scene, chunk: int) -> str:
     """Digest of what fixes the content of every block: the scene and the chunk size."""
     h = hashlib.sha256(scene.to_toml().encode())
@@ -181,8 +197,9 @@ class Store:
             "chunk": chunk,
             "points": grid.size,
             "blocks": len(grid.blocks(chunk)),
-            "package_digest": package_digest(),
+            "code_digest": code_of(scene),
             "checksums": {},
+            "code_digests": {},
         }
         return self.save_manifest(data)
 
@@ -223,16 +240,6 @@ class Store:
                 f"chunk=None (or {stored}) to resume, or restart=True (CLI --restart) to start "
                 "afresh with the new size."
             )
-        if manifest.get("package_digest") != package_digest():
-            warnings.warn(
-                CampaignWarning(
-                    "the workbench package changed since this campaign started (source digest "
-                    f"{manifest.get('package_digest')!r} -> {package_digest()!r}); blocks "
-                    "computed before and after the change are combined. Pass restart=True for a "
-                    "campaign computed by one version throughout."
-                ),
-                stacklevel=3,
-            )
         return stored
 
     def clear(self) -> None:
@@ -260,34 +267,55 @@ class Store:
             removed.append(p)
         return removed
 
-    def verified_blocks(self, manifest: dict, blocks: list[range]) -> set[int]:
+    def verified_blocks(self, manifest: dict, blocks: list[range], code: str) -> set[int]:
         """Indices of the committed blocks whose file is intact (its SHA-256 is the one in the
-        manifest). Every other block is named in a CampaignWarning (missing, corrupt, or
-        written but never committed) and will be recomputed; the manifest drops their
-        checksums."""
+        manifest) and that the code of digest ``code`` computed. Every other block is named in a
+        CampaignWarning (missing, corrupt, written but never committed, or computed by other
+        code) and will be recomputed; the manifest drops their checksums."""
         sums: dict[str, str] = manifest.setdefault("checksums", {})
-        done, dropped = set(), False
+        codes: dict[str, str] = manifest.setdefault("code_digests", {})
+        done, dropped, other = set(), False, {}
         for i in range(len(blocks)):
             path = self.block_path(i)
             problem = file_problem(path, sums.get(str(i)))
-            if problem is None:
+            if problem is None and str(i) in sums and codes.get(str(i)) != code:
+                other.setdefault(codes.get(str(i), "unrecorded"), []).append(i)
+                problem = "stale"
+            elif problem is None:
                 if str(i) in sums:
                     done.add(i)
                 continue
-            warnings.warn(
-                CampaignWarning(f"block {i} ({path.name}) {problem}; recomputing"), stacklevel=3
-            )
+            else:
+                warnings.warn(
+                    CampaignWarning(f"block {i} ({path.name}) {problem}; recomputing"),
+                    stacklevel=3,
+                )
             if sums.pop(str(i), None) is not None:
                 dropped = True
+            codes.pop(str(i), None)
             with contextlib.suppress(OSError):
                 path.unlink()
+        if other:
+            n = sum(len(v) for v in other.values())
+            was = ", ".join(f"{d!r} ({len(v)})" for d, v in other.items())
+            warnings.warn(
+                CampaignWarning(
+                    f"{n} of {len(blocks)} blocks were computed by other code (code digest "
+                    f"{was}; this code: {code!r}: the package, a model or the solver changed "
+                    "since they ran); recomputing them, so that the archive holds the results "
+                    "of one version of the code"
+                ),
+                stacklevel=3,
+            )
         if dropped:
             self.save_manifest(manifest)
         return done
 
-    def commit(self, manifest: dict, block: int, sha256: str) -> None:
-        """Record a finished block's checksum in the manifest (the block is then committed)."""
+    def commit(self, manifest: dict, block: int, sha256: str, code: str) -> None:
+        """Record a finished block's checksum and the digest of the code that computed it in
+        the manifest (the block is then committed)."""
         manifest.setdefault("checksums", {})[str(block)] = sha256
+        manifest.setdefault("code_digests", {})[str(block)] = code
         self.save_manifest(manifest)
 
     @contextlib.contextmanager

@@ -9,7 +9,7 @@ saltation at events (:func:`tangent_problem`), copies integrated side by side in
 sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled Jacobian.
 """
 
-from workbench.solver._compile import jacobian_for
+from workbench.solver._compile import TEMPLATE_MODULES, jacobian_for
 from workbench.solver._copies import copies_problem, split_copies
 from workbench.solver._integrate import COMPILED_METHODS, METHODS, integrate
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
@@ -24,6 +24,7 @@ __all__ = [
     "RunResult",
     "SolverError",
     "Status",
+    "TEMPLATE_MODULES",
     "copies_problem",
     "integrate",
     "jacobian_for",

@@ -26,9 +26,10 @@ from pathlib import Path
 from types import ModuleType
 
 from workbench._cache import KERNEL_PACKAGE, kernel_directory
+from workbench._sources import source_digest
 
 _HERE = Path(__file__).parent
-# read at import, like the package digest that keys the cache, so that both describe one source
+# read at import: the generated modules are these texts (their digest keys their names)
 _SOURCES = {
     name: (_HERE / f"{name}.py").read_text()
     for name in (
@@ -41,6 +42,9 @@ _SOURCES = {
     )
 }
 _PLACEHOLDER = "workbench.solver._hooks_template"
+# the modules whose text the generated kernels are made of (read, not imported: code digests of
+# results name them, see workbench.run.results_digest)
+TEMPLATE_MODULES = tuple(f"{__package__}.{name}" for name in _SOURCES)
 
 
 def _directory() -> Path:
@@ -64,10 +68,19 @@ def _substitute(source: str, marker: str, module: str) -> str:
     return source
 
 
+def _label(hooks: str) -> str:
+    """The readable part of a generated module's name: a model's module name, or the label of
+    a generated hooks module (its digest dropped)."""
+    if hooks.startswith(KERNEL_PACKAGE + "."):
+        return hooks[len(KERNEL_PACKAGE) + 1 :].rsplit("_", 1)[0]
+    return re.sub(r"\W", "_", hooks)
+
+
 def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=None) -> ModuleType:
     """Write ``template`` with its tagged import lines pointed at ``modules`` (marker -> module)
     and its tagged flags set (``flags``: name -> bool) as module
-    ``workbench_kernels.<prefix>_<hooks>``, and import it."""
+    ``workbench_kernels.<prefix>_<label>_<digest>`` (the digest of its code and of everything it
+    imports, :func:`workbench._sources.source_digest`), and import it."""
     source = _SOURCES[template]
     for marker, module in modules.items():
         source = _substitute(source, marker, module)
@@ -77,7 +90,8 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
         if n != 1:  # pragma: no cover
             raise RuntimeError(f"flag {flag} not found exactly once in {template}")
     directory = _directory()
-    name = f"{prefix}_" + re.sub(r"\W", "_", hooks)
+    label = f"{prefix}_{_label(hooks)}"
+    name = f"{label}_{source_digest(source, f'{KERNEL_PACKAGE}.{label}')}"
     path = directory / f"{name}.py"
     if not path.exists() or path.read_text() != source:
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
