@@ -28,12 +28,13 @@ import os
 import numpy as np
 import workbench
 from workbench._cache import module_digest
-from workbench.solver._hooks_template import rhs
+from workbench.solver._templates.placeholder_hooks import rhs
 import other_lib
 
 assert other_lib.plus_one(1) == 2
 rhs(0.0, np.ones(2), np.zeros(0), np.zeros(0, np.int64), np.zeros(0), np.zeros(1), np.empty(2))
-print(os.environ.get("NUMBA_CACHE_DIR"), module_digest("workbench.solver._hooks_template"))
+hooks = "workbench.solver._templates.placeholder_hooks"
+print(os.environ.get("NUMBA_CACHE_DIR"), module_digest(hooks))
 """
 
 
@@ -51,7 +52,7 @@ def test_only_workbench_functions_use_its_cache(tmp_path):
     ).stdout.split()
     assert out[0] == "None"  # NUMBA_CACHE_DIR was not set for the process
     ours = sorted(p.name for p in (tmp_path / "wb" / "numba" / out[1]).rglob("*.nbi"))
-    assert ours and all(name.startswith("_hooks_template.rhs-") for name in ours)
+    assert ours and all(name.startswith("placeholder_hooks.rhs-") for name in ours)
     theirs = sorted(p.name for p in (tmp_path / "__pycache__").glob("*.nbi"))
     assert theirs and all(name.startswith("other_lib.plus_one-") for name in theirs)
 
@@ -79,8 +80,8 @@ def test_a_models_code_closure_holds_what_it_is_built_from_and_nothing_else():
     assert not any(m.startswith("workbench.models.ninebar") for m in duffing)
     assert "workbench.models.duffing" not in ninebar
     # a kernel's templates are read as text: the results' digest names them
-    kernel = closure("workbench.solver._kernel")
-    assert {"workbench.solver._numerics", "workbench.solver._steps_template"} <= kernel
+    kernel = closure("workbench.solver._templates.integration_loop")
+    assert {"workbench.solver._numerics", "workbench.solver._templates.explicit_steps"} <= kernel
 
 
 EDIT = """

@@ -11,7 +11,7 @@ depends on the submodule ``pkg.sub`` alone (not on ``pkg/__init__``) when ``sub`
 libraries enter by their version (:func:`environment`).
 
 >>> from workbench._sources import closure, code_digest
->>> "workbench.solver._numerics" in closure("workbench.solver._kernel")
+>>> "workbench.solver._numerics" in closure("workbench.solver._templates.integration_loop")
 True
 >>> "workbench.analysis._wolf" in closure("workbench.models.duffing")
 False

@@ -16,8 +16,8 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import save_run, sha256_file
+from workbench.campaign._grid import code_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
-from workbench.campaign._store import code_of
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml

@@ -16,18 +16,11 @@ import xarray as xr
 from workbench.archive import open_run, save_run
 from workbench.campaign._assemble import assemble
 from workbench.campaign._block import BlockTask, failed
+from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
+from workbench.campaign._grid import SweepGrid, campaign_id, code_of, expand_sweep, format_point
 from workbench.campaign._schedule import longest_first
-from workbench.campaign._store import (
-    CampaignError,
-    CampaignWarning,
-    Store,
-    SweepGrid,
-    campaign_id,
-    code_of,
-    expand_sweep,
-    format_point,
-)
+from workbench.campaign._store import Store
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["run_campaign", "store_paths"]

@@ -1,4 +1,4 @@
-"""The grid of a campaign and its store on disk: manifest, block files, scene comparison.
+"""The store of a campaign on disk: manifest, block files, lock, scene comparison.
 
 Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
 
@@ -13,29 +13,24 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
 
 A block is *committed* when its checksum is in the manifest; on resume a block is reused only
 if its file's SHA-256 matches, otherwise it is named and recomputed. The manifest also records,
-per block, the digest of the code that computed it (:func:`code_of`; the block file carries it
-as the attribute ``code_digest``): a block computed by other code (a model's default edited, a
-``git pull``) is named and recomputed on resume, so an archive never mixes results of two
-versions of the code. Its attribute ``code_digests`` lists the digests it holds.
+per block, the digest of the code that computed it (:func:`workbench.campaign._grid.code_of`;
+the block file carries it as the attribute ``code_digest``): a block computed by other code (a
+model's default edited, a ``git pull``) is named and recomputed on resume, so an archive never
+mixes results of two versions of the code. Its attribute ``code_digests`` lists the digests
+it holds.
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
-import math
 import os
 import re
 import warnings
-from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-
 from workbench.archive import (
-    StoreWarning,
     check_output_file,
     file_problem,
     mapping_diff,
@@ -43,118 +38,17 @@ from workbench.archive import (
     store_lock,
     write_text_atomic,
 )
-from workbench.models import get_model
-from workbench.run import REALISATION_ATTRS, results_digest
-from workbench.scene import RUN_SWEEP_KEYS, Scene, SceneError, scene_from_toml
+from workbench.campaign._errors import CampaignError, CampaignWarning
+from workbench.campaign._grid import SweepGrid, code_of
+from workbench.scene import Scene, SceneError, scene_from_toml
 
-__all__ = [
-    "CampaignError",
-    "CampaignWarning",
-    "Store",
-    "SweepGrid",
-    "code_of",
-    "expand_sweep",
-]
+__all__ = ["FORMAT", "Store"]
 
 FORMAT = "workbench-campaign 2"  # 2: block checksums, lock
 _BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
 _TMP_RE = re.compile(r"^\.(block-\d{5,}\.nc|manifest\.json)\..*\.tmp$")
 
 
-class CampaignError(ValueError):
-    """A campaign cannot run as asked (e.g. its store holds a different campaign); the message
-    says what differs and how to proceed."""
-
-
-class CampaignWarning(StoreWarning):
-    """Something about a campaign deserves attention (failed points, blocks recomputed)."""
-
-
-@dataclass(frozen=True)
-class SweepGrid:
-    """The points of a campaign: the outer product of the swept values, in C order (not to be
-    confused with a run's record times, :func:`workbench.run.record_times`).
-
-    Attributes
-    ----------
-    dims : tuple[str, ...]
-        Swept parameter names, in the scene's ``[sweep]`` order (the dataset's leading dims).
-    values : tuple[tuple[float, ...], ...]
-        The values of each dim (SI units of the parameter).
-    """
-
-    dims: tuple[str, ...]
-    values: tuple[tuple[float, ...], ...]
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(len(v) for v in self.values)
-
-    @property
-    def size(self) -> int:
-        return math.prod(self.shape)
-
-    def point(self, flat: int) -> dict[str, float]:
-        """Parameter values of the point with flat (C-order) index ``flat``."""
-        idx = np.unravel_index(flat, self.shape)
-        return {
-            d: self.values[k][int(i)] for k, (d, i) in enumerate(zip(self.dims, idx, strict=True))
-        }
-
-    def blocks(self, chunk: int) -> list[range]:
-        """Flat point indices of each block of ``chunk`` points (the last may be shorter)."""
-        return [range(s, min(s + chunk, self.size)) for s in range(0, self.size, chunk)]
-
-    def as_dict(self) -> dict[str, list[float]]:
-        return {d: list(v) for d, v in zip(self.dims, self.values, strict=True)}
-
-
-def expand_sweep(scene: Scene) -> SweepGrid:
-    """The grid of a scene's ``[sweep]`` (CampaignError if it has none)."""
-    if not scene.sweep:
-        raise CampaignError(
-            "a campaign needs a [sweep] table naming at least one parameter, e.g. "
-            "[sweep] gamma = {start = 0.2, stop = 0.5, num = 40}; this scene has none "
-            "(run a single scene with workbench.simulate)"
-        )
-    dims = tuple(scene.sweep)
-    return SweepGrid(dims, tuple(tuple(float(x) for x in scene.sweep[d]) for d in dims))
-
-
-def forcing_period(scene: Scene, grid: SweepGrid, flat: int) -> float | None:
-    """Forcing period (s) of the grid point ``flat`` (None for an autonomous model)."""
-    params = dict(scene.resolved_parameters)
-    params.update(grid.point(flat))
-    return get_model(scene.model).forcing_period(params)
-
-
-def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a model parameter (from its declaration), or of a swept
-    ``[run]`` key (``realisation``)."""
-    if name in RUN_SWEEP_KEYS:
-        return dict(REALISATION_ATTRS)
-    p = get_model(scene.model).parameter(name)
-    return {"units": p.units, "long_name": p.long_name}
-
-
-def format_point(point: Mapping[str, float]) -> str:
-    return ", ".join(f"{k}={v:.6g}" for k, v in point.items())
-
-
-def code_of(scene: Scene) -> str:
-    """Digest of the code that computes a block of ``scene``'s campaign (the run layer, the
-    model, the kernels and the block task; :func:`workbench.run.results_digest`)."""
-    return results_digest(scene.model, "workbench.campaign._block")
-
-
-def campaign_id(scene: Scene, chunk: int) -> str:
-    """Digest of what fixes the content of every block: the scene and the chunk size."""
-    h = hashlib.sha256(scene.to_toml().encode())
-    h.update(f"\nchunk={chunk}".encode())
-    return h.hexdigest()[:16]
-
-
-# -- the store -------------------------------------------------------------------------------------
 class Store:
     """Paths and bookkeeping of one campaign store (see the module docstring)."""
 

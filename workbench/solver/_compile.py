@@ -1,17 +1,27 @@
-"""Specialise compiled templates for one model.
+"""Generate and import the compiled code of one model from the templates.
 
 Numba cannot cache a compiled function that receives other compiled functions as arguments or
-closes over them (its cache then recompiles every process, seconds each time). Instead a template
-(the integration loop :mod:`workbench.solver._kernel` with the steps it takes,
-:mod:`workbench.solver._steps_template` and :mod:`workbench.solver._implicit_template`, the
-Jacobian :mod:`workbench.solver._jacobian_template`, the tangent system
-:mod:`workbench.solver._tangent_template`, side-by-side copies
-:mod:`workbench.solver._copies_template`) is written once per model into the cache directory
-with its hook imports pointing at the model's module, and imported from there as a module of the
-package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an ordinary module
-whose functions call global compiled functions,
-which numba caches on disk. Every process after the first (a CLI call, a dask worker) loads
-machine code instead of compiling.
+closes over them (its cache then recompiles every process, seconds each time). Instead each
+template of :mod:`workbench.solver._templates` (real, importable, lintable Python) is written
+once per model into the cache directory with its tagged import lines (``# @@HOOKS@@``, ...)
+pointing at the model's module and at the other generated modules, and imported from there as a
+module of the package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an
+ordinary module whose functions call global compiled functions, which numba caches on disk.
+Every process after the first (a CLI call, a dask worker) loads machine code instead of
+compiling. What is generated, for hooks module ``H`` (a model's ``rhs``, ``event_values``,
+``apply_event`` and optional ``jacobian``):
+
+========================  =================================  ==================================
+function                  template                           generates
+========================  =================================  ==================================
+:func:`kernel_for`        ``integration_loop``               the loop (``advance``), with
+                          ``explicit_steps``, ``radau_step``  the steps of every method
+:func:`jacobian_for`      ``jacobian``                       H's Jacobian (analytic or FD)
+:func:`tangent_for`       ``tangent_hooks``                  hooks of H's variational system
+:func:`copies_for`        ``copies_hooks``                   hooks of copies of H side by side
+========================  =================================  ==================================
+
+:func:`generated_source` prints what was written for a model.
 """
 
 from __future__ import annotations
@@ -28,23 +38,23 @@ from types import ModuleType
 from workbench._cache import KERNEL_PACKAGE, kernel_directory
 from workbench._sources import source_digest
 
-_HERE = Path(__file__).parent
+_TEMPLATES = Path(__file__).parent / "_templates"
 # read at import: the generated modules are these texts (their digest keys their names)
 _SOURCES = {
-    name: (_HERE / f"{name}.py").read_text()
+    name: (_TEMPLATES / f"{name}.py").read_text()
     for name in (
-        "_kernel",
-        "_steps_template",
-        "_implicit_template",
-        "_jacobian_template",
-        "_tangent_template",
-        "_copies_template",
+        "integration_loop",
+        "explicit_steps",
+        "radau_step",
+        "jacobian",
+        "tangent_hooks",
+        "copies_hooks",
     )
 }
-_PLACEHOLDER = "workbench.solver._hooks_template"
+_PLACEHOLDER = "workbench.solver._templates.placeholder_hooks"
 # the modules whose text the generated kernels are made of (read, not imported: code digests of
 # results name them, see workbench.run.results_digest)
-TEMPLATE_MODULES = tuple(f"{__package__}.{name}" for name in _SOURCES)
+TEMPLATE_MODULES = tuple(f"{__package__}._templates.{name}" for name in _SOURCES)
 
 
 def _directory() -> Path:
@@ -100,7 +110,6 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
     return importlib.import_module(f"{KERNEL_PACKAGE}.{name}")
 
 
-@cache
 def kernel_for(hooks: str) -> ModuleType:
     """The compiled integration loop whose hooks come from module ``hooks``.
 
@@ -109,16 +118,24 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    steps = _specialise("_steps_template", "steps", hooks, {"HOOKS": hooks}).__name__
+    return _kernel_parts(hooks)["kernel"]
+
+
+@cache
+def _kernel_parts(hooks: str) -> dict[str, ModuleType]:
+    """The generated modules of the integration loop of ``hooks``: its explicit steps
+    (``steps``), Radau IIA's step (``implicit``) and the loop itself (``kernel``)."""
+    steps = _specialise("explicit_steps", "steps", hooks, {"HOOKS": hooks})
     jacobian = jacobian_for(hooks).__name__
     implicit = _specialise(
-        "_implicit_template",
+        "radau_step",
         "implicit",
         hooks,
-        {"HOOKS": hooks, "JACOBIAN": jacobian, "STEPS": steps},
-    ).__name__
-    modules = {"HOOKS": hooks, "STEPS": steps, "IMPLICIT": implicit}
-    return _specialise("_kernel", "kernel", hooks, modules)
+        {"HOOKS": hooks, "JACOBIAN": jacobian, "STEPS": steps.__name__},
+    )
+    modules = {"HOOKS": hooks, "STEPS": steps.__name__, "IMPLICIT": implicit.__name__}
+    kernel = _specialise("integration_loop", "kernel", hooks, modules)
+    return {"steps": steps, "implicit": implicit, "kernel": kernel}
 
 
 @cache
@@ -127,12 +144,12 @@ def jacobian_for(hooks: str) -> ModuleType:
     are in module ``hooks``: the module's own analytic ``jacobian`` if it defines one, else
     central finite differences of its compiled ``rhs`` (``fd_jacobian``, always available, so
     that an analytic Jacobian can be checked against it). See
-    :mod:`workbench.solver._jacobian_template`.
+    :mod:`workbench.solver._templates.jacobian`.
     """
     analytic = _defines_jacobian(importlib.import_module(hooks))
     modules = {"HOOKS": hooks, "JACOBIAN": hooks if analytic else _PLACEHOLDER}
     flags = {"HAS_ANALYTIC": analytic}
-    return _specialise("_jacobian_template", "jacobian", hooks, modules, flags)
+    return _specialise("jacobian", "jacobian", hooks, modules, flags)
 
 
 def _defines_jacobian(module: ModuleType) -> bool:
@@ -146,14 +163,34 @@ def _defines_jacobian(module: ModuleType) -> bool:
 @cache
 def tangent_for(hooks: str) -> ModuleType:
     """Hooks of the tangent (variational) system of the model whose hooks are in ``hooks``, with
-    saltation at events; see :mod:`workbench.solver._tangent_template`. Integrate it with
+    saltation at events; see :mod:`workbench.solver._templates.tangent_hooks`. Integrate it with
     ``kernel_for(tangent_for(hooks).__name__)``."""
     modules = {"HOOKS": hooks, "MODEL_JACOBIAN": jacobian_for(hooks).__name__}
-    return _specialise("_tangent_template", "tangent", hooks, modules)
+    return _specialise("tangent_hooks", "tangent", hooks, modules)
 
 
 @cache
 def copies_for(hooks: str) -> ModuleType:
     """Hooks of several copies of the model whose hooks are in ``hooks``, integrated side by
-    side with one step-size sequence; see :mod:`workbench.solver._copies_template`."""
-    return _specialise("_copies_template", "copies", hooks, {"HOOKS": hooks})
+    side with one step-size sequence; see :mod:`workbench.solver._templates.copies_hooks`."""
+    return _specialise("copies_hooks", "copies", hooks, {"HOOKS": hooks})
+
+
+def generated_source(hooks: str, what: str = "kernel") -> tuple[Path, str]:
+    """The path and text of the module generated for hooks module ``hooks``: ``what`` =
+    ``"kernel"`` (the integration loop), ``"steps"`` (its explicit steps), ``"implicit"``
+    (Radau IIA's step), ``"jacobian"`` or ``"tangent"`` (the variational system's hooks).
+    Generates it if needed (compiles nothing).
+
+    >>> path, text = generated_source("workbench.models.duffing", "jacobian")
+    >>> "from workbench.models.duffing import" in text
+    True
+    """
+    if what in ("kernel", "steps", "implicit"):
+        module = _kernel_parts(hooks)[what]
+    elif what in ("jacobian", "tangent"):
+        module = (jacobian_for if what == "jacobian" else tangent_for)(hooks)
+    else:
+        raise ValueError(f"what: got {what!r}; allowed: kernel, steps, implicit, jacobian, tangent")
+    path = Path(module.__file__)
+    return path, path.read_text()
