@@ -289,7 +289,7 @@ def test_restart_cannot_replace_a_store_in_use(tmp_path):
 def test_a_campaign_whose_points_all_fail_exits_non_zero_with_the_count(tmp_path, capsys):
     scene = scene_file(tmp_path, {**QUICK, "solver": {"max_steps": 10}})
     code = main(["campaign", str(scene), "-o", str(tmp_path / "c.nc"), "--workers", "1", "-q"])
-    assert code == 3  # max_steps (workbench/_exit_codes.py)
+    assert code == 3  # max_steps (workbench/cli/_exit_codes.py)
     err = capsys.readouterr().err
     assert "workbench campaign: 4 of 4 points failed (4 max_steps); exit code 3" in err
 
