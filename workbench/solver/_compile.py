@@ -26,6 +26,7 @@ function                  template                           generates
 
 from __future__ import annotations
 
+import ast
 import importlib
 import os
 import re
@@ -69,13 +70,29 @@ def _directory() -> Path:
 
 
 def _substitute(source: str, marker: str, module: str) -> str:
-    """Point the import lines tagged ``# @@<marker>@@`` at ``module`` (the names they import
-    stay)."""
-    pattern = re.compile(rf"^from \S+ import (.*)  # @@{marker}@@$", re.M)
-    source, n = pattern.subn(rf"from {module} import \1  # generated", source)
-    if n == 0:  # pragma: no cover - guards an edit of a template
-        raise RuntimeError(f"marker @@{marker}@@ not found in a template")
-    return source
+    """Point every import statement tagged ``# @@<marker>@@`` (on any of its lines: a formatter
+    may wrap it) at ``module``; the names it imports stay. Every tag must belong to an import
+    statement, and the tag becomes ``# generated``."""
+    tag = f"# @@{marker}@@"
+    lines = source.splitlines(keepends=True)
+    tagged = {i for i, line in enumerate(lines) if line.rstrip().endswith(tag)}
+    rewritten = set()
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        span = set(range(node.lineno - 1, node.end_lineno))
+        if span & tagged:
+            first = node.lineno - 1
+            lines[first] = re.sub(r"^from \S+ import", f"from {module} import", lines[first])
+            rewritten |= span & tagged
+    if not tagged or rewritten != tagged:  # pragma: no cover - guards an edit of a template
+        raise RuntimeError(
+            f"marker @@{marker}@@ not found on an import statement of a template "
+            f"(lines {sorted(i + 1 for i in tagged - rewritten) or 'none'})"
+        )
+    for i in tagged:
+        lines[i] = lines[i].replace(tag, "# generated")
+    return "".join(lines)
 
 
 def _label(hooks: str) -> str:
