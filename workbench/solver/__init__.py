@@ -15,7 +15,7 @@ from workbench.solver._copies import copies_problem, split_copies
 from workbench.solver._integrate import COMPILED_METHODS, METHODS, integrate
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, SolverError, Status
-from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem
+from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem, tangent_state
 
 __all__ = [
     "COMPILED_METHODS",
@@ -34,4 +34,5 @@ __all__ = [
     "state_scale",
     "tangent_columns",
     "tangent_problem",
+    "tangent_state",
 ]
