@@ -12,7 +12,7 @@ import xarray as xr
 from workbench.analysis._delay import delay_ami
 from workbench.analysis._embedding import embedding_fnn
 from workbench.analysis._series import as_series
-from workbench.analysis._wolf import mean_period
+from workbench.analysis._wolf_embedding import mean_period
 
 __all__ = ["rosenstein_lle"]
 
