@@ -19,7 +19,9 @@ import math
 import numpy as np
 import xarray as xr
 
+from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._series import Series, as_series, require_samples
+from workbench.analysis._surrogate import SURROGATES
 from workbench.analysis._wolf_embedding import (
     FLOW_MIN_SMOOTHNESS,
     FLOW_SMOOTHNESS,
@@ -62,6 +64,7 @@ def wolf_lle(
     theiler: int | None = None,
     period: float | None = None,
     flow: bool | None = None,
+    surrogates: int = SURROGATES,
 ) -> xr.Dataset:
     """Largest Lyapunov exponent of a scalar series of a map or a sampled flow by the method of
     Wolf, Swift, Swinney & Vastano (1985), Physica D 16, 285 (their fixed-evolution-time
@@ -110,9 +113,19 @@ def wolf_lle(
     events between samples), its lambda dt above 0.1 per sample or it has fewer than 10
     samples per mean period, or spans fewer than 20 mean periods; the series has fewer than
     10**D points, D the correlation dimension (Grassberger & Procaccia 1983) of the embedded
-    points at the neighbours' scales (Eckmann & Ruelle 1992; Wolf et al. 1985, Sec. 7); or
+    points at the neighbours' scales (Eckmann & Ruelle 1992; Wolf et al. 1985, Sec. 7);
     Cao's E2 is within 0.1 of 1 at every dimension (noise: a positive exponent is then no
-    evidence of chaos).
+    evidence of chaos); or the exponent is positive and the series is predicted no better than
+    its IAAFT surrogates (:func:`~workbench.analysis.surrogate_test`: Theiler et al. 1992;
+    Kennel & Isabelle 1992), i.e. nothing tells it from linear correlated noise. A series with
+    no dynamics at all (constant, constant to rounding, parked at one value, a few repeated
+    values: :func:`~workbench.analysis.no_dynamics`) raises ValueError with that verdict,
+    at once.
+
+    **Stages.** The estimate runs in three stages, each a function of its own module (the way
+    ChaosTools separates its high-level calls from the low-level ones on an embedded data
+    set): choose the embedding (``workbench.analysis._wolf_embedding``), evolve
+    (``_wolf_follow``: the FET program on the embedded points) and judge (``_wolf_judge``).
 
     Parameters
     ----------
@@ -133,6 +146,9 @@ def wolf_lle(
         Forcing period (s) for ``lle_per_period`` (default: the series' ``forcing_period``).
     flow : bool, optional
         Force a sampled flow (True) or a map (False) instead of detecting it.
+    surrogates : int
+        IAAFT surrogates of the noise test of a positive estimate (19: a one-sided rank test
+        at 5 %; 0: no test).
 
     Returns
     -------
@@ -146,20 +162,25 @@ def wolf_lle(
         ``delay``, ``evolve``, ``theiler``, ``scale_min``, ``scale_max`` (units of x),
         ``max_angle`` (rad); and ``replacements``, ``kept`` (steps that kept their neighbour
         for want of a replacement), ``steps``, ``points`` (embedded points), the
-        ``correlation_dimension`` D and ``min_points`` (10**D).
+        ``correlation_dimension`` D and ``min_points`` (10**D); the surrogate test's
+        ``prediction_error``, ``surrogate_error`` over ``surrogate`` and
+        ``surrogate_stochastic`` (1: not told from linear noise, 0: deterministic, -1: not
+        tested).
 
     Raises
     ------
     ValueError
-        For fewer than 100 samples, a series too short for the chosen embedding, or a
-        setting out of its range (the message names it and what is allowed).
+        For fewer than 100 samples, a series with no dynamics (the verdict of
+        :func:`~workbench.analysis.no_dynamics`), a series too short for the chosen embedding,
+        or a setting out of its range (the message names it and what is allowed).
 
     References
     ----------
     Wolf, Swift, Swinney & Vastano (1985), Physica D 16, 285. Fraser & Swinney (1986), Phys.
     Rev. A 33, 1134. Kennel, Brown & Abarbanel (1992), Phys. Rev. A 45, 3403. Cao (1997),
     Physica D 110, 43. Eckmann & Ruelle (1992), Physica D 56, 185. Theiler (1986), Phys. Rev.
-    A 34, 2427 (the Theiler window).
+    A 34, 2427 (the Theiler window). Theiler, Eubank, Longtin, Galdrikian & Farmer (1992),
+    Physica D 58, 77 (surrogate data). Kennel & Isabelle (1992), Phys. Rev. A 46, 3111.
 
     Examples
     --------
@@ -197,8 +218,13 @@ def wolf_lle(
             raise ValueError(f"{name}={value!r}; allowed: a finite separation >= 0 (units of x)")
     if period is not None and not period > 0:
         raise ValueError(f"period={period!r}; allowed: a positive forcing period (s)")
-    if np.ptp(v) == 0:
-        raise ValueError(f"x ({s.name!r}) is constant: no separations to follow")
+    if surrogates != 0 and (int(surrogates) != surrogates or surrogates < SURROGATES):
+        raise ValueError(
+            f"surrogates={surrogates!r}; allowed: 0 (no noise test) or a whole number >= 19"
+        )
+    problem = series_without_dynamics(s)
+    if problem:
+        raise ValueError(problem)
     # 1. choose the embedding and the scales
     emb = choose_embedding(s, flow=flow, delay=delay, dim=dim, theiler=theiler, evolve=evolve)
     scales = choose_scales(emb, scale_min=scale_min, scale_max=scale_max)
@@ -221,7 +247,7 @@ def wolf_lle(
     running_per_sample = np.cumsum(followed.logs) / elapsed_samples
     per_sample = float(running_per_sample[-1])
     # 3. judge
-    verdict = judge(s, emb, scales, followed.tree, per_sample)
+    verdict = judge(s, emb, scales, followed.tree, per_sample, surrogates=int(surrogates))
     return _result(
         s, emb, scales, followed, verdict, running_per_sample, elapsed_samples, max_angle, period
     )
@@ -278,6 +304,7 @@ def _result(
                     "flag_values": np.array([0, 1], dtype=np.int8),
                     "flag_meanings": "flagged reliable",
                     "message": message,
+                    "reasons": "\n".join(verdict.reasons),
                 },
             ),
             "smoothness": (
@@ -339,6 +366,7 @@ def _result(
                 {"units": "1", "long_name": "correlation dimension at the neighbours' scales"},
             ),
             "min_points": ((), min_points, {"units": "1", "long_name": "10^D points"}),
+            **_surrogate_variables(verdict.surrogate),
         },
         coords={
             "elapsed": (
@@ -348,6 +376,11 @@ def _result(
             ),
             "lag": ("lag", ami.lag.values, {"units": "1", "long_name": "lag (samples)"}),
             "dimension": ("dimension", dims, {"units": "1", "long_name": "embedding dimension"}),
+            "surrogate": (
+                "surrogate",
+                np.arange(0 if verdict.surrogate is None else verdict.surrogate.sizes["surrogate"]),
+                {"units": "1", "long_name": "IAAFT surrogate"},
+            ),
         },
         attrs={
             "method": "Wolf et al. (1985), fixed evolution time",
@@ -364,3 +397,35 @@ def _result(
             {"units": "1", "long_name": "largest Lyapunov exponent per forcing period"},
         )
     return out
+
+
+def _surrogate_variables(test: xr.Dataset | None) -> dict:
+    """The surrogate test's variables in :func:`wolf_lle`'s Dataset (NaN, empty and -1 when
+    the test did not run: a non-positive estimate, or ``surrogates=0``)."""
+    if test is None:
+        error, curve, flag = math.nan, np.empty(0), -1
+    else:
+        error, curve = float(test.error), test.surrogate_error.values
+        flag = int(test.stochastic)
+    return {
+        "prediction_error": (
+            (),
+            error,
+            {"units": "1", "long_name": "normalised nonlinear prediction error of the series"},
+        ),
+        "surrogate_error": (
+            "surrogate",
+            curve,
+            {"units": "1", "long_name": "normalised nonlinear prediction error of a surrogate"},
+        ),
+        "surrogate_stochastic": (
+            (),
+            np.int8(flag),
+            {
+                "units": "1",
+                "long_name": "not told from linear correlated noise by IAAFT surrogates",
+                "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+                "flag_meanings": "not_tested deterministic stochastic",
+            },
+        ),
+    }

@@ -3,8 +3,10 @@
 Whether the estimate can be trusted, from the series, its embedding and what the evolution
 measured: the sampling must resolve the orbit of a flow (smoothness, samples per mean period,
 lambda dt per sample), the series must be long enough for the attractor's correlation dimension
-(Eckmann & Ruelle 1992) and span enough mean periods, and it must not look stochastic. Each
-failed check is one sentence of the verdict's message, which says what to do.
+(Eckmann & Ruelle 1992) and span enough mean periods, and a positive exponent must come from a
+series that looks deterministic: not one whose Cao E2 stays near 1 (Cao 1997) nor one that its
+IAAFT surrogates predict as well as it predicts itself (Theiler et al. 1992; Kennel & Isabelle
+1992). Each failed check is one sentence of the verdict's message, which says what to do.
 """
 
 from __future__ import annotations
@@ -13,9 +15,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import xarray as xr
 from scipy.spatial import cKDTree
 
 from workbench.analysis._series import Series
+from workbench.analysis._surrogate import surrogate_test
 from workbench.analysis._wolf_embedding import (
     FLOW_MIN_SMOOTHNESS,
     FLOW_SMOOTHNESS,
@@ -44,12 +48,13 @@ MIN_PERIODS = 20
 class Verdict:
     """The judgement of an estimate: ``reliable`` unless one of the ``reasons`` holds;
     ``correlation_dimension`` D of the embedded points and ``min_points`` (10**D) behind the
-    length check."""
+    length check; ``surrogate`` the Dataset of the surrogate test (None if not run)."""
 
     reliable: bool
     reasons: list[str]
     correlation_dimension: float
     min_points: int
+    surrogate: xr.Dataset | None = None
 
     @property
     def message(self) -> str:
@@ -91,8 +96,8 @@ def _sampling_messages(s: Series, *, flow, chosen_flow, smooth, per_sample, spp)
                 f"dominant cycle; {spp:.1f} samples per mean period), so it was taken for a map: "
                 f"if it samples a flow, {step} is far too long for its exponent to be measured; "
                 "record it more finely. If it is a map or a stroboscopic section, pass "
-                "flow=False (or the section as poincare_section returns it) and the exponent "
-                "per sample stands"
+                "flow=False (CLI: --kind map), or the section as poincare_section returns it, "
+                "and the exponent per sample stands"
             )
         return msgs
     if smooth < FLOW_SMOOTHNESS:
@@ -114,9 +119,21 @@ def _sampling_messages(s: Series, *, flow, chosen_flow, smooth, per_sample, spp)
     return msgs
 
 
-def judge(s: Series, emb: Embedding, scales: Scales, tree: cKDTree, per_sample: float) -> Verdict:
+def judge(
+    s: Series,
+    emb: Embedding,
+    scales: Scales,
+    tree: cKDTree,
+    per_sample: float,
+    *,
+    surrogates: int = 19,
+) -> Verdict:
     """Stage 3: the verdict on an estimate of ``per_sample`` (lambda dt) from the series ``s``
-    embedded as ``emb`` (``tree``: the KD-tree of its points), with the neighbours' scales."""
+    embedded as ``emb`` (``tree``: the KD-tree of its points), with the neighbours' scales.
+
+    A positive estimate is tested against ``surrogates`` IAAFT surrogates
+    (:func:`~workbench.analysis.surrogate_test`, in the same embedding, predicting a delay
+    ahead for a flow and one step for a map; 0: no test)."""
     v = s.values
     n = emb.points.shape[0]
     msgs = _sampling_messages(
@@ -146,4 +163,22 @@ def judge(s: Series, emb: Embedding, scales: Scales, tree: cKDTree, per_sample: 
             "Cao's E2 is within 0.1 of 1 at every dimension: the series looks stochastic, and "
             "a positive exponent is then no evidence of chaos"
         )
-    return Verdict(not msgs, msgs, d2, min_points)
+    surrogate = None
+    if surrogates and per_sample > 0:
+        surrogate = surrogate_test(
+            v,
+            dim=emb.dim,
+            delay=emb.delay,
+            horizon=emb.delay if emb.flow else 1,
+            theiler=emb.theiler,
+            surrogates=surrogates,
+        )
+        if int(surrogate.stochastic):
+            es = surrogate.surrogate_error.values
+            msgs.append(
+                f"the series is predicted no better than its {es.size} IAAFT surrogates "
+                f"(nonlinear prediction error {float(surrogate.error):.3g} against "
+                f"{es.min():.3g}-{es.max():.3g}; Theiler et al. 1992): nothing tells it from "
+                "linear correlated noise, so a positive exponent is no evidence of chaos"
+            )
+    return Verdict(not msgs, msgs, d2, min_points, surrogate)
