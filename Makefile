@@ -19,12 +19,12 @@ demo: $(STAMP)
 	@echo "demo: netCDF run in $(OUT)/ninebar.nc, figures in $(OUT)/figures/"
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check workbench tests benchmarks studies
-	$(VENV)/bin/ruff format --check workbench tests benchmarks studies
+	$(VENV)/bin/ruff check workbench tests benchmarks studies docs/hooks.py
+	$(VENV)/bin/ruff format --check workbench tests benchmarks studies docs/hooks.py
 
 format: $(STAMP)
-	$(VENV)/bin/ruff format workbench tests benchmarks studies
-	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies
+	$(VENV)/bin/ruff format workbench tests benchmarks studies docs/hooks.py
+	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies docs/hooks.py
 
 # What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests,
 # every python block of README.md and of the docs' pages (tests/test_readme.py, test_docs.py),

@@ -81,3 +81,17 @@ def test_docs_command_parses(line):
         return
     parsed = build_parser().parse_args(args)
     assert parsed.command == args[0]
+
+
+def test_key_figures_are_the_reports():
+    """The figures the site commits beside the report (docs/hooks.py) are ones the report cites,
+    and each one committed is in that list (make studies copies them from its run)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_hooks", DOCS / "hooks.py")
+    hooks = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hooks)
+    cited = set(hooks._CITED.findall((ROOT / "studies" / "REPORT.md").read_text()))
+    assert set(hooks.KEY_FIGURES) <= cited
+    committed = {str(p.relative_to(hooks.FIGURES)) for p in hooks.FIGURES.rglob("*.png")}
+    assert committed <= set(hooks.KEY_FIGURES)

@@ -25,7 +25,9 @@ def no_dynamics(x, dt: float | None = None) -> str | None:
     place of its magnitude (rounding, e.g. a computed constant); when one value holds more than
     half of its samples (a variable parked at a value, e.g. a contact force that is zero while
     the contact is open, or a constant with rare departures); or when it takes fewer than 16
-    distinct values (a periodic orbit of a map, or a coarsely quantised record). Delay
+    distinct values, each repeated (four times or more on average: a periodic orbit of a map,
+    or a coarsely quantised record). A series too short for these to mean anything is left to
+    the estimators' own length checks. Delay
     embeddings of such series are made of exact copies of a few points: neighbours cannot be
     followed and no exponent, dimension or delay can be estimated.
 
@@ -72,7 +74,7 @@ def series_without_dynamics(s: Series) -> str | None:
             "(a variable parked at one value, or a constant with rare departures): no motion "
             "for an embedding to follow; analyse a variable that moves"
         )
-    if values.size < MIN_DISTINCT:
+    if values.size < MIN_DISTINCT and n >= 4 * values.size:  # each value repeated
         return (
             f"{s.name} takes only {values.size} distinct values over {n} samples (a periodic "
             "orbit of a map, or a coarsely quantised record): no dynamics an embedding can "
