@@ -15,6 +15,7 @@ import argparse
 import importlib
 import sys
 
+from workbench._version import FORMAT_VERSION, __version__
 from workbench.cli._console import one_line_warnings
 from workbench.cli._exit_codes import UsageError, exit_code
 
@@ -33,6 +34,11 @@ def build_parser() -> argparse.ArgumentParser:
         prog="workbench",
         description="Nonlinear dynamics of mechanisms with clearance joints: run scenes, "
         "campaigns and analyses; results are netCDF files and PNG figures.",
+    )
+    parser.add_argument(
+        "--version",
+        action="version",
+        version=f"workbench {__version__} (archive format {FORMAT_VERSION})",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 
 from workbench._sources import code_digest
+from workbench._version import FORMAT_VERSION, __version__
 from workbench.models import get_model
 from workbench.run._prepare import Prepared
 from workbench.scene import Scene
@@ -132,6 +133,7 @@ def provenance(scene: Scene, *, by: str = "workbench.simulate") -> dict:
         "scene": scene.to_toml(),
         "package_versions": versions,
         "code_digest": results_digest(scene.model),
+        "format_version": np.int32(FORMAT_VERSION),
     }
 
 
@@ -152,13 +154,16 @@ def _versions() -> tuple[str, str]:
     milliseconds, more than a short run)."""
     found = []
     for pkg in _PACKAGES:
+        if pkg == "workbench":
+            found.append(f"workbench={__version__}")
+            continue
         try:
             found.append(f"{pkg}={version(pkg)}")
         except Exception:
             found.append(f"{pkg}=unknown")
-    try:
-        own = version("workbench")
-    except Exception:
-        own = "dev"
-    source = f"workbench {own} ({platform.python_implementation()} {platform.python_version()})"
+    # the package's own version from its code: an editable install's metadata keeps the
+    # version it was installed with
+    source = (
+        f"workbench {__version__} ({platform.python_implementation()} {platform.python_version()})"
+    )
     return "; ".join(found), source
