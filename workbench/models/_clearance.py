@@ -17,6 +17,7 @@ import numpy as np
 
 from workbench._errors import SceneError
 from workbench.models._base import Effect, Parameter, Quantity
+from workbench.models._friction_report import diagnostic_outputs
 from workbench.models._mechanism_layouts import (
     CODE_ASSEMBLY,
     CODE_NONFINITE,
@@ -95,7 +96,21 @@ def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[P
         Parameter("lugre_mu_k", 0.05, "1", "LuGre kinetic friction coefficient", lower=0.0),
         Parameter("lugre_mu_s", 0.15, "1", "LuGre static friction coefficient", lower=0.0),
         Parameter("lugre_sigma0", 1e5, "m-1", "LuGre bristle stiffness (normalised)", **_POS),
-        Parameter("lugre_sigma1", 316.2, "s m-1", "LuGre bristle damping (normalised)", lower=0.0),
+        Parameter(
+            "lugre_sigma1",
+            316.2,
+            "s m-1",
+            "LuGre bristle damping at zero sliding velocity (normalised)",
+            lower=0.0,
+        ),
+        Parameter(
+            "lugre_damping_velocity",
+            1e-3,
+            "m s-1",
+            "LuGre sliding speed v_d over which the bristle damping fades, sigma1 "
+            "exp(-(v/v_d)^2) (0: constant sigma1)",
+            lower=0.0,
+        ),
         Parameter("lugre_sigma2", 0.4, "s m-1", "LuGre viscous friction (normalised)", lower=0.0),
         Parameter("lugre_stribeck_velocity", 1e-3, "m s-1", "LuGre Stribeck velocity v_s", **_POS),
         Parameter("lugre_stribeck_exponent", 2.0, "1", "LuGre Stribeck exponent", **_POS),
@@ -127,8 +142,18 @@ def joint_outputs(effects: Mapping[str, Any]) -> list[Quantity]:
         Quantity("contact_force", "N", "normal contact force", jd),
         Quantity("friction_force", "N", "friction force on the journal along t", jd),
     ]
+    if effects["friction"] != "none":
+        out.append(
+            Quantity(
+                "friction_coefficient",
+                "1",
+                "friction coefficient |F_t| / F_n of the law (0 out of contact)",
+                jd,
+            )
+        )
     if effects["friction"] == "lugre":
         out.append(Quantity("lugre_z", "m", "LuGre bristle deflection", jd))
+        out += diagnostic_outputs()
     return out
 
 
@@ -182,6 +207,7 @@ def friction_block(params: Mapping[str, float]) -> np.ndarray:
             "sigma2": params["lugre_sigma2"],
             "v_s": params["lugre_stribeck_velocity"],
             "gamma": params["lugre_stribeck_exponent"],
+            "v_d": params["lugre_damping_velocity"],
         }
     )
 
