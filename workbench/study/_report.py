@@ -210,6 +210,7 @@ def _study_section(s: dict) -> list[str]:
             )
         lines.append("")
     m = s.get("measures", {})
+    lines += _friction_law_table(m)
     if m.get("wolf_lle"):
         lines += _chaos_table(m)
     for case, sweep in m.get("sweep_contact", {}).items():
@@ -219,6 +220,37 @@ def _study_section(s: dict) -> list[str]:
     if s["figures"]:
         lines += ["Figures: " + ", ".join(f"`{p}`" for p in s["figures"]), ""]
     return lines
+
+
+def _friction_law_table(m: dict) -> list[str]:
+    """The friction law's range per case (studies with a LuGre case): the largest |F_t| / F_n
+    at the records, the time above mu_s and beyond the LuGre envelope per crank cycle, and the
+    99th-percentile contact force."""
+    from workbench.study._stats import describe
+
+    law = m.get("friction_law", {})
+    if not any(math.isfinite(x) for v in law.values() for x in v.get("above", []) if x is not None):
+        return []
+    lines = [
+        "The friction law's range, median (IQR) over the realisations: the largest friction "
+        "coefficient |F_t| / F_n at the records, and per crank cycle the time (summed over the "
+        "joints, integrated with the motion) with it above mu_s and beyond the LuGre law's "
+        "envelope 2 mu_s + sigma2 |v_t| (`workbench/models/_friction_report.py`); a passive "
+        "law stays within the envelope, Coulomb within c_f.",
+        "",
+        "| case | largest |F_t|/F_n | above mu_s [ms per cycle] | beyond the envelope [ms per "
+        "cycle] | 99th-percentile contact force [N] |",
+        "|---|---|---|---|---|",
+    ]
+    for case, v in law.items():
+        ms = {k: [1e3 * x for x in v.get(k, []) if x is not None] for k in ("above", "beyond")}
+        contact = m.get("contact", {}).get(case, {})
+        force = ", ".join(f"{j} {_fmt(describe(c['p99'])['median'])}" for j, c in contact.items())
+        lines.append(
+            f"| {case} | {_stats(describe(v['mu_max']))} | {_stats(describe(ms['above']))} | "
+            f"{_stats(describe(ms['beyond']))} | {force or '–'} |"
+        )
+    return lines + [""]
 
 
 def _chaos_table(m: dict) -> list[str]:
