@@ -255,3 +255,20 @@ def test_default_lugre_run_stays_within_its_law():
     assert float(paper.time_beyond_friction_law[-1].max()) > 1e-3
     assert float(paper.friction_coefficient.max()) > 2 * MU_S
     assert caught and "not passive" in str(caught[0].message)
+
+
+def test_run_summary_line_reports_the_friction_law(tmp_path, capsys):
+    """`workbench run` of a LuGre scene states the largest |F_t|/F_n and the times above mu_s
+    and beyond the envelope, per joint."""
+    from workbench.cli import main
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        '[model]\nname = "ninebar"\n[effects]\nclearance = ["A"]\nfriction = "lugre"\n'
+        '[solver]\nmethod = "ark548"\n[run]\nduration = 0.05\n[record]\ndt = 1e-4\n'
+        'variables = ["contact_force"]\n'
+    )
+    assert main(["run", str(scene), "-o", str(tmp_path / "r.nc"), "-q"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert "; LuGre |F_t|/F_n up to " in line and "time above mu_s = 0.15: A " in line
+    assert "beyond 2 mu_s + sigma2 |v_t|: A 0 s" in line

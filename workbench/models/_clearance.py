@@ -39,7 +39,25 @@ FRICTION_EFFECT = Effect(
 
 def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[Parameter, ...]:
     """Parameters of the contact and friction laws, with the model's default clearance (m) and
-    Coulomb coefficient."""
+    Coulomb coefficient.
+
+    The LuGre parameters are normalised by the normal force (the paper's Eqs. 8-10; values of
+    ``shared/spec/ninebar-parameters.md``): mu_k = 0.05, mu_s = 0.15 (the paper), sigma0 =
+    1e5 m-1 (the paper), sigma2 = 0.4 s m-1, v_s = 1e-3 m s-1, exponent 2 (Canudas de Wit et
+    al. 1995). The bristle damping is ``lugre_sigma1 * exp(-(v / lugre_damping_velocity)^2)``
+    (Olsson et al. 1998, Eur. J. Control 4:176) with ``lugre_sigma1`` = 316.2 s m-1 (the
+    paper's sqrt(sigma0), the value of the force-form examples of Canudas de Wit et al. 1995)
+    and ``lugre_damping_velocity`` = v_s = 1e-3 m s-1, chosen (issue 29) because the paper's
+    constant damping is not passive: Barabanov & Ortega's (2000, IEEE TAC 45:830) condition for
+    a constant damping, sigma1 <= sigma2 mu_k / (mu_s - mu_k) = 0.2 s m-1, is broken 1 600-fold,
+    and the law then reaches |F_t| / F_n of 25-50 at contact onsets and sliding reversals. The
+    fading damping keeps 316.2 s m-1 in pre-sliding, where it belongs (a damping ratio of 1/2
+    for a 1-kg block at F_n = 1 N, as in the 1995 example), and is passive because
+    sigma1 v_d = 0.316 <= 4 sqrt(2 e) mu_k = 0.466 (derivation in
+    :mod:`workbench.models.friction`). ``lugre_damping_velocity = 0`` gives the paper's
+    constant damping; ``lugre_sigma1 = 0.2`` with it the largest passive constant one. Every
+    LuGre run records how far its friction coefficient went
+    (:mod:`workbench.models._friction_report`)."""
     return (
         Parameter("clearance", clearance, "m", "radial clearance c of the joints", **_POS),
         Parameter("bearing_radius", 10.0e-3, "m", "bearing radius R1", **_POS),
