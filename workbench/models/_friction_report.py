@@ -6,20 +6,31 @@ paper's constant s1 = 316 s m-1 it reached 25-50 against mu_s = 0.15 in the nine
 case (issue 29). So a LuGre run of a mechanism always records, per clearance joint (dims
 ``time``, ``joint``):
 
-- ``friction_coefficient`` (1): |F_t| / F_n at the records (0 out of contact);
+- ``friction_coefficient`` (1): the law's |F_t| / F_n at the records (0 out of contact), with
+  the bristle deflection on its invariant set |z| <= max(mu_s, mu_k) / s0
+  (:func:`workbench.models._reduced.lugre_diagnostic`);
 - ``time_above_static_friction`` (s): the time since the record start spent in contact with
   |F_t| / F_n > mu_s;
 - ``time_beyond_friction_law`` (s): the same beyond the law's envelope 2 mu_s + s2 |v_t|
   (:func:`workbench.models.friction.lugre_envelope`).
 
-The two times are quadratures integrated with the motion (states with a 0/1 rate from the
-right-hand side), so they do not depend on the record spacing: a bristle transient of a few
-microseconds between two records is counted. Each is exact to within the solver's step at each
-crossing of its level (the integrand jumps there); their characteristic size
-(:data:`TIME_SCALE`) keeps them out of the step-size control. The largest coefficient is
-taken at the records, whose spacing bounds what it can see. :func:`friction_summary` puts
-them in the run's summary line and :func:`friction_warnings` says where a run leaves the
-envelope and why.
+and the bristle deflection ``lugre_z`` (m). The two times are quadratures integrated with the
+motion (states with a 0/1 rate from the right-hand side), so they do not depend on the record
+spacing: a bristle transient of a few microseconds between two records is counted. Each is
+exact to within the solver's step at each crossing of its level (the integrand jumps there);
+their characteristic size (:data:`TIME_SCALE`) keeps them out of the step-size control. The
+largest coefficient is taken at the records, whose spacing bounds what it can see.
+
+The coefficient is the law's on the invariant set of its bristles because an explicit method
+at its stability bound (DOP853 on LuGre, benchmarks/lugre_stiffness.py) integrates the stiff
+bristle state accurately at its steps but not in between: its stages, and its dense output at
+the records, can put z far outside the set (measured: up to 20 times it at 139 of 10^6 records
+of a default Sec. 4.2 run with DOP853 at rtol 1e-6; none with ARK548, which integrates the
+bristles implicitly). Those values are the integrator's error, and ``friction_force`` (and what
+depends on it at the records: torques, accelerations) carries it there; the law's coefficient
+does not. :func:`friction_summary` puts the diagnostics in the run's summary line and
+:func:`friction_warnings` says where a run leaves the envelope and why, and where the records'
+bristle deflection left its invariant set.
 """
 
 from __future__ import annotations
@@ -41,7 +52,12 @@ __all__ = [
 ]
 
 #: the variables every LuGre run of a mechanism records
-DIAGNOSTICS = ("friction_coefficient", "time_above_static_friction", "time_beyond_friction_law")
+DIAGNOSTICS = (
+    "friction_coefficient",
+    "time_above_static_friction",
+    "time_beyond_friction_law",
+    "lugre_z",
+)
 #: characteristic size of the time quadratures for the solver's atol (s): their error (up to a
 #: step at each crossing of a level) never limits the step
 TIME_SCALE = 1e6
@@ -121,12 +137,14 @@ def friction_summary(ds, params: Mapping[str, float]) -> str:
 
 def friction_warnings(ds, params: Mapping[str, float]) -> list[str]:
     """One sentence per joint whose LuGre friction coefficient left the law's envelope
-    (time beyond it > 0), with the likely cause: a bristle damping that is not passive."""
+    (time beyond it > 0), with the likely cause: a bristle damping that is not passive; and
+    one per joint whose recorded bristle deflection left its invariant set (an integration
+    error at those records)."""
     if not _has(ds):
         return []
     beyond = _totals(ds, "time_beyond_friction_law")
     mu = np.asarray(ds["friction_coefficient"].values, float)
-    out = []
+    out = _outside_warnings(ds, params)
     for k, (joint, spent) in enumerate(beyond.items()):
         if not spent > 0.0:
             continue
@@ -137,6 +155,26 @@ def friction_warnings(ds, params: Mapping[str, float]) -> list[str]:
             f"sigma2 |v_t| for {spent:.3g} s (largest at the records {top:.3g}, mu_s = "
             f"{params['lugre_mu_s']:g}). {_damping_cause(params)}"
         )
+    return out
+
+
+def _outside_warnings(ds, params: Mapping[str, float]) -> list[str]:
+    """Records whose bristle deflection lies outside |z| <= max(mu_s, mu_k) / sigma0."""
+    bound = max(params["lugre_mu_s"], params["lugre_mu_k"]) / params["lugre_sigma0"]
+    z = np.abs(np.asarray(ds["lugre_z"].values, float))
+    out = []
+    for k, joint in enumerate(ds["joint"].values):
+        outside = z[:, k] > bound * (1.0 + 1e-9)
+        if outside.any():
+            out.append(
+                f"LuGre bristle deflection at joint {joint} outside its invariant set |z| <= "
+                f"{bound:.3g} m at {int(outside.sum())} of {outside.size} records (up to "
+                f"{float(np.nanmax(z[:, k])):.3g} m): an integration error between steps (the "
+                "dense output of the stiff bristle state by an explicit method), so "
+                "friction_force and what depends on it are off there (friction_coefficient "
+                "takes the law's value); solver.method = 'ark548' integrates the bristles "
+                "implicitly."
+            )
     return out
 
 

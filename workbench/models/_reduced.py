@@ -130,7 +130,8 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
         (e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy):
         eccentricity and penetration (m), penetration rate (m s-1), normal force and its damping
         part (N), friction force on the journal along t = (-ny, nx) (N), the friction
-        coefficient mu = -ft / fn of the law (1; 0 without friction or contact), sliding
+        coefficient of the law mu (1; 0 without friction or contact; -ft / fn, with LuGre's
+        bristle deflection taken on its invariant set, see :func:`lugre_diagnostic`), sliding
         velocity (m s-1), the bristle deflection used (m), its rate (m s-1) and decay rate a in
         zdot = vt - a z (s-1; both 0 out of contact, where the bristles are frozen), the
         material contact points of journal and bearing (m), and the force on the journal (N;
@@ -178,12 +179,27 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
         z = (z + hg * vt) / (1.0 + hg * decay)  # exact for hg = 0
         zdot = vt - decay * z  # the bristle equation, Eq. (9)
         s1 = lugre_damping(vt, fp[FRICTION.sigma1], fp[FRICTION.v_d])
-        mu = lugre_coefficient(vt, z, zdot, s0, s1, fp[FRICTION.sigma2])
-        ft = -mu * fn
+        ft = -lugre_coefficient(vt, z, zdot, s0, s1, fp[FRICTION.sigma2]) * fn
+        mu = lugre_diagnostic(vt, z, decay, s0, s1, fp)
     # force on the journal: the normal force pushes it back towards the bearing centre
     fx = -fn * nx + ft * tx
     fy = -fn * ny + ft * ty
     return e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy
+
+
+@njit(cache=True, inline="always")
+def lugre_diagnostic(vt, z, decay, s0, s1, fp):
+    """The LuGre friction coefficient (1) the diagnostics report: the law's, with the bristle
+    deflection z (m) on its invariant set |z| <= max(mu_s, mu_k) / s0 (Canudas de Wit et al.
+    1995, Property 1: the exact solution never leaves it). Where the integration is accurate
+    it is -F_t / F_n; a z beyond the set is the integrator's error, not the law's (a stage of
+    an explicit step, or the dense output of the stiff bristle state between two steps of
+    DOP853 at its stability bound, measured up to 20 times the set), and is not the friction
+    law leaving its physics. ``decay`` is the relaxation rate a (s-1), s0 (m-1) and the damping
+    in effect s1 (s m-1) as in :func:`workbench.models.friction.lugre_coefficient`."""
+    zmax = max(fp[FRICTION.mu_s], fp[FRICTION.mu_k]) / s0
+    zc = min(max(z, -zmax), zmax)
+    return lugre_coefficient(vt, zc, vt - decay * zc, s0, s1, fp[FRICTION.sigma2])
 
 
 @njit(cache=True, inline="always")
