@@ -272,3 +272,24 @@ def test_run_summary_line_reports_the_friction_law(tmp_path, capsys):
     line = capsys.readouterr().out.strip()
     assert "; LuGre |F_t|/F_n up to " in line and "time above mu_s = 0.15: A " in line
     assert "beyond 2 mu_s + sigma2 |v_t|: A 0 s" in line
+
+
+def test_diagnostic_coefficient_takes_the_bristles_on_their_invariant_set():
+    """The reported coefficient is the law's wherever the bristle deflection lies in |z| <=
+    mu_s / s0, where the exact solution stays (Canudas de Wit et al. 1995); a z beyond it (an
+    explicit method's stage or dense output) is taken at the edge of the set."""
+    from workbench.models import get_model
+    from workbench.models._clearance import friction_block
+    from workbench.models._reduced import lugre_diagnostic
+
+    params = get_model("ninebar").default_parameters()
+    fp = tuple(friction_block(params))
+    v = 0.17
+    a = lugre_decay(v, S0, MU_K, MU_S, V_S, GAMMA)
+    s1 = lugre_damping(v, PAPER_S1, 1e-3)
+    for z in (-1.5e-6, 2e-7, 5e-7, 1.5e-6):
+        law = lugre_coefficient(v, z, v - a * z, S0, s1, S2)
+        assert lugre_diagnostic(v, z, a, S0, s1, fp) == pytest.approx(law, rel=1e-14)
+    edge = lugre_coefficient(v, -MU_S / S0, v + a * MU_S / S0, S0, s1, S2)
+    assert lugre_diagnostic(v, -1.4e-5, a, S0, s1, fp) == pytest.approx(edge, rel=1e-14)
+    assert abs(edge) <= MU_S + S2 * v
