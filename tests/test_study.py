@@ -188,7 +188,12 @@ def test_contradicted_claim_carries_its_reason_with_measured_evidence():
 def test_claim_with_a_why_says_it_whatever_the_verdict():
     """A claim's ``why`` is shown with the friction law's measured numbers for a reproduced
     verdict too, and after the ensemble spread of a not-resolved one."""
-    law = {"mu_max": [25.0, 30.0, 41.0, 50.0], "above": [0.02] * 4, "beyond": [0.008] * 4}
+    law = {
+        "mu_max": [25.0, 30.0, 41.0, 50.0],
+        "mu_median": [0.08] * 4,
+        "above": [0.02] * 4,
+        "beyond": [0.008] * 4,
+    }
     measures = {
         "units": {"contact_force": "N"},
         "peak_record": {
@@ -208,8 +213,8 @@ def test_claim_with_a_why_says_it_whatever_the_verdict():
     out = evaluate_claim(claim, measures)
     assert out["verdict"] == "reproduced"
     assert out["reason"] == (
-        "friction spikes. Measured: paper: |F_t|/F_n up to 35.5, 20 ms per cycle above mu_s "
-        "and 8 ms beyond 2 mu_s + s2 |v_t| (medians over the realisations)."
+        "friction spikes. Measured: paper: |F_t|/F_n 0.08 in contact (median), up to 35.5, 20 ms "
+        "per cycle above mu_s and 8 ms beyond 2 mu_s + s2 |v_t| (medians over the realisations)."
     )
     measures["peak_record"]["coulomb"]["contact_force"] = _peaks(6000.0, 100.0, 8, 3)
     out = evaluate_claim(claim, measures)

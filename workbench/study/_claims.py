@@ -242,7 +242,10 @@ def _friction_law_evidence(claim: dict, measures: dict) -> str:
         m = law.get(member)
         if not m:
             continue
-        text = f"{member}: |F_t|/F_n up to {_fmt(describe(m['mu_max'])['median'])}"
+        text = (
+            f"{member}: |F_t|/F_n {_fmt(describe(m['mu_median'])['median'])} in contact (median), "
+            f"up to {_fmt(describe(m['mu_max'])['median'])}"
+        )
         if np.isfinite(np.asarray(m["above"], float)).any():
             text += (
                 f", {_fmt(1e3 * describe(m['above'])['median'])} ms per cycle above mu_s and "

@@ -232,22 +232,24 @@ def _friction_law_table(m: dict) -> list[str]:
     if not any(math.isfinite(x) for v in law.values() for x in v.get("above", []) if x is not None):
         return []
     lines = [
-        "The friction law's range, median (IQR) over the realisations: the largest friction "
-        "coefficient |F_t| / F_n at the records, and per crank cycle the time (summed over the "
+        "The friction law's range, median (IQR) over the realisations: the friction coefficient "
+        "|F_t| / F_n at the records, its median in contact and its largest, and per crank cycle "
+        "the time (summed over the "
         "joints, integrated with the motion) with it above mu_s and beyond the LuGre law's "
         "envelope 2 mu_s + sigma2 |v_t| (`workbench/models/_friction_report.py`); a passive "
         "law stays within the envelope, Coulomb within c_f.",
         "",
-        "| case | largest |F_t|/F_n | above mu_s [ms per cycle] | beyond the envelope [ms per "
-        "cycle] | 99th-percentile contact force [N] |",
-        "|---|---|---|---|---|",
+        "| case | |F_t|/F_n in contact: median | largest | above mu_s [ms per cycle] | beyond "
+        "the envelope [ms per cycle] | 99th-percentile contact force [N] |",
+        "|---|---|---|---|---|---|",
     ]
     for case, v in law.items():
         ms = {k: [1e3 * x for x in v.get(k, []) if x is not None] for k in ("above", "beyond")}
         contact = m.get("contact", {}).get(case, {})
         force = ", ".join(f"{j} {_fmt(describe(c['p99'])['median'])}" for j, c in contact.items())
         lines.append(
-            f"| {case} | {_stats(describe(v['mu_max']))} | {_stats(describe(ms['above']))} | "
+            f"| {case} | {_stats(describe(v.get('mu_median', [])))} | "
+            f"{_stats(describe(v['mu_max']))} | {_stats(describe(ms['above']))} | "
             f"{_stats(describe(ms['beyond']))} | {force or '–'} |"
         )
     return lines + [""]

@@ -83,6 +83,7 @@ def summary_dataset(
     law = measures.get("friction_law", {})
     for key, units, long_name in (
         ("mu_max", "1", "largest friction coefficient |F_t| / F_n at the records"),
+        ("mu_median", "1", "median friction coefficient |F_t| / F_n at the records in contact"),
         ("above", "s", "time per crank cycle with |F_t| / F_n above mu_s (LuGre)"),
         ("beyond", "s", "time per crank cycle with |F_t| / F_n beyond 2 mu_s + s2 |v_t| (LuGre)"),
     ):
