@@ -122,7 +122,7 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
         LuGre bristle deflection (m); in an implicit ARK548 stage its known part B.
     hg : float
         h gamma (s) of an implicit ARK548 stage, else 0: z is then replaced by the solution of
-        z = B + hg (vt - a z) (see :mod:`workbench.solver._kernel`).
+        z = B + hg (vt - a z) (see :mod:`workbench.solver._templates.integration_loop`).
 
     Returns
     -------

@@ -1,6 +1,7 @@
 """The tangent (variational) system of a problem, as a problem the compiled loop integrates.
 
-See :mod:`workbench.solver._tangent_template` for the equations (variational equations between
+See :mod:`workbench.solver._templates.tangent_hooks` for the equations (variational equations
+between
 events, the saltation matrix at events) and the layout of the arrays built here.
 """
 

@@ -194,6 +194,6 @@ def summary_dataset(
 
 
 def _param_attrs(scene: Scene, name: str) -> dict:
-    from workbench.campaign._store import parameter_attrs
+    from workbench.campaign._grid import parameter_attrs
 
     return parameter_attrs(scene, name)

@@ -231,7 +231,8 @@ def _column(p, state, k):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def rhs(t, y, p, ip, aux, work, dydt):
-    """dy/dt at (t, y) (the solver's hook; protocol in :mod:`workbench.solver._kernel`).
+    """dy/dt at (t, y) (the solver's hook; protocol in
+    :mod:`workbench.solver._templates.integration_loop`).
 
     Equal to :func:`rhs_reference` to rounding, computing only what the integration reads. It
     allocates nothing and is compiled without reference counting (``_nrt=False``: numba's

@@ -165,7 +165,8 @@ def _residual(p, c, acc, gx, gy, fx, fy, arm, barm):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def rhs(t, y, p, ip, aux, work, dydt):
-    """dy/dt at (t, y) (the solver's hook; protocol in :mod:`workbench.solver._kernel`).
+    """dy/dt at (t, y) (the solver's hook; protocol in
+    :mod:`workbench.solver._templates.integration_loop`).
 
     Equal to :func:`rhs_reference` to rounding, computing only what the integration reads;
     compiled as the nine-bar's :func:`workbench.models.ninebar._dynamics.rhs` (no reference

@@ -1,7 +1,8 @@
 """The compiled loop's vocabulary: method ids, return codes, the layout of its statistics and
 controller arrays, and the few grouped arguments its functions take.
 
-The loop's functions (:mod:`workbench.solver._kernel`, specialised per model) take their inputs
+The loop's functions (:mod:`workbench.solver._templates.integration_loop`, specialised per
+model) take their inputs
 in three named tuples instead of twenty positional arguments: :class:`Settings` (what the run
 asks for), :class:`Hooks` (the arrays the model's hooks receive besides time, state and discrete
 state) and :class:`State` (everything that a call of ``advance`` continues from and leaves for

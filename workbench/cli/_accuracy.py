@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from workbench._console import (
+from workbench.cli._console import (
     announce_compile,
     float_list,
     output_and_figure,
@@ -12,7 +12,7 @@ from workbench._console import (
     report_failures,
     save_with_figure,
 )
-from workbench._exit_codes import worst_exit_code
+from workbench.cli._exit_codes import worst_exit_code
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:

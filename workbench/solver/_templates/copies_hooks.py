@@ -38,9 +38,13 @@ import math
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import apply_event as model_apply_event  # @@HOOKS@@
-from workbench.solver._hooks_template import event_values as model_event_values  # @@HOOKS@@
-from workbench.solver._hooks_template import rhs as model_rhs  # @@HOOKS@@
+from workbench.solver._templates.placeholder_hooks import (
+    apply_event as model_apply_event,  # @@HOOKS@@
+)
+from workbench.solver._templates.placeholder_hooks import (
+    event_values as model_event_values,  # @@HOOKS@@
+)
+from workbench.solver._templates.placeholder_hooks import rhs as model_rhs  # @@HOOKS@@
 
 N_META = 7
 

@@ -1,12 +1,13 @@
 """One step of each integration method and the location of events in it (a template,
-specialised per model like :mod:`workbench.solver._kernel`, whose docstring gives the hooks'
+specialised per model like :mod:`workbench.solver._templates.integration_loop`, whose docstring
+gives the hooks'
 protocol and the algorithms).
 
 The functions here call the model's hooks: ``rhs`` for the stages, ``event_values`` to see and
 locate sign changes of the event functions on the dense output. The explicit pairs' step with
 its error control (``_explicit_attempts``) lives here; Radau IIA's in
-:mod:`workbench.solver._implicit_template`; the loop that chooses between them, records and
-applies events in :mod:`workbench.solver._kernel`.
+:mod:`workbench.solver._templates.radau_step`; the loop that chooses between them, records and
+applies events in :mod:`workbench.solver._templates.integration_loop`.
 """
 
 from __future__ import annotations
@@ -14,8 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import event_values, rhs  # @@HOOKS@@
-from workbench.solver._loop import (
+from workbench.solver._loop_types import (
     ARK548,
     CT_NONFINITE,
     DOP853,
@@ -63,6 +63,7 @@ from workbench.solver._tableaux import (
     RK45_B,
     RK45_C,
 )
+from workbench.solver._templates.placeholder_hooks import event_values, rhs  # @@HOOKS@@
 
 
 @njit(cache=True)

@@ -26,8 +26,8 @@ import math
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import jacobian as model_jacobian  # @@JACOBIAN@@
-from workbench.solver._hooks_template import rhs  # @@HOOKS@@
+from workbench.solver._templates.placeholder_hooks import jacobian as model_jacobian  # @@JACOBIAN@@
+from workbench.solver._templates.placeholder_hooks import rhs  # @@HOOKS@@
 
 HAS_ANALYTIC = True  # @@FLAG@@
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from workbench._exit_codes import UsageError
+from workbench.cli._exit_codes import UsageError
 
 
 def _series(ds, var: str, select: list[str]):

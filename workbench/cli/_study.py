@@ -7,8 +7,8 @@ import json
 import os
 import time as _time
 
-from workbench._console import positive_int, report_failures
-from workbench._exit_codes import worst_exit_code
+from workbench.cli._console import positive_int, report_failures
+from workbench.cli._exit_codes import worst_exit_code
 
 
 def _failed_runs(ds) -> tuple[int, int]:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from workbench._console import float_list, output_and_figure, positive_float, save_with_figure
-from workbench._exit_codes import UsageError
+from workbench.cli._console import float_list, output_and_figure, positive_float, save_with_figure
+from workbench.cli._exit_codes import UsageError
 
 
 def _frame(ds, names: list[str], drop_reference: bool = False):
@@ -64,8 +64,8 @@ def _print_tables(ds) -> None:
 
 
 def _cmd_verify(args: argparse.Namespace) -> int:
-    from workbench import load_scene
     from workbench.plot import verification_figure
+    from workbench.scene import load_scene
     from workbench.verification import verify
 
     scene = load_scene(args.scene)

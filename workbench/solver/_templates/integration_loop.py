@@ -8,12 +8,12 @@ model's module, so that every model gets its own cacheable compiled loop and add
 touches this file. This module is the loop (start, initial step, the choice of method, records,
 events applied, pauses); the steps it takes are templates specialised beside it: the explicit
 pairs' and ARK548's step and the location of events in a step in
-:mod:`workbench.solver._steps_template`, Radau IIA's step with the model's Jacobian in
-:mod:`workbench.solver._implicit_template`. Only what calls a hook lives in these; the
+:mod:`workbench.solver._templates.explicit_steps`, Radau IIA's step with the model's Jacobian in
+:mod:`workbench.solver._templates.radau_step`. Only what calls a hook lives in these; the
 hook-free numerics (tableaux, error norms, dense output, root-finding updates) are compiled once
 for all models in
 :mod:`workbench.solver._numerics`, and the loop's arguments are grouped in the named tuples of
-:mod:`workbench.solver._loop`.
+:mod:`workbench.solver._loop_types`.
 
 Hooks (all ``numba.njit``), in SI units of the model's state:
 
@@ -55,11 +55,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import apply_event, event_values, rhs  # @@HOOKS@@
-from workbench.solver._implicit_template import (  # @@IMPLICIT@@
-    _radau_attempts,
-)
-from workbench.solver._loop import (  # noqa: F401 (the loop's vocabulary, read by callers)
+from workbench.solver._loop_types import (  # noqa: F401 (the loop's vocabulary, read by callers)
     ARK548,
     AUTO,
     CT_F_INSIDE,
@@ -123,10 +119,18 @@ from workbench.solver._radau import (
     implicit_cost,
     implicit_test,
 )
-from workbench.solver._steps_template import (  # @@STEPS@@
+from workbench.solver._templates.explicit_steps import (  # @@STEPS@@
     _dense_prepare,
     _explicit_attempts,
     _locate,
+)
+from workbench.solver._templates.placeholder_hooks import (  # @@HOOKS@@
+    apply_event,
+    event_values,
+    rhs,
+)
+from workbench.solver._templates.radau_step import (  # @@IMPLICIT@@
+    _radau_attempts,
 )
 
 _crossed = crossed  # the name tests and older callers use
@@ -215,10 +219,10 @@ def _switch(current, h, h_next, s, st, im, K, before):
 def advance(t_end, t_pause, s, m, st, im):
     """Integrate from st.ctrl[CT_T] until t_end (or the first step ending at or after t_pause).
 
-    ``s``, ``m``, ``st``, ``im``: the run's :class:`~workbench.solver._loop.Settings`, the
-    model's :class:`~workbench.solver._loop.Hooks`, the loop's
-    :class:`~workbench.solver._loop.State` and the implicit method's
-    :class:`~workbench.solver._loop.Implicit` (None for an explicit method: the loop is then
+    ``s``, ``m``, ``st``, ``im``: the run's :class:`~workbench.solver._loop_types.Settings`, the
+    model's :class:`~workbench.solver._loop_types.Hooks`, the loop's
+    :class:`~workbench.solver._loop_types.State` and the implicit method's
+    :class:`~workbench.solver._loop_types.Implicit` (None for an explicit method: the loop is then
     compiled without it). All loop state lives in the caller's arrays, so calling again
     continues exactly where the last call stopped: a run split into pauses is bit-identical to
     an unbroken one. Records ``Yrec[i] = y(t_rec[i])`` and ``AUXrec[i] = aux(t_rec[i])``.

@@ -23,7 +23,7 @@ with event function ``g`` and reset ``x+ = R(t, x-)`` every column jumps by the 
 
 where ``F-`` and ``F+`` are the extended vector fields ``(f, 0)`` before and after the reset.
 ``DR``, ``dR/dt``, ``grad g`` and ``dg/dt`` are central differences of the model's
-``apply_event`` and ``event_values`` (steps: :func:`workbench.solver._jacobian_template.step`).
+``apply_event`` and ``event_values`` (steps: :func:`workbench.solver._templates.jacobian.step`).
 
 Layout (set by :func:`workbench.solver.tangent.tangent_problem`): ``p = [model p, s (n),
 time scale]`` with the state scales ``s`` (state units) and a time scale (s) for the difference
@@ -38,15 +38,19 @@ import math
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import apply_event as model_apply_event  # @@HOOKS@@
-from workbench.solver._hooks_template import event_values as model_event_values  # @@HOOKS@@
-from workbench.solver._hooks_template import rhs as model_rhs  # @@HOOKS@@
-from workbench.solver._jacobian_template import (  # @@MODEL_JACOBIAN@@
+from workbench.solver._templates.jacobian import (  # @@MODEL_JACOBIAN@@
     HAS_ANALYTIC,
     fd_aux_jacobian,
     jacobian,
     step,
 )
+from workbench.solver._templates.placeholder_hooks import (
+    apply_event as model_apply_event,  # @@HOOKS@@
+)
+from workbench.solver._templates.placeholder_hooks import (
+    event_values as model_event_values,  # @@HOOKS@@
+)
+from workbench.solver._templates.placeholder_hooks import rhs as model_rhs  # @@HOOKS@@
 
 N_META = 7
 

@@ -1,8 +1,8 @@
 """Radau IIA's step with the model's Jacobian (a template, specialised per model like
-:mod:`workbench.solver._kernel`).
+:mod:`workbench.solver._templates.integration_loop`).
 
 The Jacobian (analytic, or central differences of the compiled ``rhs``; from
-:mod:`workbench.solver._jacobian_template`), the simplified Newton iteration for the collocation
+:mod:`workbench.solver._templates.jacobian`), the simplified Newton iteration for the collocation
 system and the step with its error estimate, step-size control and event location on the
 collocation polynomial (Hairer & Wanner 1996, Sec. IV.8, after their code RADAU5). The
 hook-free pieces (tableau transforms, LU, controller, stiffness tests) are in
@@ -14,9 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.solver._hooks_template import rhs  # @@HOOKS@@
-from workbench.solver._jacobian_template import HAS_ANALYTIC, jacobian  # @@JACOBIAN@@
-from workbench.solver._loop import (
+from workbench.solver._loop_types import (
     CT_NONFINITE,
     IS_JAC,
     IS_LU,
@@ -64,12 +62,14 @@ from workbench.solver._radau import (
     starting_values,
     step_ratio,
 )
-from workbench.solver._steps_template import (  # @@STEPS@@
-    _any_crossed,
-)
 from workbench.solver._tableaux import (
     RADAU_C,
 )
+from workbench.solver._templates.explicit_steps import (  # @@STEPS@@
+    _any_crossed,
+)
+from workbench.solver._templates.jacobian import HAS_ANALYTIC, jacobian  # @@JACOBIAN@@
+from workbench.solver._templates.placeholder_hooks import rhs  # @@HOOKS@@
 
 
 @njit(cache=True)
