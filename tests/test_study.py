@@ -2,6 +2,7 @@
 claims, figures and a dataset with units, and the report shows ensemble statistics."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -413,6 +414,9 @@ def test_quick_study_run_and_report(tmp_path):
     assert "Figs. 4-9" in report and "| coulomb | slider_velocity | -1.938 | 1.59" in report
     assert "Ensemble: 4 realisation(s) per case" in report
     assert "| lugre_paper_damping | " in report and "beyond the envelope [ms per cycle]" in report
+    # bars inside a cell (|F_t|, |peak|) are escaped: every claim row has its four cells
+    rows = [r for r in report.splitlines() if r.startswith("| LuGre ")]
+    assert len(rows) == 6 and all(len(re.findall(r"(?<!\\)\|", r)) == 5 for r in rows)
     assert "Not run yet" in report  # the other studies
     stored = xr.open_dataset(tmp_path / "friction_models" / "summary.nc")
     assert stored.peak_contact_force.attrs["units"] == "N"

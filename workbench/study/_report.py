@@ -205,8 +205,8 @@ def _study_section(s: dict) -> list[str]:
         lines += ["| paper's conclusion | verdict | evidence | reason |", "|---|---|---|---|"]
         for c in s["claims"]:
             lines.append(
-                f"| {c['text']} | {_VERDICT_STYLE[c['verdict']]} | {c['evidence']} | "
-                f"{c.get('reason') or '–'} |"
+                f"| {_cell(c['text'])} | {_VERDICT_STYLE[c['verdict']]} | "
+                f"{_cell(c['evidence'])} | {_cell(c.get('reason') or '–')} |"
             )
         lines.append("")
     m = s.get("measures", {})
@@ -220,6 +220,12 @@ def _study_section(s: dict) -> list[str]:
     if s["figures"]:
         lines += ["Figures: " + ", ".join(f"`{p}`" for p in s["figures"]), ""]
     return lines
+
+
+def _cell(text: str) -> str:
+    """Text for a Markdown table cell: its bars escaped (|F_t|, |peak|), which would
+    otherwise split the row."""
+    return str(text).replace("|", "\\|")
 
 
 def _friction_law_table(m: dict) -> list[str]:
@@ -239,8 +245,8 @@ def _friction_law_table(m: dict) -> list[str]:
         "envelope 2 mu_s + sigma2 |v_t| (`workbench/models/_friction_report.py`); a passive "
         "law stays within the envelope, Coulomb within c_f.",
         "",
-        "| case | |F_t|/F_n in contact: median | largest | above mu_s [ms per cycle] | beyond "
-        "the envelope [ms per cycle] | 99th-percentile contact force [N] |",
+        "| case | \\|F_t\\|/F_n in contact: median | largest | above mu_s [ms per cycle] | "
+        "beyond the envelope [ms per cycle] | 99th-percentile contact force [N] |",
         "|---|---|---|---|---|---|",
     ]
     for case, v in law.items():
