@@ -19,6 +19,7 @@ from workbench._cache import register_cache_locator
 
 register_cache_locator()  # before any workbench module defines a cached compiled function
 
+from workbench._errors import ModelWarning  # noqa: E402
 from workbench._version import FORMAT_VERSION, __version__  # noqa: E402
 from workbench.archive import open_run, save_run  # noqa: E402
 from workbench.campaign import CampaignError, run_campaign  # noqa: E402
@@ -30,6 +31,7 @@ from workbench.solver import SolverError, Status  # noqa: E402
 __all__ = [
     "FORMAT_VERSION",
     "CampaignError",
+    "ModelWarning",
     "Recommendation",
     "Scene",
     "SceneError",

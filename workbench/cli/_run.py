@@ -38,6 +38,7 @@ def _check_summary(attrs: dict) -> str:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from workbench.archive import save_run
+    from workbench.models import get_model
     from workbench.run import run_status, simulate
     from workbench.scene import SceneError, load_scene
 
@@ -59,7 +60,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         f"{scene.model}: simulated {simulated:.6g} s in {a['solver_wall_time']:.3g} s wall, "
         f"{a['solver_steps']} steps ({a['solver_rejected_steps']} rejected), "
         f"{a['solver_rhs_evaluations']} rhs evaluations, {a['solver_events']} events, "
-        f"status {status.label}{_check_summary(a)} -> {out}"
+        f"status {status.label}{_check_summary(a)}"
+        f"{get_model(scene.model).summary(ds, scene.resolved_parameters)} -> {out}"
     )
     if args.figures:
         from workbench.plot import run_figures
