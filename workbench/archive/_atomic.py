@@ -155,6 +155,9 @@ def _lack_of_space(exc: BaseException, directory: Path) -> bool:
 
 def _disk_full(path: Path, tmp: Path, size: float | None, exc: BaseException) -> DiskFull:
     written = tmp.stat().st_size if tmp.exists() else 0
+    with contextlib.suppress(OSError):
+        # the netCDF library may keep the failed file open: emptying it frees its space now
+        os.truncate(tmp, 0)
     tmp.unlink(missing_ok=True)
     free = _free_bytes(path.parent)
     if size is not None:

@@ -54,7 +54,7 @@ def save_run(
     path = Path(path)
     encoding = {}
     if classic:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, overwrite=overwrite, size=ds.nbytes) as tmp:
             _encodable(ds).to_netcdf(tmp, engine="scipy", format="NETCDF3_64BIT")
         return path
     if compress:

@@ -94,11 +94,11 @@ def forcing_period(scene: Scene, grid: SweepGrid, flat: int) -> float | None:
     return get_model(scene.model).forcing_period(params)
 
 
-def check_archive_memory(scene: Scene, grid: SweepGrid, max_memory=None) -> None:
+def check_archive_memory(scene: Scene, grid: SweepGrid, max_memory=None) -> float:
     """Refuse, before anything runs, a campaign whose assembled archive would exceed the memory
     limit (:func:`workbench.run.check_memory`): points x the most records of a point x the
     values of a record (the variables and the record time), 8 bytes each. Each point's own
-    records are checked again when it is prepared."""
+    records are checked again when it is prepared. Returns the estimate (bytes)."""
     model = get_model(scene.model)
     base = scene.resolved_parameters
     counts = set()
@@ -114,14 +114,16 @@ def check_archive_memory(scene: Scene, grid: SweepGrid, max_memory=None) -> None
     n_time = max(counts)
     per_record = values_per_record(model, scene.effects, scene.variables)
     key, lower = what_to_lower(scene.run, scene.record)
+    needed = 8.0 * grid.size * n_time * per_record
     check_memory(
-        8.0 * grid.size * n_time * per_record,
+        needed,
         what="the campaign's archive",
         count=f"{grid.size} points x {n_time:.3g} records x {per_record} values x 8 bytes",
         key=key,
         lower=f"{lower}, sweep fewer points",
         max_memory=max_memory,
     )
+    return needed
 
 
 def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
 import time
 import warnings
 from pathlib import Path
@@ -28,6 +29,7 @@ from workbench.campaign._grid import (
 )
 from workbench.campaign._schedule import longest_first
 from workbench.campaign._store import Store
+from workbench.run import format_bytes
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["run_campaign", "store_paths"]
@@ -157,7 +159,7 @@ def run_campaign(
     wall0 = time.perf_counter()
     scene = load_scene(scene)
     grid = expand_sweep(scene)
-    check_archive_memory(scene, grid, max_memory)
+    size = check_archive_memory(scene, grid, max_memory)
     workers = _positive_int("workers", workers)
     chunk = _positive_int("chunk", chunk)
     if client is not None and workers is not None:
@@ -166,6 +168,7 @@ def run_campaign(
             "workers; pass one of them, not both"
         )
     st = Store(store)
+    _warn_disk(st, size)
     with st.lock():
         return _run_locked(
             scene, grid, st, client, workers, chunk, restart, progress, wall0, max_memory
@@ -246,6 +249,8 @@ def _run_locked(
                 on_done=commit,
                 announce=progress,
             )
+        except DiskFull as exc:  # a block's write (in a worker)
+            raise _resumable(exc, st) from None
         finally:
             if bar is not None:
                 bar.close()
@@ -277,17 +282,40 @@ def _run_locked(
     try:
         save_run(ds, st.archive)
     except DiskFull as exc:
-        raise DiskFull(
-            f"{exc}; the campaign's blocks are kept in {str(st.blocks_dir)!r}: free some space "
-            "and run the campaign again to assemble them",
-            exc.path,
-            exc.needed,
-            exc.free,
-        ) from None
+        raise _resumable(exc, st) from None
     ds = open_run(st.archive)
     if ds.attrs["failed_points"]:
         _warn_failures(ds, grid)
     return ds
+
+
+def _warn_disk(st: Store, size: float) -> None:
+    """Warn when the file system of the store has less room than the blocks and the archive
+    may take (twice the data, uncompressed: an upper bound)."""
+    directory = st.archive.parent
+    while not directory.exists():
+        directory = directory.parent
+    free = shutil.disk_usage(directory).free
+    if free < 2 * size:
+        warnings.warn(
+            CampaignWarning(
+                f"the campaign's blocks and archive may take up to {format_bytes(2 * size)} "
+                f"(uncompressed), and {str(directory)!r} has {format_bytes(free)} free: it may "
+                "stop on a full disk (its finished blocks are kept; free space and run it again)"
+            ),
+            stacklevel=3,
+        )
+
+
+def _resumable(exc: DiskFull, st: Store) -> DiskFull:
+    """A full disk during a campaign, with where its finished work is and how to resume."""
+    return DiskFull(
+        f"{exc}; the finished blocks are kept in {str(st.blocks_dir)!r}: free some space and "
+        "run the campaign again to compute the rest and assemble the archive",
+        exc.path,
+        exc.needed,
+        exc.free,
+    )
 
 
 def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset | None:
