@@ -81,7 +81,7 @@ def test_dims_units_and_archive(scene, one_worker):
     ds = one_worker
     assert ds.x.dims == ("gamma", "omega", "time")  # parameter dims first
     assert ds.status.dims == ("gamma", "omega") and ds.status.dtype == np.int8
-    meanings = [s.label for s in workbench.Status] + ["invalid_parameters"]
+    meanings = [s.label for s in workbench.Status] + ["invalid_parameters", "error"]
     assert ds.status.attrs["flag_meanings"].split() == meanings
     np.testing.assert_array_equal(ds.status.attrs["flag_values"], range(len(meanings)))
     model = workbench.models.get_model("duffing")
@@ -175,7 +175,7 @@ def test_an_error_stops_the_blocks_in_flight(tmp_path, monkeypatch):
             "run": {"duration": 1.0},
             "solver": {"max_step": 1e-7},  # 1e7 steps: minutes for the ok point
             "record": {"dt": 0.5},
-            "sweep": {"mode": [failing_model.OK, failing_model.TERMINATED]},
+            "sweep": {"mode": [failing_model.OK, failing_model.BUG]},  # BUG: at once
         }
     )
     store = tmp_path / "c.nc"

@@ -118,7 +118,7 @@ from workbench.models import get_model
 from workbench.solver import integrate
 m = get_model("duffing")
 out = []
-for method in ("dop853", "dopri5", "ark548", "radau", "auto"):
+for method in ("dop853", "dopri5", "ark548", "radau", "auto", "scipy:RK45", "scipy:LSODA"):
     prob = m.problem(m.default_parameters(), {}, {}, ("x", "v"))
     integrate(prob, [0.0, 1.0], method=method)  # load the kernel: not part of the timing
     for y0 in ([np.nan, 0.0], [np.inf, 0.0], [0.0, -np.inf], [1e50, 0.0]):
@@ -144,6 +144,21 @@ def test_a_non_finite_or_huge_initial_state_fails_at_once_with_every_method():
         why = "initial step cannot be formed" if "1e+50" in y0 else "initial state is not finite"
         assert why in message, message
         assert seconds < 1.0, (method, y0, seconds)
+
+
+@pytest.mark.parametrize("method", ["dop853", "scipy:RK45", "scipy:Radau"])
+def test_max_steps_bounds_every_backend(method):
+    """A state of 1e30 that the solver can only creep away from: every backend stops at its
+    step limit (scipy's solve_ivp, which counts no steps as it goes, at 20 evaluations per
+    allowed step); before, scipy crept on for ever."""
+    m = get_model("duffing")
+    prob = m.problem(m.default_parameters(), {}, {}, ("x", "v"))
+    prob.y0[:] = [1e30, 0.0]
+    t0 = time.process_time()
+    r = integrate(prob, np.linspace(0.0, 5.0, 3), method=method, max_steps=2000)
+    assert r.status is Status.MAX_STEPS, r.message
+    assert "raise solver.max_steps" in r.message and r.stats["rhs_evaluations"] <= 40_001
+    assert time.process_time() - t0 < 10
 
 
 def test_a_nan_derivative_mid_run_ends_with_non_finite():

@@ -137,8 +137,16 @@ def integrate(
             f"{t_rec[-1]!r}"
         )
     atol_arr = atol * problem.atol_scale
+    if not np.all(np.isfinite(problem.y0)):
+        stats0 = solver_stats(method, rtol, atol, max_step)
+        return _refused(problem, t_rec, stats0, "the initial state is not finite")
     if method.startswith("scipy:"):
-        result = _scipy_backend.integrate(problem, t_rec, method[6:], rtol, atol_arr, max_step)
+        why = _scipy_backend.cannot_start(problem, rtol, atol_arr)
+        if why:
+            return _refused(problem, t_rec, solver_stats(method, rtol, atol, max_step), why)
+        result = _scipy_backend.integrate(
+            problem, t_rec, method[6:], rtol, atol_arr, max_step, max_steps
+        )
         result.stats["atol"] = atol
         return result
     if method not in METHODS:
@@ -147,8 +155,6 @@ def integrate(
     if problem.y0.size == 0:  # nothing to integrate (e.g. a mechanism with ideal joints)
         AUX = np.tile(problem.aux0, (t_rec.size, 1))
         return RunResult(t_rec, np.empty((t_rec.size, 0)), AUX, stats0, time=float(t_rec[-1]))
-    if not np.all(np.isfinite(problem.y0)):
-        return _refused(problem, t_rec, stats0, "the initial state is not finite")
     k = kernel_for(problem.hooks)
     mid = _METHOD_IDS[method]
     settings = Settings(mid, float(rtol), atol_arr, float(max_step), int(max_steps), t_rec)
