@@ -20,10 +20,12 @@ import xarray as xr
 
 import workbench
 from workbench.archive import (
+    ArchiveError,
     DiskFull,
     OutputExists,
     StoreWarning,
     atomic_path,
+    check_output_file,
     save_run,
     write_text_atomic,
 )
@@ -219,6 +221,12 @@ def test_the_temporary_file_of_a_killed_writer_is_removed_by_the_next_write(ds, 
         save_run(ds, out)
     assert str(stale) in str(record[0].message)
     assert not stale.exists() and live.exists() and other.exists()
+    # the next command on the same output removes it even when it refuses to run
+    subprocess.run([sys.executable, "-c", _KILLED_WRITER, str(out)])
+    (stale,) = set(tmp_path.glob(".out.nc.*.tmp")) - {live}
+    with pytest.warns(StoreWarning), pytest.raises(ArchiveError, match="exists; pass --over"):
+        check_output_file(out, "-o/--output")
+    assert not stale.exists() and live.exists()
     write_text_atomic(tmp_path / "notes.txt", "a text file, written the same way")
     assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith(".")) == [
         "notes.txt",
