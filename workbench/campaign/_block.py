@@ -10,7 +10,9 @@ from __future__ import annotations
 import os
 import signal
 import time
+import traceback
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -23,18 +25,31 @@ from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
 
-__all__ = ["BlockTask", "INVALID", "STATUS", "STATS", "failed", "run_block", "worker_start"]
+__all__ = [
+    "BlockTask",
+    "INVALID",
+    "RAISED",
+    "STATUS",
+    "STATS",
+    "failed",
+    "run_block",
+    "worker_start",
+]
 
 # Per-point outcome (int8 ``status``, CF flag_values / flag_meanings): the run's Status, or
-# INVALID for a point that did not run.
+# INVALID for a point that did not run, or RAISED for a point whose run raised an exception.
 INVALID = len(Status)
-STATUS_ATTRS = status_attrs("outcome of the point's run", {INVALID: "invalid_parameters"})
+RAISED = INVALID + 1
+STATUS_ATTRS = status_attrs(
+    "outcome of the point's run", {INVALID: "invalid_parameters", RAISED: "error"}
+)
 STATUS_ATTRS["comment"] = (
     "a workbench.Status of the point's run (ok; terminated: a terminal event ended the run, "
     "records after it NaN; max_steps, step_underflow, non_finite, model_failure: the run failed, "
     "data NaN, solver statistics up to the failure, message in 'failure'), or "
     "invalid_parameters: the model rejects this combination of parameters (the point did not "
-    "run; data NaN)"
+    "run; data NaN), or error: the point raised an exception (a bug or a broken setup; its "
+    "type and message in 'failure'; data NaN)"
 )
 STATUS = dict(
     zip(STATUS_ATTRS["flag_values"].tolist(), STATUS_ATTRS["flag_meanings"].split(), strict=True)
@@ -77,6 +92,7 @@ class BlockTask:
     path: str
     campaign_id: str
     block: int
+    max_memory: float | str | None = None  # the memory limit of one point's records
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -105,23 +121,27 @@ def failed(status: np.ndarray) -> np.ndarray:
     return (status != Status.OK) & (status != Status.TERMINATED)
 
 
-def _point(scene: Scene, params: dict[str, float]) -> dict:
-    """Run one point; a failed run and rejected parameters become data, anything else raises."""
+def _point(scene: Scene, params: dict[str, float], max_memory=None) -> dict:
+    """Run one point. Its outcome is data: a failed run (its Status), rejected parameters
+    (INVALID) or any exception the point raised (RAISED, with the exception's type and message
+    in ``failure``): one bad point never stops its campaign. An interrupt (KeyboardInterrupt,
+    SystemExit) still stops the block."""
     t0 = time.perf_counter()
     try:
-        ds = simulate(scene.with_parameters(**params), throw=False)
+        ds = simulate(scene.with_parameters(**params), throw=False, max_memory=max_memory)
     except SceneError as exc:
         wall = time.perf_counter() - t0
         out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
         return out | {"ds": None, "times": np.zeros(0)}
     except Exception as exc:
-        shown = ", ".join(f"{k}={v:.6g}" for k, v in params.items())
-        raise RuntimeError(
-            f"campaign point {shown} raised {type(exc).__name__}: {exc}. Only a failed run (a "
-            "workbench.Status) or invalid parameters are recorded as a point's outcome; anything "
-            "else is a bug or a broken setup. Finished blocks are kept: fix the cause and run "
-            "the campaign again."
-        ) from exc
+        wall = time.perf_counter() - t0
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        failure = (
+            f"error: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''} "
+            f"(raised at {Path(where.filename).name}:{where.lineno} in {where.name})"
+        )
+        out = {"status": RAISED, "failure": failure, "wall": wall}
+        return out | {"ds": None, "times": np.zeros(0)}
     status = run_status(ds)
     failure = f"{status.label}: {ds.attrs['run_message']}" if status.failed else ""
     if status is Status.TERMINATED:
@@ -143,7 +163,9 @@ def run_block(task: BlockTask) -> dict:
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
     scene = scene_from_toml(task.scene_toml)
-    runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
+    runs = [
+        _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory) for v in task.values
+    ]
     ds = _block_dataset(scene, task, runs)
     code = code_of(scene)
     ds.attrs.update(

@@ -26,15 +26,23 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     out, figure = output_and_figure(args.output, args.overwrite)
     store = out.with_name(out.name + ".runs")
     announce_compile(scene)
-    wp = accuracy(
-        scene,
-        methods=methods,
-        tolerances=tolerances,
-        progress=not args.quiet,
-        store=store,
-        restart=args.restart,
+    try:
+        wp = accuracy(
+            scene,
+            methods=methods,
+            tolerances=tolerances,
+            progress=not args.quiet,
+            store=store,
+            restart=args.restart,
+        )
+    except KeyboardInterrupt as exc:
+        exc.add_note(
+            f"the finished runs are kept in '{store}/': run the same command again to resume"
+        )
+        raise
+    save_with_figure(
+        wp, out, figure, "work-precision study", work_precision_figure, overwrite=args.overwrite
     )
-    save_with_figure(wp, out, figure, "work-precision study", work_precision_figure)
     try:
         r = recommend(wp, args.target)
         print(

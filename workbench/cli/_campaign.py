@@ -9,8 +9,13 @@ from pathlib import Path
 
 import numpy as np
 
-from workbench.campaign._block import INVALID, STATUS, failed
-from workbench.cli._console import positive_float, positive_int, report_failures
+from workbench.campaign._block import INVALID, RAISED, STATUS, failed
+from workbench.cli._console import (
+    max_memory_option,
+    positive_float,
+    positive_int,
+    report_failures,
+)
 from workbench.cli._exit_codes import worst_exit_code
 
 __all__ = ["campaign_exit_code", "register_cli"]
@@ -67,7 +72,14 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                 chunk=args.chunk,
                 restart=args.restart,
                 progress=not args.quiet,
+                max_memory=args.max_memory,
             )
+    except KeyboardInterrupt as exc:
+        exc.add_note(
+            f"the finished blocks are kept in '{args.output}.blocks/': run the same command "
+            "again to compute the rest"
+        )
+        raise
     finally:
         if client is not None:
             client.close()
@@ -87,9 +99,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def campaign_exit_code(flags) -> int:
-    """The largest exit code among a campaign's point flags (a run's Status, or
-    invalid_parameters: invalid input)."""
-    return worst_exit_code(flags, INVALID)
+    """The largest exit code among a campaign's point flags (a run's Status;
+    invalid_parameters: invalid input; error: the point raised an exception)."""
+    return worst_exit_code(flags, INVALID, RAISED)
 
 
 def register_cli(sub) -> None:
@@ -119,4 +131,5 @@ def register_cli(sub) -> None:
         "--restart", action="store_true", help="discard a stored campaign and start afresh"
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    max_memory_option(p, "the campaign's archive (or one point's records)")
     p.set_defaults(func=_cmd_campaign)

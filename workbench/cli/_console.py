@@ -16,11 +16,14 @@ from pathlib import Path
 __all__ = [
     "announce_compile",
     "float_list",
+    "max_memory_option",
+    "memory_size",
     "one_line_warnings",
     "output_and_figure",
     "positive_float",
     "positive_int",
     "report_failures",
+    "save_or_keep",
     "save_with_figure",
 ]
 
@@ -107,14 +110,56 @@ def output_and_figure(output, overwrite: bool) -> tuple[Path, Path]:
     return out, figure
 
 
-def save_with_figure(ds, out: Path, figure: Path, what: str, draw: Callable) -> None:
-    """Write ``ds`` to ``out`` and ``draw(ds)`` to ``figure``, saying where each went."""
-    from workbench.archive import save_run
-
-    save_run(ds, out)
+def save_with_figure(
+    ds, out: Path, figure: Path, what: str, draw: Callable, *, overwrite: bool = True
+) -> None:
+    """Write ``ds`` to ``out`` (:func:`save_or_keep`) and ``draw(ds)`` to ``figure``, saying
+    where each went."""
+    save_or_keep(ds, out, overwrite=overwrite, what=what)
     print(f"{what} -> {out}")
     draw(ds).savefig(figure, dpi=120)
     print(f"figure: {figure}")
+
+
+def max_memory_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """Add ``--max-memory SIZE``: refuse before running when ``what`` would need more memory
+    (default: the environment variable WORKBENCH_MAX_MEMORY, else half of the machine's)."""
+    parser.add_argument(
+        "--max-memory",
+        type=memory_size,
+        metavar="SIZE",
+        help=f"refuse to start when {what} would take more memory than SIZE (e.g. '16GiB'; "
+        "default: $WORKBENCH_MAX_MEMORY, else half of this machine's memory)",
+    )
+
+
+def memory_size(text: str) -> float:
+    """argparse type: a size in bytes, e.g. ``16GiB``, ``500MB``, ``2e9``, ``inf``."""
+    from workbench.run import parse_bytes
+
+    try:
+        return parse_bytes(text, "SIZE")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("SIZE: ")) from None
+
+
+def save_or_keep(ds, output, *, overwrite: bool, what: str) -> Path:
+    """Write a computed dataset to ``output`` (atomically; replacing a file there only with
+    ``overwrite``). When that fails for lack of space, write it where there is room and say
+    where in the error; a file that appeared at ``output`` meanwhile is never replaced (the
+    result is kept beside it, :class:`workbench.archive.OutputExists` says where)."""
+    from workbench.archive import ArchiveError, DiskFull, keep_elsewhere, save_run
+
+    try:
+        return save_run(ds, output, overwrite=overwrite)
+    except DiskFull as exc:
+        kept = keep_elsewhere(lambda p: save_run(ds, p, overwrite=False), output, ds.nbytes)
+        where = (
+            f"the computed {what} was kept at {str(kept)!r}"
+            if kept is not None
+            else f"no file system had room for the computed {what}: it is lost"
+        )
+        raise ArchiveError(f"{exc}; {where}") from None
 
 
 def report_failures(command: str, failures: str, code: int) -> None:

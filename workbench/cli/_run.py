@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from workbench.cli._console import announce_compile
+from workbench.cli._console import announce_compile, max_memory_option, save_or_keep
 from workbench.cli._exit_codes import exit_code
 
 __all__ = ["register_cli"]
@@ -37,7 +37,6 @@ def _check_summary(attrs: dict) -> str:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from workbench.archive import save_run
     from workbench.models import get_model
     from workbench.run import run_status, simulate
     from workbench.scene import SceneError, load_scene
@@ -51,8 +50,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         )
     _check_outputs(scene, args)
     announce_compile(scene)
-    ds = simulate(scene, progress=not args.quiet, throw=False)
-    out = save_run(ds, args.output)
+    ds = simulate(scene, progress=not args.quiet, throw=False, max_memory=args.max_memory)
+    out = save_or_keep(ds, args.output, overwrite=args.overwrite, what="run")
     a = ds.attrs
     status = run_status(ds)
     simulated = float(ds.time[-1]) if ds.sizes["time"] else float("nan")
@@ -85,4 +84,5 @@ def register_cli(sub) -> None:
     p.add_argument("--figures", metavar="DIR", help="also write the run's figures (PNG) here")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    max_memory_option(p, "the run's records")
     p.set_defaults(func=_cmd_run)

@@ -14,13 +14,13 @@ from workbench.cli._exit_codes import worst_exit_code
 def _failed_runs(ds) -> tuple[int, int]:
     """Failed runs of a study (read from its case archives) and their worst exit code."""
     from workbench.archive import open_run
-    from workbench.campaign._block import INVALID, failed
+    from workbench.campaign._block import INVALID, RAISED, failed
 
     n, code = 0, 0
     for archive in json.loads(ds.attrs["archives"]).values():
         status = open_run(archive)["status"].values
         n += int(failed(status).sum())
-        code = max(code, worst_exit_code(status, INVALID))
+        code = max(code, worst_exit_code(status, INVALID, RAISED))
     return n, code
 
 

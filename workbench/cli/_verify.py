@@ -74,7 +74,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         ds = verify(scene, horizon=args.horizon, steps=args.steps, record_dt=args.record_dt)
     except (ValueError, RuntimeError, ImportError) as exc:
         raise UsageError(str(exc)) from None
-    save_with_figure(ds, out, figure, "verification", verification_figure)
+    save_with_figure(ds, out, figure, "verification", verification_figure, overwrite=args.overwrite)
     _print_tables(ds)
     print(
         "\nwall time [s]: "

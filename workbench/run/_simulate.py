@@ -64,7 +64,13 @@ def integrate(
     )
 
 
-def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) -> xr.Dataset:
+def simulate(
+    scene: SceneSource,
+    *,
+    progress: bool = False,
+    throw: bool = True,
+    max_memory: float | str | None = None,
+) -> xr.Dataset:
     """Run one scene and return its records as a labelled dataset.
 
     Parameters
@@ -78,6 +84,10 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
         Raise :class:`workbench.SolverError` if the run fails (default). With ``throw=False`` a
         failed run returns its dataset: the records before the failure, NaN after it, and the
         failure in ``run_status`` and ``run_message``.
+    max_memory : float or str, optional
+        Refuse, before anything is allocated, a run whose records would take more memory than
+        this (bytes, or text such as ``"16 GiB"``; default: the environment variable
+        ``WORKBENCH_MAX_MEMORY``, else half of this machine's memory).
 
     Returns
     -------
@@ -91,7 +101,10 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
     SolverError
         With ``throw=True``, when the run fails (the error's ``status`` says how).
     SceneError, ValueError
-        For an invalid scene, or a scene with a sweep.
+        For an invalid scene, or a scene with a sweep; :class:`MemoryLimitError` (a
+        SceneError) for records above the memory limit.
+    KeyboardInterrupt
+        Ctrl-C stops the run within about 0.1 s (the compiled loop pauses that often).
 
     Warns
     -----
@@ -106,7 +119,7 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
     >>> ds.x.attrs["units"], ds.sizes["time"], ds.attrs["run_status"]
     ('1', 1001, 'ok')
     """
-    prepared = prepare(scene)
+    prepared = prepare(scene, max_memory=max_memory)
     result = _with_progress_bar(prepared) if progress else integrate(prepared)
     derived, result = derive(prepared, result)
     if throw:

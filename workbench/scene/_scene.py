@@ -29,7 +29,7 @@ from workbench._errors import SceneError
 from workbench.models import available_models, get_model
 from workbench.scene._tables import (
     RUN_SWEEP_KEYS,
-    number,
+    finite,
     table,
     unknown_keys,
     validate_effects,
@@ -246,7 +246,7 @@ def _validate(data: Mapping[str, Any]) -> Scene:
     states = {q.name for q in model.states(effects)}
     initial_t = table(data, "initial")
     unknown_keys("initial", initial_t, states)
-    initial = {k: number(f"initial.{k}", v) for k, v in initial_t.items()}
+    initial = {k: finite(f"initial.{k}", v) for k, v in initial_t.items()}
 
     solver = validate_solver(table(data, "solver"))
     period = model.forcing_period(resolved)
