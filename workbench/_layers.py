@@ -12,7 +12,10 @@ from __future__ import annotations
 __all__ = ["LAYERS", "layer_of"]
 
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("base", ("workbench._cache", "workbench._layers", "workbench._sources")),
+    (
+        "base",
+        ("workbench._cache", "workbench._layers", "workbench._progress", "workbench._sources"),
+    ),
     ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators
     ("models", ("workbench.models", "workbench._errors")),  # build Problems
     ("scene", ("workbench.scene",)),  # validated against the models

@@ -85,8 +85,18 @@ def save_run(
     return path
 
 
-def open_run(path: str | os.PathLike) -> xr.Dataset:
-    """Read a stored run (or campaign) fully into memory and close the file.
+def open_run(path: str | os.PathLike, *, chunks: int | str | dict | None = None) -> xr.Dataset:
+    """Read a stored run (or campaign).
+
+    Parameters
+    ----------
+    path : str or path
+        A netCDF file written by :func:`save_run` (or :func:`workbench.run_campaign`).
+    chunks : int, "auto", dict or None
+        None (default): read everything into memory and close the file. Otherwise open it
+        lazily: variables are dask arrays in chunks of this size (as :func:`xarray.open_dataset`
+        takes them, e.g. ``{"time": 100_000}``, ``"auto"``, or ``{}`` for one chunk per
+        variable) read when computed; the file stays open until ``ds.close()``.
 
     Raises
     ------
@@ -94,6 +104,16 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         There is no file at ``path``.
     ArchiveError
         The file is not a readable netCDF file (truncated, corrupt, or something else).
+
+    Examples
+    --------
+    >>> import workbench, tempfile, pathlib
+    >>> ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 2}})
+    >>> path = workbench.save_run(ds, pathlib.Path(tempfile.mkdtemp()) / "run.nc")
+    >>> lazy = open_run(path, chunks={"time": 50})
+    >>> lazy.x.chunks[0][:2], float(lazy.x.max()) == float(ds.x.max())
+    ((50, 50), True)
+    >>> lazy.close()
     """
     path = Path(path)
     if not path.exists():
@@ -102,9 +122,12 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         raise ArchiveError(f"{str(path)!r} is a directory, not a netCDF file")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            return ds.load()
+            if chunks is None:
+                return ds.load()
     except (OSError, ValueError, RuntimeError, KeyError, IndexError) as exc:
         raise ArchiveError(
             f"{str(path)!r} is not a readable netCDF file (truncated or corrupt?): "
             f"{type(exc).__name__}: {exc}"
         ) from None
+    # readable: now lazily, where a chunk that names no dim is xarray's own error
+    return xr.open_dataset(path, engine="netcdf4", chunks=chunks)

@@ -7,6 +7,7 @@ file atomically and returns a small summary to the client.
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import time
@@ -68,7 +69,9 @@ PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork s
 
 @dataclass(frozen=True)
 class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points, where to write."""
+    """What one task needs: the campaign scene (TOML), which points, where to write, and the
+    module that defines the scene's model when it is not one of workbench's (a user's model,
+    registered when imported: a worker process that did not import it yet does so first)."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -77,6 +80,7 @@ class BlockTask:
     path: str
     campaign_id: str
     block: int
+    model_module: str = ""
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -142,6 +146,8 @@ def run_block(task: BlockTask) -> dict:
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
+    if task.model_module:
+        importlib.import_module(task.model_module)  # registers the user's model
     scene = scene_from_toml(task.scene_toml)
     runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
     ds = _block_dataset(scene, task, runs)

@@ -21,6 +21,7 @@ from workbench.campaign._execute import available_workers, execute
 from workbench.campaign._grid import SweepGrid, campaign_id, code_of, expand_sweep, format_point
 from workbench.campaign._schedule import longest_first
 from workbench.campaign._store import Store
+from workbench.models import get_model
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["run_campaign", "store_paths"]
@@ -190,6 +191,8 @@ def _run_locked(
     blocks = grid.blocks(chunk)
     code = code_of(scene)
     done = st.verified_blocks(manifest, blocks, code)
+    model_module = type(get_model(scene.model)).__module__
+    model_module = "" if model_module.split(".")[0] == "workbench" else model_module
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -199,6 +202,7 @@ def _run_locked(
             path=str(st.block_path(i)),
             campaign_id=cid,
             block=i,
+            model_module=model_module,
         )
         for i, rng in enumerate(blocks)
         if i not in done
@@ -302,9 +306,9 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
 
 
 def _bar(total: int, initial: int):
-    from tqdm.auto import tqdm
+    from workbench._progress import Progress
 
-    return tqdm(total=total, initial=initial, unit="pt", desc="campaign", smoothing=0.05)
+    return Progress(total, initial=initial, unit="pt", desc="campaign")
 
 
 def store_paths(store: str | os.PathLike) -> dict[str, Path]:

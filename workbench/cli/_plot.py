@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from workbench.cli._console import add_quiet
 from workbench.cli._exit_codes import UsageError
 
 __all__ = ["register_cli"]
@@ -41,4 +42,5 @@ def register_cli(sub) -> None:
     p.add_argument("run", help="netCDF run or campaign written by 'workbench run | campaign'")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the PNGs")
     p.add_argument("--overwrite", action="store_true", help="replace existing figures")
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_plot)

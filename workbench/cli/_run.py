@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from workbench.cli._console import announce_compile
+from workbench.cli._console import add_quiet, compile_kernel
 from workbench.cli._exit_codes import exit_code
 
 __all__ = ["register_cli"]
@@ -49,14 +49,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
             "sweep with 'workbench campaign SCENE -o OUT.nc', or remove the [sweep] table",
         )
     _check_outputs(scene, args)
-    announce_compile(scene)
+    compiled = compile_kernel(scene, quiet=args.quiet)
     ds = simulate(scene, progress=not args.quiet, throw=False)
     out = save_run(ds, args.output)
     a = ds.attrs
     status = run_status(ds)
     simulated = float(ds.time[-1]) if ds.sizes["time"] else float("nan")
+    compile_note = "" if compiled is None else f" (after compiling the kernel in {compiled:.0f} s)"
     print(
-        f"{scene.model}: simulated {simulated:.6g} s in {a['solver_wall_time']:.3g} s wall, "
+        f"{scene.model}: simulated {simulated:.6g} s in {a['solver_wall_time']:.3g} s of "
+        f"integration{compile_note}, "
         f"{a['solver_steps']} steps ({a['solver_rejected_steps']} rejected), "
         f"{a['solver_rhs_evaluations']} rhs evaluations, {a['solver_events']} events, "
         f"status {status.label}{_check_summary(a)} -> {out}"
@@ -81,6 +83,6 @@ def register_cli(sub) -> None:
     p.add_argument("scene", help="scene file (TOML)")
     p.add_argument("-o", "--output", required=True, help="netCDF file to write (atomically)")
     p.add_argument("--figures", metavar="DIR", help="also write the run's figures (PNG) here")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.set_defaults(func=_cmd_run)

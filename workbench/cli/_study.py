@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time as _time
 
-from workbench.cli._console import positive_int, report_failures
+from workbench.cli._console import add_quiet, positive_int, report_failures
 from workbench.cli._exit_codes import worst_exit_code
 
 
@@ -27,6 +28,13 @@ def _failed_runs(ds) -> tuple[int, int]:
 def _cmd_study(args: argparse.Namespace) -> int:
     from workbench.study import available_studies, run_study, write_report
 
+    if args.no_progress:
+        print(
+            "workbench study: warning: --no-progress is deprecated; use -q (--quiet), as every "
+            "command does",
+            file=sys.stderr,
+        )
+        args.quiet = True
     if args.name == "report":
         print(f"report: {write_report(args.output)}")
         return 0
@@ -44,7 +52,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
             out=args.output,
             quick=args.quick,
             workers=args.workers,
-            progress=not args.no_progress,
+            progress=not args.quiet,
         )
         runs += int(ds.attrs["runs"])
         failed, worst = _failed_runs(ds)
@@ -94,5 +102,7 @@ def register_cli(sub) -> None:
     p.add_argument(
         "--workers", type=positive_int, help="processes for campaign cases (default: all)"
     )
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_quiet(p)
+    # the flag before -q, kept for old scripts (deprecated: says so when used)
+    p.add_argument("--no-progress", action="store_true", help=argparse.SUPPRESS)
     p.set_defaults(func=_cmd_study)

@@ -28,11 +28,13 @@ from workbench.run._ensemble import (
     perturb_initial_state,
     scene_perturbation,
 )
+from workbench.run._parameters import PARAMETERS_ATTR, parameter_coords
 from workbench.run._prepare import Prepared, prepare, record_times
 from workbench.run._simulate import check_error, integrate, simulate
 
 __all__ = [
     "DEFAULT_PERTURBATION",
+    "PARAMETERS_ATTR",
     "REALISATION_ATTRS",
     "TIME_ATTRS",
     "Prepared",
@@ -42,6 +44,7 @@ __all__ = [
     "derive",
     "divergence_time",
     "integrate",
+    "parameter_coords",
     "prepare",
     "provenance",
     "record_times",
