@@ -19,7 +19,11 @@ def _check_outputs(scene, args: argparse.Namespace) -> None:
 
     check_output_file(args.output, "-o/--output", overwrite=args.overwrite)
     if args.figures:
-        names = run_figure_names(scene.model, len(scene.variables))
+        from workbench.models import get_model
+
+        forced = get_model(scene.model).forcing_period(scene.resolved_parameters) is not None
+        strobe = forced and ("cycles" in scene.run or "samples_per_period" in scene.record)
+        names = run_figure_names(scene.model, len(scene.variables), strobe=strobe)
         check_output_directory(args.figures, "--figures", names, overwrite=args.overwrite)
 
 

@@ -7,9 +7,10 @@ import json
 import os
 import sys
 import time as _time
+from pathlib import Path
 
 from workbench.cli._console import add_quiet, positive_int, report_failures
-from workbench.cli._exit_codes import worst_exit_code
+from workbench.cli._exit_codes import UsageError, worst_exit_code
 
 
 def _failed_runs(ds) -> tuple[int, int]:
@@ -43,6 +44,12 @@ def _cmd_study(args: argparse.Namespace) -> int:
             print(name)
         return 0
     names = available_studies() if args.name == "all" else [args.name]
+    unknown = [n for n in names if n not in available_studies() and not Path(n).is_dir()]
+    if unknown:
+        raise UsageError(
+            f"no study {unknown[0]!r}; available: {', '.join(available_studies())} (or 'all', "
+            "'report', 'list', or the directory of a study)"
+        )
     t_all = _time.perf_counter()
     runs, n_failed, code = 0, 0, 0
     for name in names:

@@ -68,7 +68,7 @@ def register(cls: type[Model]) -> type[Model]:
     """Class decorator: make a model available to scenes under ``cls.name`` (a name of a
     built-in model is refused for any other class; registering a name again replaces it)."""
     builtin = _BUILTIN.get(cls.name)
-    if builtin is not None and cls.__module__ != builtin:
+    if builtin is not None and not (cls.__module__ + ".").startswith(builtin + "."):
         raise ValueError(
             f"model name {cls.name!r} is taken by the built-in model of {builtin}; choose "
             f"another name (built-in: {', '.join(sorted(_BUILTIN))})"
