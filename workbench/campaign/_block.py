@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import os
 import signal
+import sys
 import time
 from dataclasses import dataclass
 
@@ -81,6 +82,7 @@ class BlockTask:
     campaign_id: str
     block: int
     model_module: str = ""
+    model_directory: str = ""  # where the module's file lies, for a worker without it on sys.path
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -134,6 +136,19 @@ def _point(scene: Scene, params: dict[str, float]) -> dict:
     return out | {"wall": time.perf_counter() - t0}
 
 
+def _import_model(module: str, directory: str) -> None:
+    """Import (and so register) a user's model module in this worker: by name, and if the
+    worker's ``sys.path`` lacks it (a fork server started before the caller extended its
+    path), from the directory the caller imported it from."""
+    try:
+        importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if not directory or exc.name != module.split(".")[0]:
+            raise
+        sys.path.insert(0, directory)
+        importlib.import_module(module)
+
+
 def run_block(task: BlockTask) -> dict:
     """Run the points of one block and write them to ``task.path`` (atomically).
 
@@ -147,7 +162,7 @@ def run_block(task: BlockTask) -> dict:
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
     if task.model_module:
-        importlib.import_module(task.model_module)  # registers the user's model
+        _import_model(task.model_module, task.model_directory)
     scene = scene_from_toml(task.scene_toml)
     runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
     ds = _block_dataset(scene, task, runs)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -191,8 +192,7 @@ def _run_locked(
     blocks = grid.blocks(chunk)
     code = code_of(scene)
     done = st.verified_blocks(manifest, blocks, code)
-    model_module = type(get_model(scene.model)).__module__
-    model_module = "" if model_module.split(".")[0] == "workbench" else model_module
+    model_module, model_directory = _model_module(scene)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -203,6 +203,7 @@ def _run_locked(
             campaign_id=cid,
             block=i,
             model_module=model_module,
+            model_directory=model_directory,
         )
         for i, rng in enumerate(blocks)
         if i not in done
@@ -303,6 +304,19 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
         ),
         stacklevel=3,
     )
+
+
+def _model_module(scene: Scene) -> tuple[str, str]:
+    """The module that defines a user's model (a worker imports it to know the model) and the
+    directory it lies under, or ('', '') for a model of workbench."""
+    module = type(get_model(scene.model)).__module__
+    if module.split(".")[0] == "workbench":
+        return "", ""
+    file = getattr(sys.modules.get(module), "__file__", None)
+    if not file:
+        return module, ""
+    depth = module.count(".") + (Path(file).name == "__init__.py")
+    return module, str(Path(file).resolve().parents[depth])
 
 
 def _bar(total: int, initial: int):

@@ -25,6 +25,7 @@ __all__ = [
     "plt",
     "register_overview",
     "run_parameters",
+    "title_width",
     "units_label",
     "wrap_title",
 ]
@@ -78,6 +79,12 @@ def wrap_title(text: str, width: int = 90) -> str:
             textwrap.wrap(paragraph, width, break_long_words=False, break_on_hyphens=False) or [""]
         )
     return "\n".join(lines).replace(_NBSP, " ")
+
+
+def title_width(fig, fontsize: float = 9.0) -> int:
+    """How many characters of a title at ``fontsize`` (pt) fit across ``fig`` (about 0.6 em
+    per character)."""
+    return max(30, int(fig.get_figwidth() * 72 / (0.6 * fontsize)))
 
 
 def units_label(units: str | None) -> str:

@@ -22,7 +22,14 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, display_scale, plain_ticks, plt, wrap_title
+from workbench.plot._base import (
+    axis_label,
+    display_scale,
+    plain_ticks,
+    plt,
+    title_width,
+    wrap_title,
+)
 from workbench.plot._failures import run_status_note
 
 __all__ = [
@@ -36,10 +43,11 @@ __all__ = [
 ]
 
 #: a change between consecutive records larger than this share of the variable's range is a
-#: straight edge in a drawn curve: a smooth oscillation shows it below ~pi / 0.1 = 31 samples
+#: visible straight edge in a drawn curve: a sinusoid reaches it below ~pi / 0.25 = 13 samples
 #: per period, an impact whenever it lasts less than a record step
-COARSE_JUMP = 0.1
+COARSE_JUMP = 0.25
 _MAX_PAIRS = 6
+_FEW_PERIODS = 50
 
 
 class CoarseSamplingWarning(UserWarning):
@@ -118,7 +126,8 @@ def _coarse_note(ds: xr.Dataset, pairs) -> str:
     text = (
         f"the records ({per}) are too coarse for the fastest changes they draw: a variable "
         f"changes by {100 * worst:.0f} % of its range between two records (at t = {when:.4g} s), "
-        "so impacts appear as straight edges; record more samples per period to resolve them"
+        "so fast changes such as impacts appear as straight edges; record more samples per "
+        "period to resolve them"
     )
     warnings.warn(CoarseSamplingWarning(text), stacklevel=3)
     return f"coarse records: straight edges hide what happens within a record step ({per})"
@@ -140,9 +149,15 @@ def _scaled(da: xr.DataArray) -> tuple[np.ndarray, str]:
     return np.asarray(da.values, dtype=float) * factor, axis_label(da, units)
 
 
-def _title(ds: xr.Dataset, what: str, notes: list[str]) -> str:
-    lines = [wrap_title(f"{what}: {ds.attrs.get('title', '')}".rstrip(": "), 100)]
-    lines += [wrap_title(n, 100) for n in notes if n]
+def _panel_title(label: str, value: xr.DataArray, rate: xr.DataArray) -> str:
+    """``clearance_vx against clearance_x, joint A``."""
+    return f"{rate.name} against {value.name}" + (f", {label}" if label else "")
+
+
+def _title(fig, ds: xr.Dataset, what: str, notes: list[str]) -> str:
+    width = title_width(fig, 9)
+    lines = [wrap_title(f"{what}: {ds.attrs.get('title', '')}".rstrip(": "), width)]
+    lines += [wrap_title(n, width) for n in notes if n]
     return "\n".join(lines)
 
 
@@ -163,14 +178,15 @@ def run_phase_figure(ds: xr.Dataset) -> plt.Figure:
             ax.plot(x[::strobe], y[::strobe], ".", color="tab:red", ms=3, label="once per period")
         ax.set_xlabel(xl, fontsize=8)
         ax.set_ylabel(yl, fontsize=8)
-        ax.set_title(label or f"{rate.name} against {value.name}", fontsize=8)
+        ax.set_title(_panel_title(label, value, rate), fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
         plain_ticks(ax)
     if strobe:
-        axes.flat[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(0, -0.18), ncol=2)
+        handles, labels = axes.flat[0].get_legend_handles_labels()
+        fig.legend(handles, labels, fontsize=7, loc="outside lower center", ncol=2)
     notes = [run_status_note(ds), _coarse_note(ds, pairs)]
-    fig.suptitle(_title(ds, "phase portraits", notes), fontsize=9)
+    fig.suptitle(_title(fig, ds, "phase portraits", notes), fontsize=9)
     return fig
 
 
@@ -194,10 +210,12 @@ def run_poincare_figure(ds: xr.Dataset) -> plt.Figure:
         ax.plot(x, y, ".", color="k", ms=3)
         ax.set_xlabel(xl, fontsize=8)
         ax.set_ylabel(yl, fontsize=8)
-        ax.set_title(label or f"{rate.name} against {value.name}", fontsize=8)
+        ax.set_title(_panel_title(label, value, rate), fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
         plain_ticks(ax)
     what = f"stroboscopic Poincaré sections ({n} periods, one point each)"
-    fig.suptitle(_title(ds, what, [run_status_note(ds)]), fontsize=9)
+    if n < _FEW_PERIODS:
+        what += f"; with fewer than {_FEW_PERIODS} points a section shows no structure yet"
+    fig.suptitle(_title(fig, ds, what, [run_status_note(ds)]), fontsize=9)
     return fig

@@ -91,6 +91,15 @@ def _short_label(da: xr.DataArray, units: str | None = None) -> str:
     return f"{da.name}{units_label(units or da.attrs.get('units'))}"
 
 
+def _last_record(ds: xr.Dataset) -> float:
+    """Time (s) of the last record with a finite value (the start when there is none)."""
+    finite = np.zeros(ds.sizes["time"], bool)
+    for name in _series(ds):
+        finite |= np.isfinite(ds[name].values).reshape(ds.sizes["time"], -1).any(axis=1)
+    last = np.flatnonzero(finite)
+    return float(ds.time[last[-1]] if last.size else ds.time[0])
+
+
 def _empty_panel(ax, da: xr.DataArray, status: str) -> None:
     """Say why a panel has nothing to draw, instead of leaving it blank."""
     why = f"no finite values: {status}" if status else "no finite values in this record"
@@ -137,7 +146,8 @@ def timeseries_figure(
     """Variables against time in a grid of panels (up to two columns), each titled with its
     ``long_name`` and labelled with its name and units (in a readable SI prefix, e.g. µm);
     extra dims (e.g. ``joint``) become lines named in a legend beside the panel. A panel
-    without a finite value says so; a failed run's status is in the title. Give at most
+    without a finite value says so; a failed run's status is in the title, and a dotted red
+    line marks its last record on the whole span asked for. Give at most
     :data:`PANELS_PER_FIGURE` variables for a readable figure (:func:`run_figures` pages
     them)."""
     names = variables or _series(ds)
@@ -151,6 +161,9 @@ def timeseries_figure(
             _empty_panel(ax, da, status)
         for label, line in _lines(da, ("time",)):
             ax.plot(ds.time, line * factor, lw=0.7, label=label or None)
+        if status and ds.sizes["time"] > 1:  # the whole span asked for, and where it ended
+            ax.set_xlim(float(ds.time[0]), float(ds.time[-1]))
+            ax.axvline(_last_record(ds), color="tab:red", ls=":", lw=1.0)
         if len(da.dims) > 1:
             _legend_outside(ax)
         ax.set_title(_panel_title(da), fontsize=8)
