@@ -96,6 +96,18 @@ def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     }
     for printed, expected in lines:
         assert printed.split() == expected.split()
+    # the numbers of the page's text
+    longer = ns["lyapunov_spectrum"](
+        {**ns["scene"], "run": {"duration": 50000.0, "transient": 200.0}}, check=False
+    )
+    lam50 = longer.exponent.values
+    assert round(100 * abs(lam[0] / SPROTT[0] - 1), 1) == 0.4
+    assert round(100 * err[0] / SPROTT[0], 1) == 1.4
+    assert round(float(lam50[0]), 4) == 0.0722 and abs(lam50[0] / SPROTT[0] - 1) < 0.02
+    assert round(100 * abs(lam50[0] - lam[0]) / SPROTT[0], 1) == 0.8
+    assert round(100 * abs(lam[2] / SPROTT[2] - 1), 1) == 0.2
+    assert round(float(lam.sum()), 4) == -5.3346
+    assert round(100 * abs(lam.sum() / float(spectrum.divergence) - 1), 1) == 0.3
 
 
 def test_events_discrete_state_and_outputs_of_a_user_model(user_modules):

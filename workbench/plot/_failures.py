@@ -14,6 +14,8 @@ from collections import Counter
 import numpy as np
 import xarray as xr
 
+from workbench.solver import Status
+
 __all__ = ["FAILED_STYLE", "failed_mask", "failure_note", "mark_failed", "run_status_note"]
 
 _NOT_FAILED = ("ok", "terminated")
@@ -22,9 +24,12 @@ FAILED_STYLE = {"marker": "x", "color": "tab:red", "ms": 7, "mew": 1.6, "ls": "n
 
 
 def _meanings(status: xr.DataArray) -> dict[int, str]:
+    """Flag value -> meaning: the variable's CF flags, else the statuses' own labels."""
     values = np.atleast_1d(status.attrs.get("flag_values", []))
     names = str(status.attrs.get("flag_meanings", "")).split()
-    return {int(v): n for v, n in zip(values, names, strict=False)}
+    if len(values) and len(values) == len(names):
+        return {int(v): n for v, n in zip(values, names, strict=True)}
+    return {int(s): s.label for s in Status}
 
 
 def failed_mask(ds: xr.Dataset) -> tuple[xr.DataArray | None, Counter]:
@@ -61,13 +66,14 @@ def mark_failed(ax, ds: xr.Dataset, param: str, *, scale: float = 1.0) -> str:
     at = mask.any(other) if other else mask
     x = ds[param].values[at.values] * scale
     note = failure_note(ds)
+    kinds = ", ".join(f"{n} {k}" for k, n in counts.most_common())
     ax.plot(
         x,
         np.zeros_like(x, dtype=float),
         transform=ax.get_xaxis_transform(),
         clip_on=False,
         zorder=5,
-        label=f"failed: {note}",
+        label=f"failed ({kinds})",
         **FAILED_STYLE,
     )
     return note

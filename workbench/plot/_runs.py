@@ -115,6 +115,23 @@ def _empty_panel(ax, da: xr.DataArray, status: str) -> None:
     )
 
 
+def _proxies(ax) -> list:
+    """Legend handles of a scatter panel: the dots' colours at a visible size, the failed
+    points' cross as drawn."""
+    from matplotlib.lines import Line2D
+
+    out = []
+    for h in ax.get_lines():
+        if h.get_label().startswith("_"):
+            continue
+        if h.get_marker() == ".":
+            h = Line2D(
+                [], [], ls="none", marker="o", ms=4, color=h.get_color(), label=h.get_label()
+            )
+        out.append(h)
+    return out
+
+
 def _legend_outside(ax, **kw) -> None:
     """A legend to the right of the panel, where it covers no trace."""
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0, **kw)
@@ -204,9 +221,9 @@ def campaign_figure(
             x = np.broadcast_to(ds[param].values[:, None], line.transpose(param, "time").shape)
             y = line.transpose(param, "time").values * factor
             ax.plot(x.ravel(), y.ravel(), ".", ms=1.5, alpha=0.6, label=label or None)
-        marked = mark_failed(ax, ds, param)
-        if marked or any(d not in (param, "time") for d in da.dims):
-            _legend_outside(ax, markerscale=3)
+        mark_failed(ax, ds, param)  # counted in the title
+        if any(d not in (param, "time") for d in da.dims):
+            _legend_outside(ax, handles=_proxies(ax))
         ax.set_title(_panel_title(da), fontsize=8)
         ax.set_ylabel(_short_label(da, units), fontsize=8)
         ax.tick_params(labelsize=7)
