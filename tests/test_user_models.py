@@ -11,6 +11,7 @@ events, the discrete state and derived outputs against the closed-form bounce ti
 import contextlib
 import io
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -24,9 +25,9 @@ SPROTT = (0.0714, 0.0, -5.3943)  # Rössler a = b = 0.2, c = 5.7 (Sprott 2003, A
 
 
 def blocks(kind: str) -> dict[str, str]:
-    """The python blocks of the page marked ``<!-- {kind}: NAME -->``, by name."""
+    """The code blocks of the page marked ``<!-- {kind}: NAME -->``, by name."""
     text = DOC.read_text()
-    pattern = rf"<!-- {kind}: (\S+) -->\n```python\n(.*?)```"
+    pattern = rf"<!-- {kind}: (\S+) -->\n```(?:python|toml)\n(.*?)```"
     return {name: body for name, body in re.findall(pattern, text, flags=re.S)}
 
 
@@ -139,3 +140,48 @@ def test_a_user_model_runs_in_a_campaign_of_worker_processes(user_modules, tmp_p
     assert (runs.status.values == 0).all()
     assert float(runs.a) == 0.2 and runs.a.attrs["units"] == "1" and runs.c.dims == ("c",)
     assert np.isfinite(runs.x.values).all()
+
+
+def test_a_scene_file_names_the_module_and_the_command_line_runs_it(user_modules, tmp_path):
+    """``[model] module``: the CLI (a fresh process, started elsewhere) imports the module from
+    the scene file's directory and runs the user's model; a module that is not there is one
+    line naming the key."""
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "workbench.cli",
+            "run",
+            str(user_modules / "rossler.toml"),
+            "-o",
+            str(tmp_path / "r.nc"),
+            "--figures",
+            str(tmp_path / "figs"),
+            "-q",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert out.returncode == 0, out.stderr
+    ds = workbench.open_run(tmp_path / "r.nc")
+    assert ds.attrs["model"] == "rossler" and float(ds.c) == 5.7
+    assert 'module = "rossler_model"' in ds.attrs["scene"]
+    assert sorted(p.name for p in (tmp_path / "figs").iterdir()) == [
+        "rossler_phase.png",
+        "rossler_timeseries.png",
+    ]
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[model]\nname = "rossler"\nmodule = "no_such_module"\n')
+    out = subprocess.run(
+        [sys.executable, "-m", "workbench.cli", "run", str(bad), "-o", "x.nc"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 2
+    assert out.stderr.startswith(
+        "workbench run: error: model.module: cannot import 'no_such_module'"
+    ), out.stderr

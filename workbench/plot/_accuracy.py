@@ -4,9 +4,27 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from workbench.plot._base import axis_label, plt, wrap_title
 from workbench.solver import Status
+
+
+def _missing_note(missing: list[tuple[str, float, str]], n_tolerances: int) -> str:
+    """``"scipy:LSODA: model_failure at every tolerance; scipy:Radau: no error to show at
+    1e-05, 1e-06"``: the settings without a point, by method and reason."""
+    parts = []
+    for method in dict.fromkeys(m for m, _, _ in missing):
+        rows = [(t, why) for m, t, why in missing if m == method]
+        for why in dict.fromkeys(w for _, w in rows):
+            tols = [t for t, w in rows if w == why]
+            where = (
+                "at every tolerance"
+                if len(rows) == len(tols) == n_tolerances
+                else "at " + ", ".join(f"{t:.0e}" for t in tols)
+            )
+            parts.append(f"{method}: {why} {where}")
+    return "; ".join(parts)
 
 
 def work_precision_figure(wp: xr.Dataset, error: str = "short_error") -> plt.Figure:
@@ -15,7 +33,7 @@ def work_precision_figure(wp: xr.Dataset, error: str = "short_error") -> plt.Fig
     the settings without a point (a failed run, or no error to show) are listed in the panel
     with their status instead of a legend entry without a point."""
     fig, ax = plt.subplots(figsize=(7.0, 5.0), layout="constrained")
-    missing = []
+    missing, labelled = [], []
     for k, method in enumerate(wp.solver_method.values):
         sel = wp.sel(solver_method=method)
         ok = np.isfinite(sel[error].values) & np.isfinite(sel.wall_time.values)
@@ -33,6 +51,10 @@ def work_precision_figure(wp: xr.Dataset, error: str = "short_error") -> plt.Fig
         )
         (line,) = ax.loglog(x, y, "o-", ms=4, label=label)
         for i, dy in ((0, 4), (len(t) - 1, -10)):  # the loose end above, the tight end below
+            at = (np.log10(x[i]), np.log10(y[i]))
+            if any(abs(at[0] - a) < 0.06 and abs(at[1] - b) < 0.25 for a, b in labelled):
+                continue  # another line's end label is there already (the legend has both)
+            labelled.append(at)
             ax.annotate(
                 f"{t[i]:.0e}",
                 (x[i], y[i]),
@@ -42,21 +64,20 @@ def work_precision_figure(wp: xr.Dataset, error: str = "short_error") -> plt.Fig
                 textcoords="offset points",
             )
     if missing:
-        by_method: dict[str, list[str]] = {}
-        for method, tol, why in missing:
-            by_method.setdefault(method, []).append(f"{tol:.0e} {why}")
-        text = "no point: " + "; ".join(f"{m} ({', '.join(v)})" for m, v in by_method.items())
         ax.text(
-            0.01,
-            0.01,
-            wrap_title(text, 80),
+            0.0,
+            -0.13,
+            wrap_title("no point: " + _missing_note(missing, len(wp.rtol)), 110),
             transform=ax.transAxes,
-            fontsize=6,
-            va="bottom",
+            fontsize=7,
+            va="top",
             ha="left",
             color="tab:red",
-            bbox={"facecolor": "white", "alpha": 0.8, "lw": 0},
         )
+    for axis in (ax.xaxis, ax.yaxis):  # decades and their 2 and 5, as plain numbers
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(f"{wp.wall_time.attrs['long_name']} [s]")
     ax.set_ylabel(axis_label(wp[error]), fontsize=8)
     ax.set_title(
