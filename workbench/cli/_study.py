@@ -9,7 +9,7 @@ import sys
 import time as _time
 from pathlib import Path
 
-from workbench.cli._console import add_quiet, positive_int, report_failures
+from workbench.cli._console import add_quiet, compile_kernel, positive_int, report_failures
 from workbench.cli._exit_codes import UsageError, worst_exit_code
 
 
@@ -27,7 +27,7 @@ def _failed_runs(ds) -> tuple[int, int]:
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
-    from workbench.study import available_studies, run_study, write_report
+    from workbench.study import available_studies, load_study, run_study, write_report
 
     if args.no_progress:
         print(
@@ -54,6 +54,8 @@ def _cmd_study(args: argparse.Namespace) -> int:
     runs, n_failed, code = 0, 0, 0
     for name in names:
         t0 = _time.perf_counter()
+        for scene in load_study(name).cases.values():  # a cold cache: say so, then compile
+            compile_kernel(scene, quiet=args.quiet)
         ds = run_study(
             name,
             out=args.output,

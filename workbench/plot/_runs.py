@@ -217,6 +217,8 @@ def campaign_figure(
     for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
         da = ds[name].where(ok)
         factor, units = display_scale(da.values, da.attrs.get("units"))
+        if not np.isfinite(da.values).any():
+            _empty_panel(ax, da, note or "")
         for label, line in _lines(da, (param, "time")):
             x = np.broadcast_to(ds[param].values[:, None], line.transpose(param, "time").shape)
             y = line.transpose(param, "time").values * factor

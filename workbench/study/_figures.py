@@ -331,7 +331,6 @@ def _lle(spec, ctx):
         ax.set_ylabel(f"{label}: LLE [1/s]", fontsize=8)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
     return fig
 
 
