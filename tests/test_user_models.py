@@ -76,6 +76,18 @@ def test_a_built_in_name_is_refused():
         register(Impostor)
 
 
+def test_a_model_in_main_is_refused_with_the_remedy():
+    from workbench.models import Model, Quantity
+
+    class InMain(Model):
+        name = "in_main"
+        fixed_states = (Quantity("x", "1", "x"),)
+
+    InMain.__module__ = "__main__"  # as if defined in a notebook cell or a script run directly
+    with pytest.raises(TypeError, match="must live in an importable module"):
+        InMain().problem({}, {}, {}, ())
+
+
 @pytest.mark.slow
 def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     ns, lines = run_block("rossler")
