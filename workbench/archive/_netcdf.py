@@ -71,8 +71,18 @@ def save_run(
     return path
 
 
-def open_run(path: str | os.PathLike) -> xr.Dataset:
-    """Read a stored run (or campaign) fully into memory and close the file.
+def open_run(path: str | os.PathLike, *, chunks: int | str | dict | None = None) -> xr.Dataset:
+    """Read a stored run (or campaign).
+
+    Parameters
+    ----------
+    path : str or path
+        A netCDF file written by :func:`save_run` (or :func:`workbench.run_campaign`).
+    chunks : int, "auto", dict or None
+        None (default): read everything into memory and close the file. Otherwise open it
+        lazily: variables are dask arrays in chunks of this size (as :func:`xarray.open_dataset`
+        takes them, e.g. ``{"time": 100_000}``, ``"auto"``, or ``{}`` for one chunk per
+        variable) read when computed; the file stays open until ``ds.close()``.
 
     An archive of an older format (its ``format_version``, :mod:`workbench._version`) is
     upgraded in memory where the change is unambiguous (``upgraded_from_format`` says so).
@@ -85,6 +95,16 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         The file is not a readable netCDF file (truncated, corrupt, or something else), or an
         archive of a newer format, or of an older one that cannot be upgraded (the message
         says what to do).
+
+    Examples
+    --------
+    >>> import workbench, tempfile, pathlib
+    >>> ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 2}})
+    >>> path = workbench.save_run(ds, pathlib.Path(tempfile.mkdtemp()) / "run.nc")
+    >>> lazy = open_run(path, chunks={"time": 50})
+    >>> lazy.x.chunks[0][:2], float(lazy.x.max()) == float(ds.x.max())
+    ((50, 50), True)
+    >>> lazy.close()
     """
     path = Path(path)
     if not path.exists():
@@ -93,10 +113,14 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         raise ArchiveError(f"{str(path)!r} is a directory, not a netCDF file")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds = ds.load()
+            if chunks is None:
+                ds = ds.load()
     except (OSError, ValueError, RuntimeError, KeyError, IndexError) as exc:
         raise ArchiveError(
             f"{str(path)!r} is not a readable netCDF file (truncated or corrupt?): "
             f"{type(exc).__name__}: {exc}"
         ) from None
-    return upgrade_archive(ds, str(path))
+    if chunks is None:
+        return upgrade_archive(ds, str(path))
+    # readable: now lazily, where a chunk that names no dim is xarray's own error
+    return upgrade_archive(xr.open_dataset(path, engine="netcdf4", chunks=chunks), str(path))

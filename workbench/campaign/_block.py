@@ -7,8 +7,10 @@ file atomically and returns a small summary to the client.
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
+import sys
 import time
 import traceback
 from dataclasses import dataclass
@@ -83,7 +85,9 @@ PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork s
 
 @dataclass(frozen=True)
 class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points, where to write."""
+    """What one task needs: the campaign scene (TOML), which points, where to write, and the
+    module that defines the scene's model when it is not one of workbench's (a user's model,
+    registered when imported: a worker process that did not import it yet does so first)."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -93,6 +97,8 @@ class BlockTask:
     campaign_id: str
     block: int
     max_memory: float | str | None = None  # the memory limit of one point's records
+    model_module: str = ""
+    model_directory: str = ""  # where the module's file lies, for a worker without it on sys.path
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -150,6 +156,19 @@ def _point(scene: Scene, params: dict[str, float], max_memory=None) -> dict:
     return out | {"wall": time.perf_counter() - t0}
 
 
+def _import_model(module: str, directory: str) -> None:
+    """Import (and so register) a user's model module in this worker: by name, and if the
+    worker's ``sys.path`` lacks it (a fork server started before the caller extended its
+    path), from the directory the caller imported it from."""
+    try:
+        importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if not directory or exc.name != module.split(".")[0]:
+            raise
+        sys.path.insert(0, directory)
+        importlib.import_module(module)
+
+
 def run_block(task: BlockTask) -> dict:
     """Run the points of one block and write them to ``task.path`` (atomically).
 
@@ -162,6 +181,8 @@ def run_block(task: BlockTask) -> dict:
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
+    if task.model_module:
+        _import_model(task.model_module, task.model_directory)
     scene = scene_from_toml(task.scene_toml)
     runs = [
         _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory) for v in task.values

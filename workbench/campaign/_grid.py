@@ -17,6 +17,7 @@ from workbench.models import get_model
 from workbench.run import (
     REALISATION_ATTRS,
     check_memory,
+    parameter_coords,
     record_count,
     results_digest,
     values_per_record,
@@ -127,12 +128,14 @@ def check_archive_memory(scene: Scene, grid: SweepGrid, max_memory=None) -> floa
 
 
 def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a model parameter (from its declaration), or of a swept
-    ``[run]`` key (``realisation``)."""
+    """``units``, ``long_name`` and ``comment`` of a model parameter (from its declaration, as a
+    run's coordinate of it has them), or of a swept ``[run]`` key (``realisation``)."""
     if name in RUN_SWEEP_KEYS:
         return dict(REALISATION_ATTRS)
-    p = get_model(scene.model).parameter(name)
-    return {"units": p.units, "long_name": p.long_name}
+    model = get_model(scene.model)
+    model.parameter(name)  # KeyError for a name that is no parameter
+    # the attributes a run gives the parameter's coordinate (units, long name, comment)
+    return parameter_coords(model, {name: 0.0})[name][2]
 
 
 def format_point(point: Mapping[str, float]) -> str:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -29,6 +30,7 @@ from workbench.campaign._grid import (
 )
 from workbench.campaign._schedule import longest_first
 from workbench.campaign._store import Store
+from workbench.models import get_model
 from workbench.run import format_bytes
 from workbench.scene import Scene, SceneSource, load_scene
 
@@ -212,6 +214,7 @@ def _run_locked(
     blocks = grid.blocks(chunk)
     code = code_of(scene)
     done = st.verified_blocks(manifest, blocks, code)
+    model_module, model_directory = _model_module(scene)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -222,6 +225,8 @@ def _run_locked(
             campaign_id=cid,
             block=i,
             max_memory=max_memory,
+            model_module=model_module,
+            model_directory=model_directory,
         )
         for i, rng in enumerate(blocks)
         if i not in done
@@ -358,10 +363,23 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
     )
 
 
-def _bar(total: int, initial: int):
-    from tqdm.auto import tqdm
+def _model_module(scene: Scene) -> tuple[str, str]:
+    """The module that defines a user's model (a worker imports it to know the model) and the
+    directory it lies under, or ('', '') for a model of workbench."""
+    module = type(get_model(scene.model)).__module__
+    if module.split(".")[0] == "workbench":
+        return "", ""
+    file = getattr(sys.modules.get(module), "__file__", None)
+    if not file:
+        return module, ""
+    depth = module.count(".") + (Path(file).name == "__init__.py")
+    return module, str(Path(file).resolve().parents[depth])
 
-    return tqdm(total=total, initial=initial, unit="pt", desc="campaign", smoothing=0.05)
+
+def _bar(total: int, initial: int):
+    from workbench._progress import Progress
+
+    return Progress(total, initial=initial, unit="pt", desc="campaign")
 
 
 def store_paths(store: str | os.PathLike) -> dict[str, Path]:

@@ -11,6 +11,7 @@ import numpy as np
 
 from workbench.campaign._block import INVALID, RAISED, STATUS, failed
 from workbench.cli._console import (
+    add_quiet,
     max_memory_option,
     positive_float,
     positive_int,
@@ -43,7 +44,7 @@ def _client(address: str, timeout: float):
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file
     from workbench.campaign import CampaignError, run_campaign, summary
-    from workbench.cli._console import announce_compile
+    from workbench.cli._console import compile_kernel
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -61,7 +62,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             if args.quiet:  # otherwise run_campaign prints it above its progress bar
                 print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
         else:
-            announce_compile(scene)
+            compile_kernel(scene, quiet=args.quiet)
         with warnings.catch_warnings():  # the summary below lists every failed point
             warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
             ds = run_campaign(
@@ -130,6 +131,6 @@ def register_cli(sub) -> None:
     p.add_argument(
         "--restart", action="store_true", help="discard a stored campaign and start afresh"
     )
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
     max_memory_option(p, "the campaign's archive (or one point's records)")
     p.set_defaults(func=_cmd_campaign)

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from workbench.cli._console import float_list, output_and_figure, positive_float, save_with_figure
+from workbench.cli._console import (
+    add_quiet,
+    float_list,
+    output_and_figure,
+    positive_float,
+    save_with_figure,
+)
 from workbench.cli._exit_codes import UsageError
 
 
@@ -107,4 +113,5 @@ def register_cli(sub) -> None:
         "--record-dt", type=positive_float, help="record interval, s (default: coarsest step)"
     )
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_verify)

@@ -39,6 +39,7 @@ from workbench.run._memory import (
     values_per_record,
     what_to_lower,
 )
+from workbench.run._parameters import PARAMETERS_ATTR, parameter_coords
 from workbench.run._prepare import Prepared, prepare, record_times
 from workbench.run._simulate import check_error, integrate, simulate
 
@@ -46,6 +47,7 @@ __all__ = [
     "DEFAULT_PERTURBATION",
     "MEMORY_ENV",
     "MemoryLimitError",
+    "PARAMETERS_ATTR",
     "REALISATION_ATTRS",
     "TIME_ATTRS",
     "Prepared",
@@ -62,6 +64,7 @@ __all__ = [
     "derive",
     "divergence_time",
     "integrate",
+    "parameter_coords",
     "prepare",
     "provenance",
     "record_times",

@@ -79,7 +79,8 @@ def simulate(
         Loaded with :func:`workbench.load_scene`. A scene with a ``[sweep]`` is a campaign:
         use :func:`workbench.run_campaign`.
     progress : bool
-        Show a progress bar over simulated time.
+        Show progress over simulated time on stderr: a bar on a terminal, a few lines in a
+        log (:class:`workbench._progress.Progress`).
     throw : bool
         Raise :class:`workbench.SolverError` if the run fails (default). With ``throw=False`` a
         failed run returns its dataset: the records before the failure, NaN after it, and the
@@ -133,24 +134,14 @@ def simulate(
 
 
 def _with_progress_bar(prepared: Prepared) -> RunResult:
-    from tqdm.auto import tqdm
+    """Integrate with progress over simulated time (:class:`workbench._progress.Progress`: a
+    bar on a terminal, a few lines in a log)."""
+    from workbench._progress import Progress
 
     t0 = prepared.problem.t0
-    bar = tqdm(
-        total=float(prepared.times[-1] - t0),
-        unit="s",
-        desc="simulated time",
-        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]",
-    )
-
-    def callback(t: float) -> None:
-        bar.n = t - t0
-        bar.refresh()
-
-    try:
-        return integrate(prepared, progress=callback)
-    finally:
-        bar.close()
+    total = float(prepared.times[-1] - t0)
+    with Progress(total, desc="simulated time", unit="s") as bar:
+        return integrate(prepared, progress=lambda t: bar.update_to(t - t0))
 
 
 def check_error(scene: Scene) -> dict[str, float]:
