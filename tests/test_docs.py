@@ -17,12 +17,22 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 PAGES = sorted(p for p in DOCS.rglob("*.md") if not p.is_symlink())
 FENCE = re.compile(r"^```(\w+)\n(.*?)^```", re.S | re.M)
-BLOCKS = [
-    (page, code)
-    for page in PAGES
-    for lang, code in FENCE.findall(page.read_text())
-    if lang == "python"
-]
+#: a block marked ``<!-- file: NAME -->`` or ``<!-- run: NAME -->`` (docs/own-models.md) is a
+#: module of a user's model, or runs with those modules as files: tests/test_user_models.py
+#: runs them so
+MARKED = re.compile(r"<!-- (?:file|run): \S+ -->\n$")
+
+
+def _python_blocks(page: Path) -> list[tuple[Path, str]]:
+    text = page.read_text()
+    return [
+        (page, m.group(2))
+        for m in FENCE.finditer(text)
+        if m.group(1) == "python" and not MARKED.search(text[: m.start()])
+    ]
+
+
+BLOCKS = [block for page in PAGES for block in _python_blocks(page)]
 COMMANDS = [
     line
     for page in PAGES + [ROOT / "README.md"]

@@ -20,7 +20,7 @@ import pytest
 
 import workbench
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "models.md"
+DOC = Path(__file__).resolve().parents[1] / "docs" / "own-models.md"
 SPROTT = (0.0714, 0.0, -5.3943)  # Rössler a = b = 0.2, c = 5.7 (Sprott 2003, Appendix A)
 
 
