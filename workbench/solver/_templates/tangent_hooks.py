@@ -55,14 +55,14 @@ from workbench.solver._templates.placeholder_hooks import rhs as model_rhs  # @@
 N_META = 7
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _meta(ip):
     """(n, na, m, ne, len(p), len(ip), work size) of the model, from the tail of ``ip``."""
     k = ip.size - N_META
     return ip[k], ip[k + 1], ip[k + 2], ip[k + 3], ip[k + 4], ip[k + 5], ip[k + 6]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
@@ -135,13 +135,13 @@ def rhs(t, Y, p, ip, aux, work, dY):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def event_values(t, Y, p, ip, aux, work, g):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reset(k, t, y, a, pm, ipm, wm, out):
     """``out = R(t, (y, a))``: the model's event update applied to copies."""
     n = y.size
@@ -152,7 +152,7 @@ def _reset(k, t, y, a, pm, ipm, wm, out):
     out[n:] = ac
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def apply_event(k, t, Y, p, ip, aux, work):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
