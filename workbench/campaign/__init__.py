@@ -19,7 +19,9 @@ parameter dims first, then ``time`` and the model's dims.
 Modules: ``_run`` (the orchestration), ``_grid`` (the sweep's points, the campaign's identity
 and code digest), ``_store`` (the store on disk), ``_errors``,
 ``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
-(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server),
+(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_warm`` (the kernel loaded
+once; :func:`warm_kernel` compiles it into the cache before a cluster's workers start),
+``_preload`` (the fork server), ``_cluster`` (the worker plugin of a dask cluster),
 ``_lifeline`` (processes that die with the campaign).
 
 Store layout
@@ -90,6 +92,7 @@ from workbench.campaign._assemble import summary
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._grid import SweepGrid, expand_sweep
 from workbench.campaign._run import run_campaign, store_paths
+from workbench.campaign._warm import warm_kernel
 
 __all__ = [
     "CampaignError",
@@ -99,4 +102,5 @@ __all__ = [
     "run_campaign",
     "store_paths",
     "summary",
+    "warm_kernel",
 ]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import signal
+import threading
 import time
 from dataclasses import dataclass
 
@@ -141,6 +142,7 @@ def run_block(task: BlockTask) -> dict:
     """
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
+    started = time.time()
     wall0 = time.perf_counter()
     scene = scene_from_toml(task.scene_toml)
     runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
@@ -149,7 +151,9 @@ def run_block(task: BlockTask) -> dict:
     ds.attrs.update(
         code_digest=code,
         worker_pid=os.getpid(),
+        worker_thread=threading.get_native_id(),
         worker_task_number=_TASKS_IN_PROCESS,
+        block_started=started,
         block_wall_time=time.perf_counter() - wall0,
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
