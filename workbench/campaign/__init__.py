@@ -22,6 +22,7 @@ and code digest), ``_store`` (the store on disk), ``_errors``,
 (one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_warm`` (the kernel loaded
 once; :func:`warm_kernel` compiles it into the cache before a cluster's workers start),
 ``_preload`` (the fork server), ``_cluster`` (the worker plugin of a dask cluster),
+``_jobqueue`` (:func:`jobqueue_cluster`: workers on a batch system, docs/cluster.md),
 ``_lifeline`` (processes that die with the campaign).
 
 Store layout
@@ -91,6 +92,7 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 from workbench.campaign._assemble import summary
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._grid import SweepGrid, expand_sweep
+from workbench.campaign._jobqueue import jobqueue_cluster
 from workbench.campaign._run import run_campaign, store_paths
 from workbench.campaign._warm import warm_kernel
 
@@ -99,6 +101,7 @@ __all__ = [
     "CampaignWarning",
     "SweepGrid",
     "expand_sweep",
+    "jobqueue_cluster",
     "run_campaign",
     "store_paths",
     "summary",
