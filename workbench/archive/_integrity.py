@@ -86,9 +86,13 @@ def file_problem(path: str | os.PathLike, expected: str | None) -> str | None:
 
 
 def read_manifest(
-    path: str | os.PathLike, format: str, what: str, error: type[Exception] = ArchiveError
+    path: str | os.PathLike,
+    format: str | tuple[str, ...],
+    what: str,
+    error: type[Exception] = ArchiveError,
 ) -> dict:
-    """The JSON manifest of a store at ``path``, which must have ``"format": format``.
+    """The JSON manifest of a store at ``path``, which must have ``"format": format`` (or one of
+    several formats, a tuple: the current one first, then older ones still read).
 
     Raises ``error`` naming the path when the file cannot be read or parsed, or holds another
     format; the message says that ``restart=True`` (CLI ``--restart``) starts ``what`` (e.g.
@@ -101,10 +105,12 @@ def read_manifest(
             f"{str(path)!r} cannot be read ({exc}); pass restart=True (CLI --restart) to start "
             f"{what} afresh"
         ) from None
-    if not isinstance(data, dict) or data.get("format") != format:
+    formats = (format,) if isinstance(format, str) else tuple(format)
+    if not isinstance(data, dict) or data.get("format") not in formats:
         found = data.get("format") if isinstance(data, dict) else None
         raise error(
-            f"{str(path)!r} has format {found!r}, expected {format!r}; pass restart=True (CLI "
+            f"{str(path)!r} has format {found!r}, expected {' or '.join(map(repr, formats))}; "
+            "pass restart=True (CLI "
             f"--restart) to start {what} afresh, or choose another output path"
         )
     return data

@@ -32,16 +32,18 @@ Store layout
     sweep.nc                 the assembled campaign (netCDF-4), written last, atomically
     sweep.nc.blocks/
         lock                 held (flock) by the one process writing the store: pid, host
-        manifest.json        scene TOML, grid, chunk size, campaign id, code digest, and
+        manifest.json        scene TOML, grid, chunk size, campaign id, code digest, the
+                             points of each block (flat C-order indices over the grid), and
                              the SHA-256 and code digest of every committed block
-        block-00000.nc       points 0 .. chunk-1 (flat C-order index over the grid)
-        block-00001.nc       points chunk .. 2 chunk-1
-        ...
+        block-00000.nc       up to chunk points
+        block-00001.nc       ...
 
-* Blocks start longest first: ranked by their points' simulated time (transient + recorded
-  cycles times the forcing period, or transient + duration), the longest-processing-time rule
-  (Graham 1969), so that a sweep over the forcing frequency does not end waiting for its
-  slowest, low-frequency block.
+* Blocks are dealt by estimated cost: the points ranked by their simulated time (transient +
+  recorded cycles times the forcing period, or transient + duration) are dealt to the blocks
+  like cards, in a snake order, so that every block holds one point of each tier of cost and
+  the blocks cost about the same (a sweep over the forcing frequency cut into contiguous
+  blocks would end waiting for its low-frequency block). They start longest first, the
+  longest-processing-time rule (Graham 1969).
 * Block files are netCDF-3 (64-bit offset, scipy's writer; a third of the write time of
   netCDF-4 for small files, whose cost is HDF5's per-variable overhead); the task also
   returns a small block (up to 32 MiB) to the client with its summary, so that the client

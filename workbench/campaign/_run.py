@@ -19,7 +19,7 @@ from workbench.campaign._block import BlockTask, failed
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
 from workbench.campaign._grid import SweepGrid, campaign_id, code_of, expand_sweep, format_point
-from workbench.campaign._schedule import longest_first
+from workbench.campaign._schedule import longest_first, partition
 from workbench.campaign._store import Store
 from workbench.scene import Scene, SceneSource, load_scene
 
@@ -182,12 +182,12 @@ def _run_locked(
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
         cid = campaign_id(scene, chunk)
-        manifest = st.write_manifest(scene, grid, chunk, cid)
+        manifest = st.write_manifest(scene, grid, chunk, cid, partition(scene, grid, chunk))
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
         cid = manifest["campaign_id"]
     st.remove_temporaries()
-    blocks = grid.blocks(chunk)
+    blocks = st.blocks(manifest, grid)
     code = code_of(scene)
     done = st.verified_blocks(manifest, blocks, code)
     tasks = [
