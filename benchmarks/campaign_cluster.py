@@ -173,8 +173,13 @@ def child(args: argparse.Namespace) -> None:
     if args.one == "pool":
         kw["workers"] = args.workers
     else:
+        import dask
         from distributed import Client, LocalCluster
 
+        from workbench.campaign import DASK_CONFIG
+
+        if args.one in ("lean", "threads"):  # the whole child: the scheduler lives here
+            dask.config.set(DASK_CONFIG)
         t0 = time.perf_counter()
         n, threads = (1, args.workers) if args.one == "threads" else (args.workers, 1)
         cluster = LocalCluster(
@@ -273,8 +278,8 @@ def describe(run: dict, workers: int) -> str:
     )
 
 
-def compare(args: argparse.Namespace, modes: tuple[str, str]) -> None:
-    """Alternate the two modes ``--repeats`` times; print medians and the ratio."""
+def compare(args: argparse.Namespace, modes: tuple[str, ...]) -> None:
+    """Alternate the modes ``--repeats`` times; print medians and the ratios to the first."""
     rows: dict[str, list[dict]] = {m: [] for m in modes}
     for rep in range(args.repeats):
         for mode in modes:
@@ -284,39 +289,54 @@ def compare(args: argparse.Namespace, modes: tuple[str, str]) -> None:
             print(
                 f"  [{rep + 1}/{args.repeats}] {mode:8s} cold {cold['wall']:6.2f} s wall "
                 f"{cold['cpu']:6.2f} s CPU"
-                + (f", warm {r['runs'][1]['wall']:6.2f} s" if len(r["runs"]) > 1 else "")
+                + (
+                    f", warm {r['runs'][1]['wall']:6.2f} s wall {r['runs'][1]['cpu']:6.2f} s CPU"
+                    if len(r["runs"]) > 1
+                    else ""
+                )
                 + (f" (cluster start {r['start']:.2f} s)" if "start" in r else "")
                 + f"; load {r['load']:.1f} -> {r['load_after']:.1f}",
                 flush=True,
             )
     digests = {r["digest"] for m in modes for row in rows[m] for r in row["runs"]}
-    labels = ("cold", "warm")[: args.runs]
-    for label in labels:
+    base = modes[0]
+    summary: dict = {}
+    for label in ("cold", "warm")[: args.runs]:
         med = {m: _median(rows[m], "wall", label) for m in modes}
         cpu = {m: _median(rows[m], "cpu", label) for m in modes}
+        summary[label] = {"wall": med, "cpu": cpu}
         print(
             f"{label}: median wall "
             + ", ".join(f"{m} {med[m]:.2f} s ({_spread(rows[m], 'wall', label)})" for m in modes)
-            + f"; ratio {modes[1]} / {modes[0]} {med[modes[1]] / med[modes[0]]:.3f}; median CPU "
+            + "; ratio to "
+            + base
+            + " "
+            + ", ".join(f"{m} {med[m] / med[base]:.3f}" for m in modes[1:])
+            + "; median CPU "
             + ", ".join(f"{m} {cpu[m]:.2f} s" for m in modes)
-            + f" (ratio {cpu[modes[1]] / cpu[modes[0]]:.3f})"
+            + " (ratio "
+            + ", ".join(f"{m} {cpu[m] / cpu[base]:.3f}" for m in modes[1:])
+            + ")"
         )
     for m in modes:
-        best = min((row["runs"][0] for row in rows[m]), key=lambda r: r["wall"])
-        print(f"  {m} (fastest cold run): {describe(best, args.workers)}")
-        overlap = statistics.median(threads_overlap(row["runs"][0]) for row in rows[m])
+        best = min((row["runs"][-1] for row in rows[m]), key=lambda r: r["wall"])
+        print(f"  {m} (fastest {best['label']} run): {describe(best, args.workers)}")
+        overlap = statistics.median(threads_overlap(row["runs"][-1]) for row in rows[m])
         print(
-            f"  {m}: integrations at once (summed solver wall / task phase, median of the cold "
-            f"runs): {overlap:.2f}"
+            f"  {m}: integrations at once (summed solver wall / task phase, median of the "
+            f"{best['label']} runs): {overlap:.2f}"
         )
+        summary.setdefault("overlap", {})[m] = overlap
     print(f"same numbers in every run: {len(digests) == 1} ({len(digests)} distinct digests)")
-    if "start" in rows[modes[1]][0]:
-        starts = [row["start"] for row in rows[modes[1]]]
+    starts = [row["start"] for m in modes for row in rows[m] if "start" in row]
+    if starts:
         print(f"cluster start (outside the campaigns): median {statistics.median(starts):.2f} s")
     for row in (r for m in modes for r in rows[m]):
         for run in row["runs"]:
             run.pop("point_costs", None)
-    save(f"{modes[0]}-{modes[1]}", args, {"rows": rows, "same_numbers": len(digests) == 1})
+    save(
+        "-".join(modes), args, {"summary": summary, "rows": rows, "same_numbers": len(digests) == 1}
+    )
 
 
 def save(section: str, args: argparse.Namespace, payload: dict) -> None:
@@ -413,6 +433,60 @@ def efficiency(args: argparse.Namespace) -> None:
     )
 
 
+def _idle_child(config: str, seconds: float) -> None:
+    """CPU per second of an idle LocalCluster of 2 workers (this process: client, scheduler,
+    nannies; and each worker process)."""
+    import dask
+    import psutil
+    from distributed import Client, LocalCluster
+
+    from workbench.campaign import DASK_CONFIG
+
+    if config == "lean":
+        dask.config.set(DASK_CONFIG)
+    with (
+        LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster,
+        Client(cluster),
+    ):
+        time.sleep(2.0)
+        me = psutil.Process()
+        procs = [me, *me.children(recursive=True)]
+        t0 = {p.pid: sum(p.cpu_times()[:2]) for p in procs}
+        time.sleep(seconds)
+        used = {p.pid: sum(p.cpu_times()[:2]) - t0[p.pid] for p in procs}
+    workers = sorted((v / seconds for k, v in used.items() if k != me.pid and v > 0), reverse=True)
+    print("JSON " + json.dumps({"client": used[me.pid] / seconds, "workers": workers[:2]}))
+
+
+def idle(args: argparse.Namespace) -> None:
+    """Idle CPU of a 2-worker LocalCluster with dask's defaults and with DASK_CONFIG."""
+    print("--- idle LocalCluster of 2 workers: CPU s per s of wall time (alternated)")
+    out: dict = {"default": [], "lean": []}
+    for _ in range(args.repeats):
+        for config in out:
+            code = (
+                f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); "
+                f"import campaign_cluster as c; c._idle_child({config!r}, 15.0)"
+            )
+            res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+            line = [ln for ln in res.stdout.splitlines() if ln.startswith("JSON ")][-1]
+            r = json.loads(line[5:])
+            r["total"] = r["client"] + sum(r["workers"])
+            out[config].append(r)
+            print(
+                f"  {config:8s} client+scheduler {r['client']:.4f}, workers "
+                f"{', '.join(f'{w:.4f}' for w in r['workers'])}: total {r['total']:.4f}; load "
+                f"{os.getloadavg()[0]:.1f}",
+                flush=True,
+            )
+    med = {k: statistics.median(r["total"] for r in v) for k, v in out.items()}
+    print(
+        f"median total: dask's defaults {med['default']:.3f}, DASK_CONFIG {med['lean']:.3f} "
+        "CPU-s per s"
+    )
+    save("idle", args, {"idle": out, "median": med})
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2, help="workers (single-thread) (2)")
@@ -425,7 +499,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=2, help="campaigns per process: cold, warm (2)")
     ap.add_argument("--threads", action="store_true", help="1 worker x N threads vs N x 1")
     ap.add_argument("--efficiency", action="store_true", help="N workers against 1 (pool)")
-    ap.add_argument("--one", choices=("pool", "cluster", "threads"), help=argparse.SUPPRESS)
+    ap.add_argument("--idle", action="store_true", help="idle CPU of dask's processes")
+    ap.add_argument("--one", choices=("pool", "cluster", "lean", "threads"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.points is None:
         args.points = 300 if args.efficiency else 32
@@ -440,12 +515,20 @@ def main() -> None:
     if args.efficiency:
         args.runs = 1
         efficiency(args)
+    elif args.idle:
+        idle(args)
     elif args.threads:
-        print(f"--- 1 worker x {args.workers} threads against {args.workers} workers x 1 thread")
-        compare(args, ("cluster", "threads"))
+        print(
+            f"--- 1 worker x {args.workers} threads against {args.workers} workers x 1 thread "
+            "(LocalCluster, workbench.campaign.DASK_CONFIG)"
+        )
+        compare(args, ("lean", "threads"))
     else:
-        print(f"--- local pool against LocalCluster, {args.workers} single-thread workers each")
-        compare(args, ("pool", "cluster"))
+        print(
+            f"--- local pool against LocalCluster, {args.workers} single-thread workers each: "
+            "dask's defaults (cluster) and workbench.campaign.DASK_CONFIG (lean)"
+        )
+        compare(args, ("pool", "cluster", "lean"))
     print(f"load average at the end: {os.getloadavg()}")
 
 

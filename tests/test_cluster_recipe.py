@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import dask
+import distributed
 import pytest
 
 import workbench
@@ -69,6 +71,8 @@ def test_jobqueue_cluster_job_script(tmp_path):
     assert f"export WORKBENCH_CACHE_DIR={cache}" in script
     for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         assert f"export {v}=1" in script
+    assert "export DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False" in script
+    assert "export DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL=1s" in script
     command = script.strip().splitlines()[-1]
     assert command.startswith(f"{sys.executable} -m distributed.cli.dask_worker tcp://")
     assert "--nthreads 1" in command and "--nworkers 8" in command
@@ -135,6 +139,10 @@ def test_the_guides_recipe_runs_a_campaign_on_the_job_scripts_workers(tmp_path, 
             for env in workers.values():
                 assert env.get("WORKBENCH_CACHE_DIR") == str(cache_root())
                 assert env.get("OMP_NUM_THREADS") == "1"
+                assert env.get("DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED") == "False"
+            with distributed.Client(cluster) as client:
+                profiling = client.run(dask.config.get, "distributed.worker.profile.enabled")
+            assert profiling and not any(profiling.values())  # the setting reached the workers
             computed_by = set()
             for path in store_paths(store)["blocks"].glob("block-*.nc"):
                 computed_by.add(int(workbench.open_run(path).attrs["worker_pid"]))

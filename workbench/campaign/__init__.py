@@ -94,11 +94,12 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 from workbench.campaign._assemble import summary
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._grid import SweepGrid, expand_sweep
-from workbench.campaign._jobqueue import jobqueue_cluster
+from workbench.campaign._jobqueue import DASK_CONFIG, jobqueue_cluster
 from workbench.campaign._run import run_campaign, store_paths
 from workbench.campaign._warm import warm_kernel
 
 __all__ = [
+    "DASK_CONFIG",
     "CampaignError",
     "CampaignWarning",
     "SweepGrid",

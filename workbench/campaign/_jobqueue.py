@@ -9,7 +9,8 @@ one process then holds the kernel once for all its threads), with
   compiled kernel that :func:`workbench.campaign.warm_kernel` put there instead of compiling it
   (30-90 s per model and worker otherwise);
 * numpy's BLAS and OpenMP pools at one thread (``OMP_NUM_THREADS=1`` and the like), so that the
-  analysis a worker may run does not start a thread per core beside the other workers.
+  analysis a worker may run does not start a thread per core beside the other workers;
+* dask's idle timers slowed (:data:`DASK_CONFIG`, exported as ``DASK_...`` variables).
 
 Nothing is submitted until ``cluster.scale(jobs=...)``. Needs the ``cluster`` extra
 (``pip install workbench[cluster]``: dask-jobqueue). See docs/cluster.md.
@@ -20,10 +21,25 @@ from __future__ import annotations
 import os
 import shlex
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["SYSTEMS", "jobqueue_cluster"]
+__all__ = ["DASK_CONFIG", "SYSTEMS", "jobqueue_cluster"]
+
+#: dask settings for a cluster that runs campaigns. dask's processes run timers whether or not
+#: there is work: the statistical profiler of every worker (every 10 ms), the event loop's
+#: tick (20 ms) and the system monitor (0.5 s). Measured on an idle LocalCluster of 2 workers
+#: (2-core machine, load ~10): 0.098 CPU-s per second of wall time with dask's defaults, 0.021
+#: with these (benchmarks/campaign_cluster.py --idle); a campaign's points do not need them.
+#: Set them where the cluster starts: ``with dask.config.set(DASK_CONFIG): LocalCluster(...)``,
+#: or let :func:`workbench.campaign.jobqueue_cluster` export them to its jobs.
+DASK_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+}
+
 
 # batch system -> dask_jobqueue class
 SYSTEMS = {
@@ -45,6 +61,7 @@ def jobqueue_cluster(
     memory: str,
     cache_dir: str | os.PathLike,
     threads_per_worker: int = 1,
+    dask_config: Mapping[str, Any] = DASK_CONFIG,
     **options: Any,
 ):
     """A dask-jobqueue cluster whose jobs run campaign workers (see the module docstring).
@@ -62,6 +79,10 @@ def jobqueue_cluster(
         exported as ``WORKBENCH_CACHE_DIR`` in every job.
     threads_per_worker : int
         Threads per worker process; must divide ``cores``. 1 (default): one process per core.
+    dask_config : mapping
+        dask settings of the workers (exported to the jobs as ``DASK_...`` variables) and of
+        the scheduler (in this process); default :data:`DASK_CONFIG` (dask's idle timers
+        slowed); ``{}`` keeps dask's own.
     **options
         Passed to the dask_jobqueue class (``queue``, ``account``, ``walltime``,
         ``job_script_prologue`` (run after workbench's exports), ``job_extra_directives``, ...).
@@ -102,15 +123,25 @@ def jobqueue_cluster(
             "jobqueue_cluster needs dask-jobqueue: pip install 'workbench[cluster]' (or "
             "dask-jobqueue)"
         ) from exc
+    import dask
+
     prologue = [f"export WORKBENCH_CACHE_DIR={shlex.quote(str(cache))}"]
     prologue += [f"export {v}=1" for v in SINGLE_THREADED]
+    prologue += [f"export {_env_name(k)}={shlex.quote(str(v))}" for k, v in dask_config.items()]
     prologue += list(options.pop("job_script_prologue", None) or [])
     options.setdefault("python", sys.executable)  # the same environment on the nodes
     cls = getattr(dask_jobqueue, SYSTEMS[system])
-    return cls(
-        cores=cores,
-        processes=cores // threads_per_worker,
-        memory=memory,
-        job_script_prologue=prologue,
-        **options,
-    )
+    with dask.config.set(dict(dask_config)):  # the scheduler starts here, in this process
+        return cls(
+            cores=cores,
+            processes=cores // threads_per_worker,
+            memory=memory,
+            job_script_prologue=prologue,
+            **options,
+        )
+
+
+def _env_name(key: str) -> str:
+    """The environment variable of a dask setting (``distributed.admin.tick.interval`` ->
+    ``DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL``), as dask reads them at import."""
+    return "DASK_" + key.upper().replace(".", "__").replace("-", "_")
