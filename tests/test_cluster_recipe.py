@@ -76,6 +76,7 @@ def test_jobqueue_cluster_job_script(tmp_path):
     command = script.strip().splitlines()[-1]
     assert command.startswith(f"{sys.executable} -m distributed.cli.dask_worker tcp://")
     assert "--nthreads 1" in command and "--nworkers 8" in command
+    assert "--preload workbench.campaign._cluster" in command
     threaded = jobqueue_cluster(
         "pbs", cores=8, memory="16GB", cache_dir=cache, threads_per_worker=4
     )

@@ -10,7 +10,9 @@ one process then holds the kernel once for all its threads), with
   (30-90 s per model and worker otherwise);
 * numpy's BLAS and OpenMP pools at one thread (``OMP_NUM_THREADS=1`` and the like), so that the
   analysis a worker may run does not start a thread per core beside the other workers;
-* dask's idle timers slowed (:data:`DASK_CONFIG`, exported as ``DASK_...`` variables).
+* dask's idle timers slowed (:data:`DASK_CONFIG`, exported as ``DASK_...`` variables);
+* workbench imported by every worker as it starts (``--preload``), while the client waits for
+  the workers, instead of at the campaign's first block.
 
 Nothing is submitted until ``cluster.scale(jobs=...)``. Needs the ``cluster`` extra
 (``pip install workbench[cluster]``: dask-jobqueue). See docs/cluster.md.
@@ -29,15 +31,17 @@ __all__ = ["DASK_CONFIG", "SYSTEMS", "jobqueue_cluster"]
 
 #: dask settings for a cluster that runs campaigns. dask's processes run timers whether or not
 #: there is work: the statistical profiler of every worker (every 10 ms), the event loop's
-#: tick (20 ms) and the system monitor (0.5 s). Measured on an idle LocalCluster of 2 workers
-#: (2-core machine, load ~10): 0.098 CPU-s per second of wall time with dask's defaults, 0.021
-#: with these (benchmarks/campaign_cluster.py --idle); a campaign's points do not need them.
+#: tick (20 ms), the memory monitor of every worker and nanny (0.1 s) and the system monitor
+#: (0.5 s); on a machine whose cores the workers fill, their CPU comes out of the campaign's.
 #: Set them where the cluster starts: ``with dask.config.set(DASK_CONFIG): LocalCluster(...)``,
-#: or let :func:`workbench.campaign.jobqueue_cluster` export them to its jobs.
+#: or let :func:`workbench.campaign.jobqueue_cluster` export them to its jobs. What an idle
+#: cluster costs with and without them: ``python benchmarks/campaign_cluster.py --idle``
+#: (results in benchmarks/results/campaign_cluster-idle.json).
 DASK_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
     "distributed.admin.system-monitor.interval": "5s",
+    "distributed.worker.memory.monitor-interval": "1s",
 }
 
 
@@ -52,6 +56,7 @@ SYSTEMS = {
     "moab": "MoabCluster",
 }
 SINGLE_THREADED = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+PRELOAD = "workbench.campaign._cluster"  # imported by each worker as it starts
 
 
 def jobqueue_cluster(
@@ -130,6 +135,9 @@ def jobqueue_cluster(
     prologue += [f"export {_env_name(k)}={shlex.quote(str(v))}" for k, v in dask_config.items()]
     prologue += list(options.pop("job_script_prologue", None) or [])
     options.setdefault("python", sys.executable)  # the same environment on the nodes
+    # each worker imports workbench as it starts, before a campaign needs it (dask's --preload)
+    extra = list(options.pop("worker_extra_args", None) or [])
+    options["worker_extra_args"] = ["--preload", PRELOAD, *extra]
     cls = getattr(dask_jobqueue, SYSTEMS[system])
     with dask.config.set(dict(dask_config)):  # the scheduler starts here, in this process
         return cls(
