@@ -10,9 +10,11 @@ starts its fork server, which imports workbench and loads the kernel; the cluste
 import workbench and load the kernel through the worker plugin; the cluster's own start is
 timed apart, outside the campaign; a second campaign in the same process shows the warm case):
 
-``pool`` / ``cluster`` (default)
+``pool`` / ``cluster`` / ``lean`` (default)
     The local pool of N single-thread processes against a ``distributed.LocalCluster`` of N
-    single-thread workers, alternated (pool, cluster, pool, cluster, ...) ``--repeats`` times.
+    single-thread workers with dask's defaults (``cluster``) and as docs/cluster.md sets one up
+    (``lean``: ``workbench.campaign.DASK_CONFIG``, workers that import workbench as they start),
+    alternated (pool, cluster, lean, pool, ...) ``--repeats`` times.
     Prints the median wall and CPU time (every process of the run: client, scheduler, fork
     server, workers) of each, the ratio cluster / pool (target <= 1.15) and whether both
     computed the same numbers.
@@ -177,13 +179,20 @@ def child(args: argparse.Namespace) -> None:
         from distributed import Client, LocalCluster
 
         from workbench.campaign import DASK_CONFIG
+        from workbench.campaign._jobqueue import PRELOAD
 
+        options = {}
         if args.one in ("lean", "threads"):  # the whole child: the scheduler lives here
             dask.config.set(DASK_CONFIG)
+            options["preload"] = [PRELOAD]  # workers import workbench as they start
         t0 = time.perf_counter()
         n, threads = (1, args.workers) if args.one == "threads" else (args.workers, 1)
         cluster = LocalCluster(
-            n_workers=n, threads_per_worker=threads, processes=True, dashboard_address=None
+            n_workers=n,
+            threads_per_worker=threads,
+            processes=True,
+            dashboard_address=None,
+            **options,
         )
         client = Client(cluster)
         out["start"] = time.perf_counter() - t0
