@@ -351,8 +351,11 @@ def compare(args: argparse.Namespace, modes: tuple[str, ...]) -> None:
 def save(section: str, args: argparse.Namespace, payload: dict) -> None:
     """Write a section's measurements to benchmarks/results/campaign_cluster-<section>.json."""
     out = Path(__file__).resolve().parent / "results" / f"campaign_cluster-{section}.json"
+    from workbench.campaign import DASK_CONFIG
+
     meta = {
         "args": {k: v for k, v in vars(args).items() if k != "one"},
+        "dask_config_lean": DASK_CONFIG,
         "cpus": len(os.sched_getaffinity(0)),
         "load_average_end": os.getloadavg(),
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
@@ -428,6 +431,16 @@ def efficiency(args: argparse.Namespace) -> None:
             f"largest point {max(costs) / sum(costs) * target:.0%} of a worker's share)"
         )
         simulated[target] = {"dealt": eff, "contiguous": sum(costs) / (target * make_c)}
+    by_chunk = {}
+    for chunk in sorted({max(1, math.ceil(grid.size / (k * 16))) for k in (4, 8, 16, 32)}):
+        blocks = [list(b) for b in partition(scene, grid, chunk)]
+        make = simulate_schedule(costs, blocks, block_order(scene, grid, blocks), 16)
+        by_chunk[chunk] = sum(costs) / (16 * make)
+    print(
+        "  simulated at 16 workers by chunk (points per block; dealt, longest first): "
+        + ", ".join(f"{c}: {e:.1%}" for c, e in by_chunk.items())
+    )
+    simulated["16 by chunk"] = by_chunk
     print(
         f"  check at 16 workers on a 16-core machine: python benchmarks/campaign_cluster.py "
         f"--efficiency --workers 16 --points {args.points} --transient {args.transient} "
