@@ -175,3 +175,62 @@ def _worker_environments(root: int, timeout: float = 30.0) -> dict[int, dict[str
         if len(found) >= 2 or time.monotonic() > deadline:
             return found
         time.sleep(0.2)
+
+
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+
+
+def guide_numbers() -> dict[str, str]:
+    """The numbers docs/cluster.md quotes, as benchmarks/campaign_cluster.py measured them
+    (benchmarks/results/campaign_cluster-*.json), formatted as the guide writes them."""
+    import json
+
+    def load(name):
+        return json.loads((RESULTS / f"campaign_cluster-{name}.json").read_text())
+
+    idle = load("idle")["median"]
+    main = load("pool-cluster-lean")["summary"]
+    threads = load("lean-threads")["summary"]
+    eff = load("efficiency-2")
+    ratio = {
+        (label, what, mode): main[label][what][mode] / main[label][what]["pool"]
+        for label in ("cold", "warm")
+        for what in ("wall", "cpu")
+        for mode in ("cluster", "lean")
+    }
+    growth = eff["many"]["solver_wall"] / eff["one"]["solver_wall"]
+    warm = threads["warm"]["wall"]
+    many = eff["many"]
+    share = {
+        "start": many["lead"],
+        "per point": many["point_wall"] - many["solver_wall"],
+        "tail": many["tail"],
+    }
+    busy = eff["args"]["workers"] * many["wall"]
+    return {
+        **{f"share {k}": f"{k} {v / busy:.1%}".replace("%", " %") for k, v in share.items()},
+        "threads cpu": f"{threads['warm']['cpu']['threads'] / threads['warm']['cpu']['lean']:.2f}x",
+        "idle default": f"{idle['default']:.3f}",
+        "idle lean": f"{idle['lean']:.3f}",
+        "lean warm wall": f"{ratio['warm', 'wall', 'lean']:.2f}x",
+        "lean warm cpu": f"{ratio['warm', 'cpu', 'lean']:.2f}x",
+        "lean cold wall": f"{ratio['cold', 'wall', 'lean']:.2f}x",
+        "lean cold cpu": f"{ratio['cold', 'cpu', 'lean']:.2f}x",
+        "default warm wall": f"{ratio['warm', 'wall', 'cluster']:.2f}x",
+        "default warm cpu": f"{ratio['warm', 'cpu', 'cluster']:.2f}x",
+        "default cold wall": f"{ratio['cold', 'wall', 'cluster']:.2f}x",
+        "default cold cpu": f"{ratio['cold', 'cpu', 'cluster']:.2f}x",
+        "threads wall": f"{warm['threads'] / warm['lean']:.2f}x",
+        "threads overlap": f"{threads['overlap']['threads']:.2f}",
+        "processes overlap": f"{threads['overlap']['lean']:.2f}",
+        "speed-up": f"{eff['speedup']:.2f}",
+        "growth": f"{growth:.2f}x",
+        "simulated dealt": f"{eff['simulated']['16']['dealt']:.1%}".replace("%", " %"),
+        "simulated contiguous": f"{eff['simulated']['16']['contiguous']:.1%}".replace("%", " %"),
+    }
+
+
+def test_the_guides_numbers_are_the_benchmarks():
+    text = " ".join(GUIDE.read_text().split())
+    missing = {k: v for k, v in guide_numbers().items() if v not in text}
+    assert not missing, f"docs/cluster.md does not quote these measured numbers: {missing}"

@@ -7,9 +7,9 @@ on a fork server, or a :class:`distributed.Client`. The loop keeps as many tasks
 there are workers, plus one waiting per worker (``PREFETCH``), and submits the next one, in the
 list's (longest-first) order, when one finishes: the start order is the campaign's own on
 either executor, whatever the scheduler's tie-breaking among independent tasks, and a worker
-that finishes a block starts its next one at once instead of waiting for the round trip to the
-client (result, commit, next submission: 0.1-1 s per block on a loaded machine, measured by
-benchmarks/campaign_cluster.py).
+that finishes a block starts its next one at once instead of idling through the round trip to
+the client (its result, the commit, the next submission: scheduling latencies of a loaded
+machine; benchmarks/campaign_cluster.py reports the idle time between blocks, "dispatch").
 
 The local pool is not a ``distributed.LocalCluster``, which costs seconds to import and to start
 its workers (README, "Campaigns"), against milliseconds for workers forked from a server that
