@@ -90,14 +90,14 @@ SURFACE_FRACTION = 0.02
 MIN_STEP_FACTOR = 1e-3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _meta(ip):
     """(n, na, m, ne, len(p), len(ip), work size) of the model, from the tail of ``ip``."""
     k = ip.size - N_META
     return ip[k], ip[k + 1], ip[k + 2], ip[k + 3], ip[k + 4], ip[k + 5], ip[k + 6]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
@@ -189,7 +189,7 @@ def rhs(t, Y, p, ip, aux, work, dY):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
     """The difference step along ``v`` (a multiple of it), shortened so that no event function
     changes by more than SURFACE_FRACTION of its value at ``y`` (``g0``) across the stencil:
@@ -212,13 +212,13 @@ def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
     return eps
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def event_values(t, Y, p, ip, aux, work, g):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reset(k, t, y, a, pm, ipm, wm, out):
     """``out = R(t, (y, a))``: the model's event update applied to copies."""
     n = y.size
@@ -229,7 +229,7 @@ def _reset(k, t, y, a, pm, ipm, wm, out):
     out[n:] = ac
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def apply_event(k, t, Y, p, ip, aux, work):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
@@ -339,7 +339,7 @@ def apply_event(k, t, Y, p, ip, aux, work):
     return stop
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def normalise(Y, b, n, nx, scale, il):
     """Scale the column ``u = Y[b : b + nx]`` to unit scaled size of its state part and add
     the log of its size to ``Y[il]`` (a column without a state part is left as it is)."""
