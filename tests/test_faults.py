@@ -373,17 +373,24 @@ def test_a_full_disk_stops_a_campaign_in_one_line_and_the_resume_completes_it(
     import workbench.archive._atomic as atomic
 
     real = xr.Dataset.to_netcdf
+    real_write = Path.write_bytes
 
     def to_netcdf(self, path=None, *args, **kwargs):
         if path is not None and ".block-00002.nc." in str(path):
             raise OSError(errno.ENOSPC, "No space left on device")
         return real(self, path, *args, **kwargs)
 
+    def write_bytes(self, data):  # block files are serialised in memory, then written
+        if ".block-00002.nc." in str(self):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_write(self, data)
+
     scene = scene_file(tmp_path, QUICK)
     store = tmp_path / "c.nc"
     argv = ["campaign", str(scene), "-o", str(store), "--workers", "1", "--chunk", "1", "-q"]
     with dask.config.set({"multiprocessing.context": "fork"}), monkeypatch.context() as m:
         m.setattr(xr.Dataset, "to_netcdf", to_netcdf)
+        m.setattr(Path, "write_bytes", write_bytes)
         m.setattr(atomic, "_free_bytes", lambda directory: 5000.0)
         code = main(argv)
     err = capsys.readouterr().err.strip().splitlines()
