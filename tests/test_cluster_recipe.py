@@ -234,3 +234,29 @@ def test_the_guides_numbers_are_the_benchmarks():
     text = " ".join(GUIDE.read_text().split())
     missing = {k: v for k, v in guide_numbers().items() if v not in text}
     assert not missing, f"docs/cluster.md does not quote these measured numbers: {missing}"
+
+
+def test_the_guides_lazy_analysis_runs_on_a_small_fig32_archive(tmp_path, monkeypatch):
+    """The guide's lazy analysis block, as written, on a 3-point, 120-cycle version of the
+    Fig. 32 sweep (studies/bifurcation_speed/sweep.toml) stored as fig32.nc: K over omega,
+    computed only when asked."""
+    block = re.search(
+        r"<!-- run: lazy-analysis -->\n```python\n(.*?)```", GUIDE.read_text(), re.S
+    ).group(1)
+    root = Path(__file__).resolve().parents[1]
+    scene = workbench.load_scene(root / "studies" / "bifurcation_speed" / "sweep.toml")
+    small = scene.replace(
+        run={"cycles": 120, "transient_cycles": 2},
+        sweep={
+            "omega": [3.0 * 3.141592653589793, 3.5 * 3.141592653589793, 4.0 * 3.141592653589793]
+        },
+    )
+    workbench.run_campaign(small, tmp_path / "fig32.nc", workers=1)
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(block, "docs/cluster.md (lazy analysis)", "exec"), namespace)
+    K = namespace["K"]
+    assert K.K.chunks is not None  # lazy until computed
+    k = K.K.compute()
+    assert k.dims == ("omega",) and k.sizes["omega"] == 3
+    assert k.attrs["units"] == "1" and bool(((k > -0.5) & (k < 1.5)).all())

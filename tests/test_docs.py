@@ -17,9 +17,10 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 PAGES = sorted(p for p in DOCS.rglob("*.md") if not p.is_symlink())
 FENCE = re.compile(r"^```(\w+)\n(.*?)^```", re.S | re.M)
-#: a block marked ``<!-- file: NAME -->`` or ``<!-- run: NAME -->`` (docs/own-models.md) is a
-#: module of a user's model, or runs with those modules as files: tests/test_user_models.py
-#: runs them so
+#: a block marked ``<!-- file: NAME -->`` or ``<!-- run: NAME -->`` needs its setting: a module
+#: of a user's model, or a block that runs with those modules as files (docs/own-models.md:
+#: tests/test_user_models.py runs them), or the cluster guide's recipe and its lazy analysis of
+#: a campaign archive (docs/cluster.md: tests/test_cluster_recipe.py runs them)
 MARKED = re.compile(r"<!-- (?:file|run): \S+ -->\n$")
 
 
