@@ -24,8 +24,8 @@ from workbench.solver import (
     copies_problem,
     split_copies,
     state_scale,
+    tangent_growths,
     tangent_problem,
-    tangent_state,
 )
 
 __all__ = ["lle_from_equations"]
@@ -92,9 +92,8 @@ def follow_copies(
                 f"{t_rec[r]:g} s (scaled distances {d!r}); choose other separations"
             )
         total[r] = logs + np.log(d / separations)
-        if variational:  # the tangent vector is its direction times e^(log size)
-            _, U, log_size, _ = tangent_state(Yr[0], n, na, 1)
-            tangent[r] = log_size[0] + math.log(np.linalg.norm(U[:n, 0] / scale))
+        if variational:  # the tangent vector's log growth
+            tangent[r] = tangent_growths(base, Yr[0])[0]
     return {
         "times": t_rec,
         "total": total,

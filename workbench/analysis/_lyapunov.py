@@ -19,19 +19,24 @@ from workbench.solver import (
     Problem,
     RunResult,
     integrate,
-    jacobian_for,
     state_scale,
+    tangent_growths,
     tangent_problem,
     tangent_state,
+    tangent_volume,
 )
 
 __all__ = ["lyapunov_spectrum"]
 
-#: largest growth (log) of a tangent vector between two re-orthonormalisations before the
-#: interval is halved (e^25 ~ 7e10 keeps ~5 significant digits of the weakest column), and the
-#: smallest before it is doubled
-_MAX_LOG_GROWTH = 25.0
-_MIN_LOG_GROWTH = 2.0
+#: orthogonality defect (the tangent directions' log sizes minus the log of the volume they
+#: span) at which the tangent system re-orthonormalises them: a direction whose part
+#: orthogonal to the others has shrunk by e^-D relative to its size is integrated to rtol e^D
+#: of that part, and e^D bounds the condition number of the vectors whose volume the system
+#: integrates (rtol e^3 = 2e-5 at rtol 1e-6)
+DEFECT = 3.0
+#: records of the accumulated growths (running estimate, batch means)
+RECORDS = 400
+_STATS = ("steps", "rejected_steps", "rhs_evaluations", "events")
 _BATCHES = 10
 
 
@@ -115,100 +120,59 @@ def _time_scale(prep: Window) -> float:
     return prep.period if prep.period is not None else 1.0
 
 
-def _qr(V: np.ndarray, scale: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Re-orthonormalise tangent vectors in the scaled state (the discrete-state components are
-    carried along): returns the new vectors and log of the growth of each, ``log R_kk``."""
-    Q, R = np.linalg.qr(V[:n] / scale[:, None])
-    d = np.diag(R)
-    if not np.all(np.isfinite(d)) or np.any(d == 0.0):
-        raise FloatingPointError(
-            "the tangent vectors became degenerate or non-finite; shorten the interval"
-        )
-    R = R * np.sign(d)[:, None]
-    return np.linalg.solve(R.T, V.T).T, np.log(np.abs(d))
-
-
 def tangent_run(
     prep: Window,
     m: int,
     *,
     rtol: float | None = None,
-    interval: float | None = None,
+    defect: float = DEFECT,
+    records: int = RECORDS,
     seed: int = 0,
-    samples_per_interval: int = 16,
 ) -> dict:
-    """Integrate the model and ``m`` tangent vectors over the prepared window, re-orthonormalised
-    every ``interval`` (s; halved or doubled on the way so that the growth between two
-    re-orthonormalisations stays within e^2 .. e^25, and at most a fortieth of the window so
-    that each of the ten batches of the standard error holds four intervals).
+    """Integrate the model and ``m`` tangent vectors over the prepared window in one run of the
+    tangent system, which re-orthonormalises them wherever their orthogonality defect reaches
+    ``defect`` (see :func:`workbench.solver.tangent_problem`), and read the accumulated log
+    growths at ``records`` equally spaced times.
 
-    Returns a dict: ``times`` (s) and ``log_growth`` (per interval and vector), the volume
-    terms (integral of the Jacobian's trace, s-1 * s; sum of log |det S_yy| at events), whether
-    the discrete state fed back on the flow (``memory``), solver statistics.
+    Returns a dict: ``times`` (s) and ``log_growth`` (per record interval and vector: the
+    increments of Benettin's accumulators), per record interval the change of the log volume
+    the vectors span, integrated with the tangent system (``log_volume``: its sum over the
+    window is that of the growths; ``log_volume_memory``: the discrete state's feedback in it)
+    and of the sum of ``log |det S_yy|`` at events (``log_det_events``), the number of
+    re-orthonormalisations, solver statistics.
     """
     pb = prep.problem
     n, na = pb.y0.size, pb.aux0.size
     if not 1 <= m <= n:
         raise ValueError(f"exponents={m!r}: must lie in 1..{n} (the model's state size)")
+    if not defect > 0:
+        raise ValueError(f"defect={defect!r}: must be a positive orthogonality defect")
     rtol = prep.rtol if rtol is None else float(rtol)
     scale = state_scale(pb)
     rng = np.random.default_rng(seed)
     Q0, _ = np.linalg.qr(rng.standard_normal((n, n)))
     V = np.zeros((n + na, m))
     V[:n] = scale[:, None] * Q0[:, :m]
-    tau = interval if interval is not None else (
-        prep.period / 64 if prep.period is not None else 0.1
-    )  # fmt: skip
-    t, t_end = pb.t0, pb.t0 + prep.length
-    # at least four intervals per batch of the standard error
-    tau_max = prep.length / (4 * _BATCHES) if interval is None else 4 * interval
-    tau = min(tau, tau_max)
-    y, aux, log_det = pb.y0.copy(), pb.aux0.copy(), 0.0
-    jac = jacobian_for(pb.hooks)
-    work = np.zeros(max(pb.work_size, 1))
-    times, growth = [], []
-    trace_integral, memory = 0.0, False
-    stats = {"steps": 0, "rejected_steps": 0, "rhs_evaluations": 0, "events": 0}
-    while t < t_end * (1 - 1e-14):
-        t1 = min(t + tau, t_end)
-        t_rec = np.linspace(t, t1, samples_per_interval + 1)
-        tp = tangent_problem(
-            dataclasses.replace(pb, y0=y, aux0=aux, t0=t), V, time_scale=_time_scale(prep),
-            log_det=log_det,
-        )  # fmt: skip
-        res = prep.solve(tp, t_rec, rtol)
-        for k in stats:
-            stats[k] += res.stats[k]
-        Yb = np.ascontiguousarray(res.Y[:, :n])
-        Js = np.empty((t_rec.size, n, n))
-        Jas = np.empty((t_rec.size, n, na))
-        codes = jac.jacobians_along(res.t, Yb, res.AUX, pb.p, pb.ip, work, scale, Js, Jas)
-        if codes.any():
-            raise FloatingPointError(f"the model failed at a record: {pb.failure(codes.max())}")
-        tr = np.trace(Js, axis1=1, axis2=2)
-        trace_integral += float(np.trapezoid(tr, res.t))
-        memory = memory or bool(np.any(Jas != 0.0))
-        y, U, log_size, log_det = tangent_state(res.Y[-1], n, na, m)
-        y, aux = y.copy(), res.AUX[-1].copy()
-        V, g = _qr(U.copy(), scale, n)
-        g = g + log_size  # the vectors are U e^log_size: R_kk of V is R_kk of U times e^l_k
-        times.append(t1)
-        growth.append(g)
-        t = t1
-        big = float(np.max(np.abs(g)))
-        if big > _MAX_LOG_GROWTH:
-            tau /= 2
-        elif big < _MIN_LOG_GROWTH and 2 * tau <= tau_max:
-            tau *= 2
+    tp = tangent_problem(pb, V, time_scale=_time_scale(prep), reorthonormalise=defect)
+    times = pb.t0 + prep.length * np.linspace(0.0, 1.0, records + 1)[1:]
+    res = prep.solve(tp, times, rtol)
+    total = np.zeros((times.size + 1, m))
+    volume = np.zeros((times.size + 1, 3))
+    count = 0
+    for r, Y in enumerate(res.Y, start=1):
+        total[r] = tangent_growths(tp, Y)  # as if re-orthonormalised here
+        w, w_memory, count = tangent_volume(Y, n, na, m)
+        volume[r] = (w, w_memory, tangent_state(Y, n, na, m)[3])
     return {
         "start": pb.t0,
-        "times": np.array(times),
-        "log_growth": np.array(growth),
-        "trace_integral": trace_integral,
-        "log_det_events": log_det,
-        "memory": memory,
+        "times": times,
+        "log_growth": np.diff(total, axis=0),
+        "log_volume": np.diff(volume[:, 0]),
+        "log_volume_memory": np.diff(volume[:, 1]),
+        "log_det_events": np.diff(volume[:, 2]),
+        "reorthonormalisations": count,
         "rtol": rtol,
-        "stats": stats,
+        "stats": {k: res.stats[k] for k in _STATS},
     }
 
 
@@ -237,7 +201,7 @@ def lyapunov_spectrum(
     cycles: int | None = None,
     duration: float | None = None,
     rtol: float | None = None,
-    interval: float | None = None,
+    defect: float = DEFECT,
     check: bool = True,
     seed: int = 0,
 ) -> xr.Dataset:
@@ -258,8 +222,9 @@ def lyapunov_spectrum(
         Measured length: forcing periods (forced models) or seconds; default the scene's.
     rtol : float, optional
         Tolerance of the tangent run (default the scene's); ``atol`` scales with it.
-    interval : float, optional
-        First re-orthonormalisation interval, s (adapted on the way; default T/64 or 0.1 s).
+    defect : float
+        Orthogonality defect of the tangent vectors at which they are re-orthonormalised
+        (default DEFECT; see :func:`tangent_run`).
     check : bool
         Also run at ``rtol / 10`` over the same window and report that estimate
         (``exponent_tight``) and whether the two agree (``converged``: within 5 % of the
@@ -287,10 +252,10 @@ def lyapunov_spectrum(
     prep = measurement_window(scene, cycles=cycles, duration=duration)
     n = prep.problem.y0.size
     m = n if exponents is None else int(exponents)
-    run = tangent_run(prep, m, rtol=rtol, interval=interval, seed=seed)
+    run = tangent_run(prep, m, rtol=rtol, defect=defect, seed=seed)
     out = _spectrum_dataset(prep, run)
     if check:
-        tight = tangent_run(prep, m, rtol=run["rtol"] / 10, interval=interval, seed=seed)
+        tight = tangent_run(prep, m, rtol=run["rtol"] / 10, defect=defect, seed=seed)
         lam_t = tight["log_growth"].sum(axis=0) / prep.length
         err_t = batch_error(tight["times"], tight["log_growth"], tight["start"])
         lam = out["exponent"].values
@@ -315,8 +280,10 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
     lam = growth.sum(axis=0) / T
     running = np.cumsum(growth, axis=0) / (times - start)[:, None]
     err = batch_error(times, growth, start)
-    divergence = (run["trace_integral"] + run["log_det_events"]) / T
     m = lam.size
+    volume = float(np.sum(run["log_volume"])) / T
+    memory = float(np.sum(run["log_volume_memory"])) / T
+    closure = abs(float(lam.sum()) - volume) / max(abs(volume), 1e-300)
     ds = xr.Dataset(
         {
             "exponent": ("index", lam, {"units": "s-1", "long_name": "Lyapunov exponent"}),
@@ -331,13 +298,41 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
                 {"units": "s-1", "long_name": "running estimate"},
             ),
             "spectrum_sum": ((), float(lam.sum()), {"units": "s-1", "long_name": "sum"}),
-            "divergence": (
+            "volume_rate": (
                 (),
-                divergence,
+                volume,
                 {
                     "units": "s-1",
-                    "long_name": "mean phase-space contraction rate (trace of J + log |det S| "
-                    "at events, per time)",
+                    "long_name": "mean rate of ln |det V| of the n tangent vectors, integrated "
+                    "with the tangent system (trace of its generator, the discrete state's "
+                    "feedback included, plus the log volume jump at events); equals the full "
+                    "spectrum's sum",
+                },
+            ),
+            "sum_check": (
+                (),
+                closure,
+                {
+                    "units": "1",
+                    "long_name": "relative difference of the spectrum's sum and volume_rate",
+                },
+            ),
+            "divergence": (
+                (),
+                volume - memory,
+                {
+                    "units": "s-1",
+                    "long_name": "mean phase-space contraction rate (trace of J plus log |det "
+                    "S_yy| at events, per time)",
+                },
+            ),
+            "memory_rate": (
+                (),
+                memory,
+                {
+                    "units": "s-1",
+                    "long_name": "part of volume_rate fed back by the discrete state (a "
+                    "contact's held onset velocity): tr(J_a V_a V_y^-1) and its jumps at events",
                 },
             ),
         },
@@ -348,15 +343,18 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
         attrs={
             "method": "variational equations with saltation at events, QR re-orthonormalisation "
             "(Benettin et al. 1980; Mueller 1995; Dellago, Posch & Hoover 1996)",
-            "memory": int(run["memory"]),
-            "memory_note": "1: the discrete state (e.g. a contact's held onset velocity) feeds "
-            "back on the flow, so the full spectrum's sum need not equal the divergence",
             "rtol": run["rtol"],
             "start_time": start,
-            "reorthonormalisations": int(times.size),
+            "reorthonormalisations": int(run["reorthonormalisations"]),
             **{f"solver_{k}": v for k, v in run["stats"].items()},
         },
     )
+    if np.isfinite(memory):  # all n exponents
+        ds.attrs["memory"] = int(memory != 0.0)
+        ds.attrs["memory_note"] = (
+            "1: the discrete state (e.g. a contact's held onset velocity) feeds back on the "
+            "flow, and the spectrum's sum is the divergence plus memory_rate"
+        )
     if prep.period is not None:
         ds["exponent_per_period"] = (
             "index",
