@@ -16,17 +16,11 @@ import xarray as xr
 from workbench.archive import open_run, save_run
 from workbench.campaign._assemble import assemble
 from workbench.campaign._block import BlockTask, failed
+from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
+from workbench.campaign._grid import SweepGrid, campaign_id, code_of, expand_sweep, format_point
 from workbench.campaign._schedule import longest_first
-from workbench.campaign._store import (
-    CampaignError,
-    CampaignWarning,
-    Store,
-    SweepGrid,
-    campaign_id,
-    expand_sweep,
-    format_point,
-)
+from workbench.campaign._store import Store
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["run_campaign", "store_paths"]
@@ -194,7 +188,8 @@ def _run_locked(
         cid = manifest["campaign_id"]
     st.remove_temporaries()
     blocks = grid.blocks(chunk)
-    done = st.verified_blocks(manifest, blocks)
+    code = code_of(scene)
+    done = st.verified_blocks(manifest, blocks, code)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -218,7 +213,7 @@ def _run_locked(
         bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
 
         def commit(result: dict) -> None:
-            st.commit(manifest, result["block"], result["sha256"])
+            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
             if bar is not None:
                 bar.update(result["points"])
 
@@ -252,6 +247,9 @@ def _run_locked(
             "campaign_wall_time": time.perf_counter() - wall0,
             "campaign_block_sha256": " ".join(
                 manifest["checksums"][str(i)] for i in range(len(blocks))
+            ),
+            "code_digests": " ".join(
+                sorted({manifest["code_digests"][str(i)] for i in range(len(blocks))})
             ),
         },
         in_memory,

@@ -1,8 +1,8 @@
 """The tangent (variational) system of a problem, as a problem the compiled loop integrates.
 
-See :mod:`workbench.solver._tangent_template` for the equations (variational equations between
-events, the saltation matrix at events, each tangent vector as a direction of unit size and its
-log size) and the layout of the arrays built here.
+See :mod:`workbench.solver._templates.tangent_hooks` for the equations (variational equations
+between events, the saltation matrix at events, each tangent vector as a direction of unit size
+and its log size) and the layout of the arrays built here.
 """
 
 from __future__ import annotations
@@ -159,7 +159,7 @@ def tangent_state(
 def tangent_volume(Y: np.ndarray, n: int, na: int, m: int) -> tuple[float, float, int]:
     """With re-orthonormalisation: the log volume the tangent vectors span, since the start
     (its rate is the sum of their exponents), and the part of it that the discrete state fed
-    back between events (see :mod:`workbench.solver._tangent_template`; zeros without); and
+    back between events (see :mod:`workbench.solver._templates.tangent_hooks`; zeros without); and
     the number of re-orthonormalisations."""
     k = n + m * (n + na) + 1 + m
     return float(Y[k]), float(Y[k + 1]), int(Y[k + 2])

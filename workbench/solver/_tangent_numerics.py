@@ -1,6 +1,6 @@
-"""Hook-free linear algebra of the tangent system (:mod:`workbench.solver._tangent_template`),
-compiled once for all models: the tangent directions' sizes, their re-orthonormalisation, the
-volume they span and its rate.
+"""Hook-free linear algebra of the tangent system
+(:mod:`workbench.solver._templates.tangent_hooks`), compiled once for all models: the tangent
+directions' sizes, their re-orthonormalisation, the volume they span and its rate.
 
 The directions are the columns ``u_c = Y[b_c : b_c + nx]`` of the tangent-system state (``b_c =
 n + c nx``, ``nx = n + na``: state then discrete-state components). Sizes and angles are taken
