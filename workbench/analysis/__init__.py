@@ -16,6 +16,7 @@ returns an ``xarray.Dataset`` with units: the chosen value and the evidence behi
 
 from workbench.analysis._benettin import lle_from_equations
 from workbench.analysis._bifurcation import bifurcation_diagram
+from workbench.analysis._convergence import ConvergenceWarning
 from workbench.analysis._degenerate import no_dynamics
 from workbench.analysis._delay import delay_acf, delay_ami
 from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
@@ -28,6 +29,7 @@ from workbench.analysis._wolf import wolf_lle
 from workbench.analysis._zero_one import zero_one_test
 
 __all__ = [
+    "ConvergenceWarning",
     "bifurcation_diagram",
     "crossing_section",
     "delay_acf",
