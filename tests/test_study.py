@@ -486,7 +486,7 @@ def test_exponent_table_of_the_chaos_case_at_small_size():
     scene = load_scene("studies/chaos/chaos.toml")
     t = exponent_table(
         scene, cycles=2, budget_cycles=2, transient_cycles=1, spectrum_exponents=2,
-        wolf_sampling=((100, 20),), strobe_cycles=40,
+        wolf_sampling=((100, 20),), strobe_cycles=110,
     )  # fmt: skip
     rows = list(t.method.values)
     assert rows[:3] == ["two trajectories", "variational, same trajectory", "variational spectrum"]
