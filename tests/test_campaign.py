@@ -318,8 +318,8 @@ def test_longest_blocks_run_first(tmp_path):
     started = {}
     for path in blocks.glob("block-*.nc"):
         b = workbench.open_run(path)
-        started[int(b.attrs["block"])] = int(b.attrs["worker_task_number"])
-    by_start = [blk for blk, _ in sorted(started.items(), key=lambda kv: kv[1])]
+        started[int(b.point.values[0])] = int(b.attrs["worker_task_number"])
+    by_start = [point for point, _ in sorted(started.items(), key=lambda kv: kv[1])]
     assert by_start == [4, 0, 1, 2, 3, 5]  # omega 0.5, 0.8, 1.0, 1.2, 1.4, 2.0
     assert by_start == [t.block for t in longest_first(scene, grid, _tasks(scene, grid))]
 

@@ -1,10 +1,9 @@
 """The documentation site (issue 26 item 1): ``mkdocs build --strict`` (every warning an
 error) into a temporary directory; every ```python block of its pages runs (each in a fresh
 namespace, in a temporary working directory that sees the repository's studies/, data/ and
-pyproject.toml, and the page's ``<!-- file: NAME -->`` blocks as files on sys.path;
-``# requires: MODULE`` skips a block without MODULE, as in the README); and every
-``workbench ...`` line of its ```sh blocks parses with the command line's own parser (the
-commands and options the pages show exist)."""
+pyproject.toml; ``# requires: MODULE`` skips a block without MODULE, as in the README); and
+every ``workbench ...`` line of its ```sh blocks parses with the command line's own parser
+(the commands and options the pages show exist)."""
 
 import re
 import shlex
@@ -18,15 +17,22 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 PAGES = sorted(p for p in DOCS.rglob("*.md") if not p.is_symlink())
 FENCE = re.compile(r"^```(\w+)\n(.*?)^```", re.S | re.M)
-# a page's files (``<!-- file: NAME -->`` before a block: a user's model module, a scene), written
-# beside the blocks that import or load them
-FILE_BLOCK = re.compile(r"<!-- file: (\S+) -->\n```(?:python|toml)\n(.*?)```", re.S)
-BLOCKS = [
-    (page, code)
-    for page in PAGES
-    for lang, code in FENCE.findall(page.read_text())
-    if lang == "python"
-]
+#: a block marked ``<!-- file: NAME -->`` or ``<!-- run: NAME -->`` (docs/own-models.md) is a
+#: module of a user's model, or runs with those modules as files: tests/test_user_models.py
+#: runs them so
+MARKED = re.compile(r"<!-- (?:file|run): \S+ -->\n$")
+
+
+def _python_blocks(page: Path) -> list[tuple[Path, str]]:
+    text = page.read_text()
+    return [
+        (page, m.group(2))
+        for m in FENCE.finditer(text)
+        if m.group(1) == "python" and not MARKED.search(text[: m.start()])
+    ]
+
+
+BLOCKS = [block for page in PAGES for block in _python_blocks(page)]
 COMMANDS = [
     line
     for page in PAGES + [ROOT / "README.md"]
@@ -72,9 +78,6 @@ def test_docs_block_runs(block, tmp_path, monkeypatch):
         pytest.importorskip(module, reason=f"the block needs the optional {module!r}")
     for name in ("studies", "data", "pyproject.toml"):
         (tmp_path / name).symlink_to(ROOT / name)
-    for name, body in FILE_BLOCK.findall(page.read_text()):
-        (tmp_path / name).write_text(body)
-    monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.chdir(tmp_path)
     exec(compile(code, str(page), "exec"), {"__name__": "__docs__"})
 

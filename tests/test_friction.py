@@ -243,17 +243,17 @@ def test_default_lugre_run_stays_within_its_law():
     the envelope for milliseconds, and the run warns, naming the cause."""
     ds, caught = _lugre_run()
     for name, units in (
-        ("friction_coefficient", "1"),
+        ("friction_ratio", "1"),
         ("time_above_static_friction", "s"),
         ("time_beyond_friction_law", "s"),
     ):
         assert ds[name].attrs["units"] == units and ds[name].dims == ("time", "joint")
     assert float(ds.time_beyond_friction_law[-1].max()) == 0.0
-    assert float(ds.friction_coefficient.max()) < 2 * MU_S
+    assert float(ds.friction_ratio.max()) < 2 * MU_S
     assert not caught
     paper, caught = _lugre_run(lugre_damping_velocity=0.0)
     assert float(paper.time_beyond_friction_law[-1].max()) > 1e-3
-    assert float(paper.friction_coefficient.max()) > 2 * MU_S
+    assert float(paper.friction_ratio.max()) > 2 * MU_S
     assert caught and "not passive" in str(caught[0].message)
 
 

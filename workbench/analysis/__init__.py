@@ -6,7 +6,11 @@ analyse (:func:`no_dynamics`) and one that cannot be told from linear noise
 (:func:`surrogate_test`) are said so.
 
 Every estimator accepts numpy arrays and xarray DataArrays (a ``time`` coordinate gives dt) and
-returns an ``xarray.Dataset`` with units: the chosen value and the evidence behind it.
+returns an ``xarray.Dataset`` with units: the chosen value and the evidence behind it. The
+estimators of one series (0-1 test, delays, embedding dimensions, Wolf's and Rosenstein's
+exponents) also take a DataArray with more dims, e.g. a campaign's record, and map over every
+dim but the series' own, lazily on a dask-backed one (``_broadcast``): ``zero_one_test(
+campaign.x)`` has ``K`` over the campaign's parameters.
 
 >>> import numpy as np
 >>> from workbench.analysis import delay_acf
@@ -14,19 +18,26 @@ returns an ``xarray.Dataset`` with units: the chosen value and the evidence behi
 32
 """
 
+from workbench.analysis import _delay, _embedding, _rosenstein, _wolf, _zero_one
 from workbench.analysis._benettin import lle_from_equations
 from workbench.analysis._bifurcation import bifurcation_diagram
+from workbench.analysis._broadcast import over_parameters
 from workbench.analysis._convergence import ConvergenceWarning
 from workbench.analysis._degenerate import no_dynamics
-from workbench.analysis._delay import delay_acf, delay_ami
-from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
+from workbench.analysis._embedding import embed
 from workbench.analysis._lyapunov import lyapunov_spectrum
-from workbench.analysis._rosenstein import rosenstein_lle
 from workbench.analysis._sections import crossing_section, phase_portrait, poincare_section
 from workbench.analysis._stability import floquet, floquet_sweep, jacobian_spectrum
 from workbench.analysis._surrogate import surrogate_test
-from workbench.analysis._wolf import wolf_lle
-from workbench.analysis._zero_one import zero_one_test
+
+# estimators of one series, mapped over every other dim of a DataArray
+delay_acf = over_parameters(_delay.delay_acf)
+delay_ami = over_parameters(_delay.delay_ami)
+embedding_cao = over_parameters(_embedding.embedding_cao)
+embedding_fnn = over_parameters(_embedding.embedding_fnn)
+rosenstein_lle = over_parameters(_rosenstein.rosenstein_lle)
+wolf_lle = over_parameters(_wolf.wolf_lle)
+zero_one_test = over_parameters(_zero_one.zero_one_test)
 
 __all__ = [
     "ConvergenceWarning",

@@ -20,6 +20,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from workbench.archive._filesystem import LockScope, lock_scope
+
 __all__ = [
     "ArchiveError",
     "StoreLocked",
@@ -84,9 +86,13 @@ def file_problem(path: str | os.PathLike, expected: str | None) -> str | None:
 
 
 def read_manifest(
-    path: str | os.PathLike, format: str, what: str, error: type[Exception] = ArchiveError
+    path: str | os.PathLike,
+    format: str | tuple[str, ...],
+    what: str,
+    error: type[Exception] = ArchiveError,
 ) -> dict:
-    """The JSON manifest of a store at ``path``, which must have ``"format": format``.
+    """The JSON manifest of a store at ``path``, which must have ``"format": format`` (or one of
+    several formats, a tuple: the current one first, then older ones still read).
 
     Raises ``error`` naming the path when the file cannot be read or parsed, or holds another
     format; the message says that ``restart=True`` (CLI ``--restart``) starts ``what`` (e.g.
@@ -99,10 +105,12 @@ def read_manifest(
             f"{str(path)!r} cannot be read ({exc}); pass restart=True (CLI --restart) to start "
             f"{what} afresh"
         ) from None
-    if not isinstance(data, dict) or data.get("format") != format:
+    formats = (format,) if isinstance(format, str) else tuple(format)
+    if not isinstance(data, dict) or data.get("format") not in formats:
         found = data.get("format") if isinstance(data, dict) else None
         raise error(
-            f"{str(path)!r} has format {found!r}, expected {format!r}; pass restart=True (CLI "
+            f"{str(path)!r} has format {found!r}, expected {' or '.join(map(repr, formats))}; "
+            "pass restart=True (CLI "
             f"--restart) to start {what} afresh, or choose another output path"
         )
     return data
@@ -135,6 +143,30 @@ def _read_holder(fd: int) -> dict:
     except (OSError, ValueError):
         return {}
     return holder if isinstance(holder, dict) else {}
+
+
+def _check_other_node(fd: int, path: Path, previous: dict, scope: LockScope, what: str) -> None:
+    """Where a lock is only seen on its own node: refuse a lock file left by another host (its
+    campaign may still run there: the free lock proves nothing), else warn that a process on
+    another node would not be refused."""
+    if previous and previous.get("host") not in (None, socket.gethostname()):
+        os.close(fd)
+        raise StoreLocked(
+            f"the {what} was locked by {_describe(previous)} (lock file {str(path)!r}), and on "
+            f"this file system a lock is not seen from other nodes ({scope.reason}), so that "
+            "process may still be writing it. If it no longer runs, delete the lock file and "
+            "start again; see docs/cluster.md",
+            previous.get("pid"),
+            previous.get("host"),
+        )
+    warnings.warn(
+        StoreWarning(
+            f"the {what} is on {scope.fstype} at {scope.mountpoint!r} ({scope.reason}): its lock "
+            "keeps out other processes on this node only; run one campaign per store, or keep "
+            "the store where flock reaches every node (docs/cluster.md)"
+        ),
+        stacklevel=4,
+    )
 
 
 def _describe(holder: dict) -> str:
@@ -170,7 +202,18 @@ def store_lock(directory: str | os.PathLike, what: str = "store") -> Iterator[di
     Raises
     ------
     StoreLocked
-        Another live process holds the lock (the message names its pid and host).
+        Another live process holds the lock (the message names its pid and host); or, on a file
+        system whose locks other nodes do not see (:func:`workbench.archive._filesystem.
+        lock_scope`: NFS with ``local_lock``, Lustre with ``localflock``), the lock file names
+        a holder on another host, which may still run.
+    ArchiveError
+        The file system refuses ``flock`` (Lustre without ``-o flock``).
+
+    Warns
+    -----
+    StoreWarning
+        A stale lock was taken over; or the store is on a file system whose locks other nodes
+        do not see (a second campaign there would not be refused).
     """
     import fcntl  # POSIX only; imported here so that the module loads everywhere
 
@@ -184,6 +227,13 @@ def store_lock(directory: str | os.PathLike, what: str = "store") -> Iterator[di
         except OSError as exc:
             holder = _read_holder(fd)
             os.close(fd)
+            if exc.errno in (errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOLCK, errno.EINVAL):
+                scope = lock_scope(directory)
+                raise ArchiveError(
+                    f"cannot lock the {what}: flock on {str(path)!r} fails ({exc.strerror}; "
+                    f"{scope.reason or 'the file system refuses it'}); put the store on a file "
+                    "system with flock (Lustre: mount with -o flock), see docs/cluster.md"
+                ) from None
             if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
                 raise
             raise StoreLocked(
@@ -202,6 +252,9 @@ def store_lock(directory: str | os.PathLike, what: str = "store") -> Iterator[di
             break
         os.close(fd)
     previous = _read_holder(fd)
+    scope = lock_scope(directory)
+    if scope.node_local:
+        _check_other_node(fd, path, previous, scope, what)
     if previous:
         warnings.warn(
             StoreWarning(

@@ -19,7 +19,10 @@ parameter dims first, then ``time`` and the model's dims.
 Modules: ``_run`` (the orchestration), ``_grid`` (the sweep's points, the campaign's identity
 and code digest), ``_store`` (the store on disk), ``_errors``,
 ``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
-(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server),
+(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_warm`` (the kernel loaded
+once; :func:`warm_kernel` compiles it into the cache before a cluster's workers start),
+``_preload`` (the fork server), ``_cluster`` (the worker plugin of a dask cluster),
+``_jobqueue`` (:func:`jobqueue_cluster`: workers on a batch system, docs/cluster.md),
 ``_lifeline`` (processes that die with the campaign).
 
 Store layout
@@ -29,16 +32,18 @@ Store layout
     sweep.nc                 the assembled campaign (netCDF-4), written last, atomically
     sweep.nc.blocks/
         lock                 held (flock) by the one process writing the store: pid, host
-        manifest.json        scene TOML, grid, chunk size, campaign id, code digest, and
+        manifest.json        scene TOML, grid, chunk size, campaign id, code digest, the
+                             points of each block (flat C-order indices over the grid), and
                              the SHA-256 and code digest of every committed block
-        block-00000.nc       points 0 .. chunk-1 (flat C-order index over the grid)
-        block-00001.nc       points chunk .. 2 chunk-1
-        ...
+        block-00000.nc       up to chunk points
+        block-00001.nc       ...
 
-* Blocks start longest first: ranked by their points' simulated time (transient + recorded
-  cycles times the forcing period, or transient + duration), the longest-processing-time rule
-  (Graham 1969), so that a sweep over the forcing frequency does not end waiting for its
-  slowest, low-frequency block.
+* Blocks are dealt by estimated cost: the points ranked by their simulated time (transient +
+  recorded cycles times the forcing period, or transient + duration) are dealt to the blocks
+  like cards, in a snake order, so that every block holds one point of each tier of cost and
+  the blocks cost about the same (a sweep over the forcing frequency cut into contiguous
+  blocks would end waiting for its low-frequency block). They start longest first, the
+  longest-processing-time rule (Graham 1969).
 * Block files are netCDF-3 (64-bit offset, scipy's writer; a third of the write time of
   netCDF-4 for small files, whose cost is HDF5's per-variable overhead); the task also
   returns a small block (up to 32 MiB) to the client with its summary, so that the client
@@ -90,14 +95,19 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 from workbench.campaign._assemble import summary
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._grid import SweepGrid, expand_sweep
+from workbench.campaign._jobqueue import DASK_CONFIG, jobqueue_cluster
 from workbench.campaign._run import run_campaign, store_paths
+from workbench.campaign._warm import warm_kernel
 
 __all__ = [
+    "DASK_CONFIG",
     "CampaignError",
     "CampaignWarning",
     "SweepGrid",
     "expand_sweep",
+    "jobqueue_cluster",
     "run_campaign",
     "store_paths",
     "summary",
+    "warm_kernel",
 ]

@@ -11,6 +11,7 @@ import importlib
 import os
 import signal
 import sys
+import threading
 import time
 import traceback
 from dataclasses import dataclass
@@ -180,6 +181,7 @@ def run_block(task: BlockTask) -> dict:
     """
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
+    started = time.time()
     wall0 = time.perf_counter()
     if task.model_module:
         _import_model(task.model_module, task.model_directory)
@@ -192,7 +194,9 @@ def run_block(task: BlockTask) -> dict:
     ds.attrs.update(
         code_digest=code,
         worker_pid=os.getpid(),
+        worker_thread=threading.get_native_id(),
         worker_task_number=_TASKS_IN_PROCESS,
+        block_started=started,
         block_wall_time=time.perf_counter() - wall0,
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5

@@ -4,13 +4,17 @@
 Both are executors in the sense of :mod:`concurrent.futures` (``submit`` returns a future; a
 ``wait`` returns the finished ones): the stdlib :class:`~concurrent.futures.ProcessPoolExecutor`
 on a fork server, or a :class:`distributed.Client`. The loop keeps as many tasks in flight as
-there are workers and submits the next one, in the list's (longest-first) order, when one
-finishes: the start order is the campaign's own on either executor, whatever the scheduler's
-tie-breaking among independent tasks.
+there are workers, plus one waiting per worker (``PREFETCH``), and submits the next one, in the
+list's (longest-first) order, when one finishes: the start order is the campaign's own on
+either executor, whatever the scheduler's tie-breaking among independent tasks, and a worker
+that finishes a block starts its next one at once instead of idling through the round trip to
+the client (its result, the commit, the next submission: scheduling latencies of a loaded
+machine; benchmarks/campaign_cluster.py reports the idle time between blocks, "dispatch").
 
 The local pool is not a ``distributed.LocalCluster``, which costs seconds to import and to start
 its workers (README, "Campaigns"), against milliseconds for workers forked from a server that
-has already imported workbench and loaded the campaign's compiled kernel (``_preload``).
+has already imported workbench and loaded the campaign's compiled kernel (``_preload``). The
+workers of a cluster get the same before their first block from a worker plugin (``_cluster``).
 """
 
 from __future__ import annotations
@@ -29,7 +33,9 @@ from workbench.campaign._lifeline import PARENT_ENV
 from workbench.campaign._warm import kernel_cached, load_kernel
 from workbench.scene import scene_from_toml
 
-__all__ = ["available_workers", "execute"]
+__all__ = ["PREFETCH", "available_workers", "execute"]
+
+PREFETCH = 1  # tasks waiting per worker beside the one it runs
 
 
 def available_workers(client, workers: int | None) -> int:
@@ -54,7 +60,8 @@ def execute(
     on_done: Callable[[dict], None] | None = None,
     announce: bool = False,
 ) -> list[dict]:
-    """Run the block tasks, starting them in list order, ``workers`` at a time.
+    """Run the block tasks, starting them in list order, ``workers`` at a time (and
+    ``PREFETCH`` per worker waiting).
 
     Parameters
     ----------
@@ -83,19 +90,22 @@ def execute(
     Exception
         The first error a task raised, after the tasks in flight were stopped.
     """
+    first = _first_point(tasks[0])
     if client is not None:
         if announce and getattr(client, "dashboard_link", None):
             print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
         from distributed import wait
 
+        from workbench.campaign._cluster import ready_workers
+
+        ready_workers(client, first)  # every worker imports and loads the kernel once
         token = uuid.uuid4().hex[:8]
 
         def submit(t: BlockTask):
             key = f"campaign-{cid}-block-{t.block:05d}-{token}"
             return client.submit(run_block, t, key=key, pure=False)
 
-        return _dispatch(submit, wait, tasks, workers, on_done)
-    first = _first_point(tasks[0])
+        return _dispatch(submit, wait, tasks, workers * (1 + PREFETCH), on_done)
     if kernel_cached(scene_from_toml(first)) is False:
         # Compiled here, where Ctrl-C stops it at once, not in the fork server's start.
         load_kernel(first)
@@ -105,7 +115,8 @@ def execute(
             with _uninterrupted_start():
                 return pool.submit(run_block, t)
 
-        return _dispatch(submit_local, concurrent.futures.wait, tasks, workers, on_done)
+        window = workers * (1 + PREFETCH)
+        return _dispatch(submit_local, concurrent.futures.wait, tasks, window, on_done)
 
 
 @contextlib.contextmanager

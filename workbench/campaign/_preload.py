@@ -6,6 +6,7 @@ The client puts the scene of the campaign's first point (TOML) in the environmen
 the server inherits the machine code instead of loading it from disk itself (and xarray's and
 netCDF's first-use imports, and the package versions of the provenance). Anything that goes
 wrong here is ignored: the workers then load the kernel on their first point as usual.
+(A dask cluster's workers get the same through a worker plugin: ``_cluster``.)
 
 First of all the server arms its lifeline (``_lifeline``): it dies with the campaign that
 started it (the pid in ``WORKBENCH_CAMPAIGN_PID``), and its workers die with it.
@@ -17,30 +18,13 @@ import os
 
 from workbench.campaign._block import PRELOAD_ENV
 from workbench.campaign._lifeline import PARENT_ENV, die_with_parent
-from workbench.campaign._warm import load_kernel
-
-
-def _warm_xarray() -> None:
-    """First-use costs, paid once here instead of once per worker: xarray's array backends and
-    the netCDF writers (netCDF-4 and the netCDF-3 one of the block files)."""
-    import tempfile
-
-    import numpy as np
-    import xarray as xr
-
-    from workbench.archive import save_run
-
-    ds = xr.Dataset({"a": ("t", np.zeros(2))}, coords={"t": ("t", np.arange(2.0))})
-    with tempfile.TemporaryDirectory() as d:
-        save_run(ds, os.path.join(d, "warm.nc"))
-        save_run(ds, os.path.join(d, "warm3.nc"), classic=True)
-
+from workbench.campaign._warm import load_kernel, warm_io
 
 if os.environ.get(PARENT_ENV):
     die_with_parent(int(os.environ[PARENT_ENV]))
 if os.environ.get(PRELOAD_ENV):
     try:
-        _warm_xarray()
+        warm_io()
         load_kernel(os.environ[PRELOAD_ENV])
     except Exception:  # pragma: no cover - best effort only
         pass

@@ -28,7 +28,7 @@ from workbench.campaign._grid import (
     expand_sweep,
     format_point,
 )
-from workbench.campaign._schedule import longest_first
+from workbench.campaign._schedule import longest_first, partition
 from workbench.campaign._store import Store
 from workbench.models import get_model
 from workbench.run import format_bytes
@@ -206,12 +206,12 @@ def _run_locked(
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
         cid = campaign_id(scene, chunk)
-        manifest = st.write_manifest(scene, grid, chunk, cid)
+        manifest = st.write_manifest(scene, grid, chunk, cid, partition(scene, grid, chunk))
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
         cid = manifest["campaign_id"]
     st.remove_temporaries()
-    blocks = grid.blocks(chunk)
+    blocks = st.blocks(manifest, grid)
     code = code_of(scene)
     done = st.verified_blocks(manifest, blocks, code)
     model_module, model_directory = _model_module(scene)

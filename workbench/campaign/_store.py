@@ -5,10 +5,12 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
     omega.nc                  assembled archive, written last (atomically)
     omega.nc.blocks/
         lock                  held (flock) by the one process writing the store; pid and host
-        manifest.json         scene TOML, grid, chunk, campaign id (written first, atomically),
-                              and the SHA-256 of every committed block (rewritten on each)
-        block-00000.nc        points 0 .. chunk-1 (one file per task, written atomically;
-                              netCDF-3 64-bit offset, half the write time of netCDF-4)
+        manifest.json         scene TOML, grid, chunk, campaign id, the points of each block
+                              (written first, atomically), and the SHA-256 of every committed
+                              block (rewritten on each)
+        block-00000.nc        up to chunk points, dealt by estimated cost (``_schedule``; one
+                              file per task, written atomically; netCDF-3 64-bit offset, half
+                              the write time of netCDF-4)
         block-00001.nc        ...
 
 A block is *committed* when its checksum is in the manifest; on resume a block is reused only
@@ -44,7 +46,8 @@ from workbench.scene import Scene, SceneError, scene_from_toml
 
 __all__ = ["FORMAT", "Store"]
 
-FORMAT = "workbench-campaign 2"  # 2: block checksums, lock
+FORMAT = "workbench-campaign 3"  # 2: block checksums, lock; 3: the points of each block
+READ = (FORMAT, "workbench-campaign 2")  # a format-2 store has contiguous blocks of chunk points
 _BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
 _TMP_RE = re.compile(r"^\.(block-\d{5,}\.nc|manifest\.json)\..*\.tmp$")
 
@@ -79,9 +82,11 @@ class Store:
                     "discard them, or choose another output path"
                 )
             return None
-        return read_manifest(self.manifest_path, FORMAT, "the campaign", CampaignError)
+        return read_manifest(self.manifest_path, READ, "the campaign", CampaignError)
 
-    def write_manifest(self, scene: Scene, grid: SweepGrid, chunk: int, cid: str) -> dict:
+    def write_manifest(
+        self, scene: Scene, grid: SweepGrid, chunk: int, cid: str, blocks: list[tuple[int, ...]]
+    ) -> dict:
         data = {
             "format": FORMAT,
             "campaign_id": cid,
@@ -90,12 +95,29 @@ class Store:
             "grid": grid.as_dict(),
             "chunk": chunk,
             "points": grid.size,
-            "blocks": len(grid.blocks(chunk)),
+            "blocks": len(blocks),
+            "block_points": [list(b) for b in blocks],
             "code_digest": code_of(scene),
             "checksums": {},
             "code_digests": {},
         }
         return self.save_manifest(data)
+
+    def blocks(self, manifest: dict, grid: SweepGrid) -> list[tuple[int, ...]]:
+        """The flat indices of each block's points: as the manifest records them (format 3),
+        or contiguous runs of ``chunk`` points (a store of format 2). CampaignError when they
+        do not cover the grid's points once each."""
+        if "block_points" not in manifest:
+            return [tuple(r) for r in grid.blocks(int(manifest["chunk"]))]
+        blocks = [tuple(int(f) for f in b) for b in manifest["block_points"]]
+        flat = sorted(f for b in blocks for f in b)
+        if flat != list(range(grid.size)) or len(blocks) != manifest.get("blocks"):
+            raise CampaignError(
+                f"{str(self.manifest_path)!r} lists blocks that do not hold each of the "
+                f"{grid.size} points of the grid once; pass restart=True (CLI --restart) to "
+                "start afresh"
+            )
+        return blocks
 
     def save_manifest(self, data: dict) -> dict:
         self.blocks_dir.mkdir(parents=True, exist_ok=True)
@@ -161,7 +183,7 @@ class Store:
             removed.append(p)
         return removed
 
-    def verified_blocks(self, manifest: dict, blocks: list[range], code: str) -> set[int]:
+    def verified_blocks(self, manifest: dict, blocks: list, code: str) -> set[int]:
         """Indices of the committed blocks whose file is intact (its SHA-256 is the one in the
         manifest) and that the code of digest ``code`` computed. Every other block is named in a
         CampaignWarning (missing, corrupt, written but never committed, or computed by other

@@ -1,12 +1,15 @@
 """The compiled kernel of a scene's model: whether numba's on-disk cache holds it, and loading
-(or compiling) it once, before any worker needs it."""
+(or compiling) it once, before any worker needs it; and the first-use costs of the writers."""
 
 from __future__ import annotations
 
-from workbench.run import integrate, prepare, provenance
+import os
+import tempfile
+
+from workbench.run import derive, integrate, prepare, provenance, to_dataset
 from workbench.scene import Scene, scene_from_toml
 
-__all__ = ["kernel_cached", "load_kernel"]
+__all__ = ["kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
 
 
 def kernel_cached(scene: Scene) -> bool | None:
@@ -32,11 +35,46 @@ def kernel_cached(scene: Scene) -> bool | None:
 
 
 def load_kernel(scene_toml: str) -> None:
-    """The provenance's package versions, then the compiled kernel of the scene's model (from
-    the cache, or compiled into it)."""
+    """The provenance's package versions, then every compiled function a point of the scene
+    runs (from the cache, or compiled into it): the kernel of the scene's model and the model's
+    derived outputs, over an empty interval (one record at the start: nothing is integrated)."""
     prepared = prepare(scene_from_toml(scene_toml))
     provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
     if prepared.scene.solver["method"].startswith("scipy:"):
         return
-    # An empty interval: every compiled entry point is loaded, nothing is integrated.
-    integrate(prepared, [prepared.problem.t0])
+    result = integrate(prepared, [prepared.problem.t0])
+    derived, result = derive(prepared, result)
+    to_dataset(prepared, result, derived)
+
+
+def warm_io() -> None:
+    """First-use costs of a worker, paid before its first block: xarray's array backends and
+    the netCDF writers (netCDF-4, and the netCDF-3 one of the block files)."""
+    import numpy as np
+    import xarray as xr
+
+    from workbench.archive import save_run
+
+    ds = xr.Dataset({"a": ("t", np.zeros(2))}, coords={"t": ("t", np.arange(2.0))})
+    with tempfile.TemporaryDirectory() as d:
+        save_run(ds, os.path.join(d, "warm.nc"))
+        save_run(ds, os.path.join(d, "warm3.nc"), classic=True)
+
+
+def warm_kernel(scene: Scene) -> bool:
+    """Compile the kernel of a scene's model into the on-disk cache if it is not there yet
+    (``$WORKBENCH_CACHE_DIR``, else ``~/.cache/workbench``), so that workers sharing that cache
+    only load it. The scene of a campaign stands for its first point (the kernel is the same
+    for every point of a sweep). Returns whether anything was compiled.
+
+    >>> import workbench
+    >>> from workbench.campaign import warm_kernel
+    >>> scene = workbench.load_scene({"model": {"name": "duffing"}})
+    >>> _ = warm_kernel(scene)  # compiles on a cold cache
+    >>> warm_kernel(scene)  # now only loads
+    False
+    """
+    if kernel_cached(scene) is not False:
+        return False
+    load_kernel(scene.replace(sweep={}).to_toml())
+    return True

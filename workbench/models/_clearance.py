@@ -167,9 +167,9 @@ def joint_outputs(effects: Mapping[str, Any]) -> list[Quantity]:
     if effects["friction"] != "none":
         out.append(
             Quantity(
-                "friction_coefficient",
+                "friction_ratio",
                 "1",
-                "friction coefficient |F_t| / F_n of the law (0 out of contact)",
+                "friction ratio |F_t| / F_n of the law (0 out of contact)",
                 jd,
             )
         )

@@ -6,7 +6,7 @@ paper's constant s1 = 316 s m-1 it reached 25-50 against mu_s = 0.15 in the nine
 case (issue 29). So a LuGre run of a mechanism always records, per clearance joint (dims
 ``time``, ``joint``):
 
-- ``friction_coefficient`` (1): the law's |F_t| / F_n at the records (0 out of contact), with
+- ``friction_ratio`` (1): the law's |F_t| / F_n at the records (0 out of contact), with
   the bristle deflection on its invariant set |z| <= max(mu_s, mu_k) / s0
   (:func:`workbench.models._reduced.lugre_diagnostic`);
 - ``time_above_static_friction`` (s): the time since the record start spent in contact with
@@ -53,7 +53,7 @@ __all__ = [
 
 #: the variables every LuGre run of a mechanism records
 DIAGNOSTICS = (
-    "friction_coefficient",
+    "friction_ratio",
     "time_above_static_friction",
     "time_beyond_friction_law",
     "lugre_z",
@@ -106,7 +106,7 @@ def _totals(ds, name: str) -> dict[str, float]:
 
 def _largest(ds) -> tuple[float, str, float]:
     """The largest |F_t| / F_n at the records, its joint and time (s)."""
-    mu = np.asarray(ds["friction_coefficient"].values, float)
+    mu = np.asarray(ds["friction_ratio"].values, float)
     if not np.isfinite(mu).any():
         return float("nan"), "", float("nan")
     i, k = np.unravel_index(int(np.nanargmax(mu)), mu.shape)
@@ -143,7 +143,7 @@ def friction_warnings(ds, params: Mapping[str, float]) -> list[str]:
     if not _has(ds):
         return []
     beyond = _totals(ds, "time_beyond_friction_law")
-    mu = np.asarray(ds["friction_coefficient"].values, float)
+    mu = np.asarray(ds["friction_ratio"].values, float)
     out = _outside_warnings(ds, params)
     for k, (joint, spent) in enumerate(beyond.items()):
         if not spent > 0.0:
@@ -171,7 +171,7 @@ def _outside_warnings(ds, params: Mapping[str, float]) -> list[str]:
                 f"{bound:.3g} m at {int(outside.sum())} of {outside.size} records (up to "
                 f"{float(np.nanmax(z[:, k])):.3g} m): an integration error between steps (the "
                 "dense output of the stiff bristle state by an explicit method), so "
-                "friction_force and what depends on it are off there (friction_coefficient "
+                "friction_force and what depends on it are off there (friction_ratio "
                 "takes the law's value); solver.method = 'ark548' integrates the bristles "
                 "implicitly."
             )

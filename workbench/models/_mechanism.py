@@ -349,7 +349,7 @@ def mechanism_derive(
         for name, field in _JOINT_OUTPUTS.items():
             out[name] = per_joint(field)
         out["penetration"] = np.maximum(per_joint("delta"), 0.0)
-        out["friction_coefficient"] = np.abs(per_joint("mu"))
+        out["friction_ratio"] = np.abs(per_joint("mu"))
         iz = problem.ip[IP.block("z")]
         if iz.max() >= 0:
             out["lugre_z"] = np.stack([Y[:, iz[j]] for j in cols], axis=1)

@@ -31,6 +31,7 @@ import importlib
 import os
 import re
 import sys
+import threading
 import types
 from functools import cache
 from pathlib import Path
@@ -121,9 +122,9 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
     name = f"{label}_{source_digest(source, f'{KERNEL_PACKAGE}.{label}')}"
     path = directory / f"{name}.py"
     if not path.exists() or path.read_text() != source:
-        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
         tmp.write_text(source)
-        os.replace(tmp, path)  # atomic: concurrent workers never see a half-written file
+        os.replace(tmp, path)  # atomic: concurrent workers (or threads) never see half a file
     return importlib.import_module(f"{KERNEL_PACKAGE}.{name}")
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def lu_factor(A, piv):
     """Overwrite ``A`` (n x n) by its LU factors (unit lower triangle below the diagonal), row
     interchanges in ``piv``. Returns 0, or 1 + the index of the first zero pivot (singular)."""
@@ -41,7 +41,7 @@ def lu_factor(A, piv):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def lu_solve(LU, piv, b):
     """Overwrite ``b`` by the solution x of A x = b, with A's factors from :func:`lu_factor`."""
     n = LU.shape[0]

@@ -12,11 +12,11 @@ from numba import njit
 __all__ = ["apply_event", "event_values"]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def event_values(t, y, p, ip, aux, work, g):  # noqa: ARG001
     return None
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def apply_event(k, t, y, p, ip, aux, work):  # noqa: ARG001
     return 0

@@ -35,7 +35,7 @@ from workbench.solver._tableaux import (
 DOP853_STABILITY = 6.1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def n_stages(method):
     """Stages of an explicit (or implicit–explicit) method before its end derivative (FSAL)."""
     if method == DOP853:
@@ -43,14 +43,14 @@ def n_stages(method):
     return 8 if method == ARK548 else 6
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def read_decay(work, stiff_slot, decay):
     """Copy the stiff states' decay rates (s-1) that the last ``rhs`` call wrote into work."""
     for k in range(stiff_slot.size):
         decay[k] = work[stiff_slot[k]]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def stiff_position(stiff_idx, i):
     """Position k of state i in ``stiff_idx`` (-1 if state i is not stiff)."""
     for k in range(stiff_idx.size):
@@ -59,7 +59,7 @@ def stiff_position(stiff_idx, i):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def stage_point(K, a, s, h, y, out):
     """out = y + h * sum_{j<s} a[j] K[j]."""
     n = y.size
@@ -70,7 +70,7 @@ def stage_point(K, a, s, h, y, out):
         out[i] = y[i] + h * acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
     """Scaled RMS error estimate of the step (Hairer et al. 1993, Eq. II.4.11; DOP853's
     combination of its 5th- and 3rd-order estimators; for DOPRI5 and ARK548 the difference of
@@ -111,13 +111,13 @@ def error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
     return np.sqrt(acc / n)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def min_step(t):
     """The smallest step (s) from time t (s): ten units in the last place of t."""
     return 10.0 * abs(np.nextafter(t, np.inf) - t)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def trial_step(t, t_end, h_abs):
     """The end (s) and size (s) of a trial step of h_abs (s) from t, not beyond t_end."""
     t_new = t + h_abs
@@ -126,7 +126,7 @@ def trial_step(t, t_end, h_abs):
     return t_new, t_new - t
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def step_factor(err, exponent, rejected):
     """Step-size ratio after an accepted step with error ``err`` < 1 (no growth right after a
     rejection)."""
@@ -139,7 +139,7 @@ def step_factor(err, exponent, rejected):
     return factor
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def reject_factor(err, exponent):
     """Step-size ratio after a rejected step with error ``err`` >= 1 (inf: a failed step)."""
     if np.isfinite(err):
@@ -147,7 +147,7 @@ def reject_factor(err, exponent):
     return MIN_FACTOR
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def dop853_dense(K, h, y, y_new, F):
     """DOP853's 7th-order continuous extension from its 16 stages (the 3 extra ones in
     K[13:16])."""
@@ -164,7 +164,7 @@ def dop853_dense(K, h, y, y_new, F):
             F[3 + r, i] = h * acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def dopri5_dense(K, F):
     """Shampine's (1986) 4th-order continuous extension of DOPRI5."""
     n = K.shape[1]
@@ -176,7 +176,7 @@ def dopri5_dense(K, F):
             F[j, i] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ark_cubic(K, h, y, y_new, F, ytmp):
     """ARK548's cubic Hermite interpolant through both ends of the step, and its value at
     t + h/3 in ``ytmp`` (where the quartic's extra derivative is taken).
@@ -196,7 +196,7 @@ def ark_cubic(K, h, y, y_new, F, ytmp):
         ytmp[i] = y[i] + x * (F[1, i] + x * (F[2, i] + x * F[3, i]))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ark_quartic(K, h, F, stiff_idx):
     """Raise :func:`ark_cubic` to the quartic Hermite interpolant (4th order: O(h^5) between the
     step's ends) with the derivative at t + h/3 in K[9]: p(1) = y_new, p'(0) = h f0,
@@ -217,7 +217,7 @@ def ark_quartic(K, h, F, stiff_idx):
         F[4, i] = -9.0 * r1 + 2.25 * r2 + 6.75 * r3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def dense_eval(method, t_old, h, y_old, F, t, out):
     """State at time t inside the last step from the continuous extension."""
     x = (t - t_old) / h
@@ -248,7 +248,7 @@ def dense_eval(method, t_old, h, y_old, F, t, out):
             out[i] = y_old[i] + x * (F[0, i] + x * (F[1, i] + x * F[2, i]))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def crossed(direction, g_a, g_b):
     """Whether event function g crossed between two points in the event's direction.
 
@@ -263,13 +263,13 @@ def crossed(direction, g_a, g_b):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def root_tolerance(t_a, t_b, h):
     """Width below which a bracket of an event's root is final (4 ulp of the times)."""
     return 4.0 * 2.220446049250313e-16 * max(abs(t_a), abs(t_b), abs(h))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def illinois_point(t_a, g_a, t_b, g_b):
     """The next trial point of regula falsi in the bracket [t_a, t_b] (its midpoint if the
     secant leaves it)."""
@@ -279,7 +279,7 @@ def illinois_point(t_a, g_a, t_b, g_b):
     return t_m
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def illinois_update(t_a, g_a, t_b, g_b, side, t_m, g_m):
     """Shrink the bracket to the side of ``t_m`` where g changes sign, halving the retained
     end's value when the same end is kept twice (the Illinois modification, which makes
@@ -299,7 +299,7 @@ def illinois_update(t_a, g_a, t_b, g_b, side, t_m, g_m):
     return t_a, g_a, t_b, g_b, side
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def initial_norms(y0, f0, rtol, atol):
     """Scaled RMS norms of y0 and f0 (Hairer et al. 1993, Sec. II.4, "starting step size")."""
     n = y0.size
@@ -312,7 +312,7 @@ def initial_norms(y0, f0, rtol, atol):
     return np.sqrt(d0 / n), np.sqrt(d1 / n)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def initial_difference(y0, f0, f1, rtol, atol, h0):
     """Scaled RMS norm of (f1 - f0) / h0, an estimate of the second derivative."""
     n = y0.size
@@ -323,7 +323,7 @@ def initial_difference(y0, f0, f1, rtol, atol, h0):
     return np.sqrt(d2 / n) / h0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def dop853_stiffness(K, h, scale):
     """Hairer's estimate of |h lambda| from DOP853's last step (Hairer & Wanner 1996,
     Sec. IV.2; the test of his code DOP853): the 12th stage and the step's end lie at the same

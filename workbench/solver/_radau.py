@@ -123,13 +123,13 @@ COST_WEIGHT = 0.1
 LU_COST_8 = 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def newton_tolerance(rtol):
     """Bound on the Newton iteration's scaled increment (RADAU5's FNEWT)."""
     return max(10.0 * EPS / rtol, min(0.03, math.sqrt(rtol)))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def factor_matrices(J, h, LUr, pivr, LUc, pivc):
     """LU factors of gamma/h - J and (alpha - i beta)/h - J. Returns 0, or nonzero when one is
     singular."""
@@ -148,7 +148,7 @@ def factor_matrices(J, h, LUr, pivr, LUc, pivc):
     return lu_factor(LUc, pivc)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def starting_values(Q, h_old, h, Z, W):
     """Stage increments of the next step from the last step's collocation polynomial
     y(t_old + x h_old) = y_old + sum_k Q[k] x^(k+1), extrapolated to the new stages
@@ -170,7 +170,7 @@ def starting_values(Q, h_old, h, Z, W):
             W[j, i] = RADAU_TI[j, 0] * Z[0, i] + RADAU_TI[j, 1] * Z[1, i] + RADAU_TI[j, 2] * Z[2, i]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def newton_increment(Fs, W, h, LUr, pivr, LUc, pivc, scale, dW, br, bc):
     """One simplified Newton step for the transformed increments W with the stage derivatives
     Fs (Hairer & Wanner 1996, Eq. 8.17-8.18, in the form of scipy's ``Radau``): writes dW and
@@ -201,7 +201,7 @@ def newton_increment(Fs, W, h, LUr, pivr, LUc, pivc, scale, dW, br, bc):
     return math.sqrt(acc / (3 * n))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def apply_increment(dW, W, Z):
     """W += dW; Z = T W."""
     n = W.shape[1]
@@ -213,7 +213,7 @@ def apply_increment(dW, W, Z):
             Z[j, i] = RADAU_T[j, 0] * W[0, i] + RADAU_T[j, 1] * W[1, i] + RADAU_T[j, 2] * W[2, i]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def error_vector(Z, f0, h, LUr, pivr, ez, e):
     """The error estimate's vector (gamma/h - J)^-1 (f0 + e^T Z / h) into ``e``, and
     ``ez = e^T Z / h`` (Hairer & Wanner 1996, Eq. 8.19-8.20)."""
@@ -224,7 +224,7 @@ def error_vector(Z, f0, h, LUr, pivr, ez, e):
     lu_solve(LUr, pivr, e)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def refine_error(f1, ez, LUr, pivr, e):
     """The refined estimate (gamma/h - J)^-1 (f(y0 + e) + e^T Z / h), with ``f1 = f(y0 + e)``,
     used after a rejection or on a first step, where the plain one can be off for stiff
@@ -235,7 +235,7 @@ def refine_error(f1, ez, LUr, pivr, e):
     lu_solve(LUr, pivr, e)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def scaled_rms(e, y, y_new, rtol, atol):
     """RMS of e / (atol + rtol max(|y|, |y_new|))."""
     n = e.size
@@ -246,7 +246,7 @@ def scaled_rms(e, y, y_new, rtol, atol):
     return math.sqrt(acc / n)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def step_ratio(err, newt):
     """h_new / h after a step with error ``err`` and ``newt`` Newton iterations (RADAU5: the
     safety factor shrinks with the iterations a step needed)."""
@@ -255,7 +255,7 @@ def step_ratio(err, newt):
     return 1.0 / quot
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def predictive_ratio(ratio, h, err, h_acc, err_acc):
     """Gustafsson's (1994) predictive step-size ratio, as in RADAU5: the smaller of the
     classical ratio and the one that also uses the last accepted step (h_acc, err_acc); the
@@ -267,7 +267,7 @@ def predictive_ratio(ratio, h, err, h_acc, err_acc):
     return min(ratio, 1.0 / fac)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def newton_limit(rc, h, h_next):
     """The next step after an accepted one, limited where the Newton iteration has recently
     failed: at most NEWTON_BACKOFF times the failed step (but never below the accepted one), a
@@ -283,7 +283,7 @@ def newton_limit(rc, h, h_next):
     return min(h_next, max(h, NEWTON_BACKOFF * h_fail))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def dense_coefficients(Z, F):
     """The collocation polynomial's coefficients F[k] (of x^(k+1)) over the last step."""
     n = Z.shape[1]
@@ -292,7 +292,7 @@ def dense_coefficients(Z, F):
             F[k, i] = RADAU_P[0, k] * Z[0, i] + RADAU_P[1, k] * Z[1, i] + RADAU_P[2, k] * Z[2, i]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def spectral_radius(J, scale, v, u):
     """Estimate of the largest |eigenvalue| of J (1/s) by 24 power iterations in the scaled
     state (D^-1 J D with D = diag(scale): the same eigenvalues, balanced units); the growth is
@@ -324,13 +324,13 @@ def spectral_radius(J, scale, v, u):
     return math.exp(log_growth / 12.0)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def lu_cost(n):
     """Cost of one LU pair in right-hand-side evaluations (see LU_COST_8)."""
     return LU_COST_8 * (n / 8.0) ** 3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def forget_jacobian(rc):
     """After an event or a switch: the Jacobian, its LU factors, the starting values and the
     predictive controller's history belong to another discrete state or method."""
@@ -344,7 +344,7 @@ def forget_jacobian(rc):
     rc[RC_FACCON] = 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def to_implicit(rc, ist):
     """Switch the automatic method to Radau IIA."""
     rc[RC_CURRENT] = RADAU5
@@ -356,7 +356,7 @@ def to_implicit(rc, ist):
     forget_jacobian(rc)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def to_explicit(rc, ist):
     """Switch the automatic method to DOP853; a short implicit phase doubles the stiffness
     tests needed to come back."""
@@ -371,7 +371,7 @@ def to_explicit(rc, ist):
     ist[IS_TO_EXPLICIT] += 1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def average(old, new):
     """Exponential average of a cost per step (the first value taken as it is)."""
     if old <= 0.0:
@@ -379,7 +379,7 @@ def average(old, new):
     return old + COST_WEIGHT * (new - old)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def explicit_test(rc, ist, h_lambda, cost):
     """Hairer's stiffness test after an accepted DOP853 step of the automatic method (his code
     DOP853; Hairer & Wanner 1996, Sec. IV.2), with the trigger EXPLICIT_TRIGGER and the
@@ -402,7 +402,7 @@ def explicit_test(rc, ist, h_lambda, cost):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def implicit_test(rc, ist, h_next, cost):
     """After an accepted Radau step of the automatic method: is the explicit method cheaper?
 
@@ -430,7 +430,7 @@ def implicit_test(rc, ist, h_next, cost):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def implicit_cost(ist, rhs_before, lu_before, n):
     """Evaluation-equivalents of the implicit method since the counters read ``rhs_before`` and
     ``lu_before``."""

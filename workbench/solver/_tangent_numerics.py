@@ -22,7 +22,7 @@ from numba import njit
 from workbench.solver._linalg import lu_factor, lu_solve
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def column_dot(Y, b1, b2, nx, w):
     """``<u, v>`` of the columns starting at ``Y[b1]`` and ``Y[b2]``."""
     acc = 0.0
@@ -31,7 +31,7 @@ def column_dot(Y, b1, b2, nx, w):
     return acc
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def normalise(Y, b, nx, w, il):
     """Scale the column at ``Y[b]`` to unit size and add the log of its size to ``Y[il]`` (a
     column of zero size is left as it is)."""
@@ -42,7 +42,7 @@ def normalise(Y, b, nx, w, il):
         Y[il] += math.log(size)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def gram(Y, n, nx, m, w, G):
     """The Gram matrix ``G[a, c] = <u_a, u_c>`` of the m columns (m x m, written into G)."""
     for a in range(m):
@@ -51,7 +51,7 @@ def gram(Y, n, nx, m, w, G):
             G[c, a] = G[a, c]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def log_volume(G):
     """``ln sqrt(det G)`` of a Gram matrix by its Cholesky factorisation (G is overwritten);
     -inf where G is not positive definite (dependent columns)."""
@@ -74,7 +74,7 @@ def log_volume(G):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def columns_log_volume(Y, n, nx, m, w):
     """``ln`` of the volume spanned by the m columns."""
     G = np.empty((m, m))
@@ -82,7 +82,7 @@ def columns_log_volume(Y, n, nx, m, w):
     return log_volume(G)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def defect(Y, n, nx, m, w):
     """Orthogonality defect of the columns: the sum of their log sizes minus the log of the
     volume they span (Hadamard: >= 0, 0 for orthogonal columns, +inf for dependent ones)."""
@@ -98,7 +98,7 @@ def defect(Y, n, nx, m, w):
     return sizes - log_volume(G)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def gram_schmidt(Y, n, nx, m, w, il):
     """Re-orthonormalise the m columns in place (modified Gram-Schmidt: ``V <- V R^-1``) and add
     ``log R_kk`` to the log sizes ``Y[il + k]``: the vectors ``V = U diag(e^l)`` then hold
@@ -118,7 +118,7 @@ def gram_schmidt(Y, n, nx, m, w, il):
                 Y[bc + j] -= d * Y[bk + j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def volume_rates(Y, n, nx, m, w, D, Dm):
     """``(tr(G^-1 U^T W D), tr(G^-1 U^T W Dm))``: the rate of the log volume of the m columns
     under ``du_c/dt = D[:, c]`` (nx x m) and the part of it from ``Dm`` (n x m, the rate's

@@ -152,14 +152,14 @@ def energy_per_cycle(ds: xr.Dataset, var: str) -> xr.DataArray:
 
 def friction_law(ds: xr.Dataset, scene: Scene) -> dict[str, list[float]]:
     """Per realisation of a member (dim ``realisation``): ``mu_max``, the largest friction
-    coefficient |F_t| / F_n at the records over the joints (1; from ``friction_coefficient``,
+    coefficient |F_t| / F_n at the records over the joints (1; from ``friction_ratio``,
     else from the friction and contact forces), ``mu_median``, its median over the records in
     contact (1), and for LuGre runs ``above`` and ``beyond``,
     the time per crank cycle (s, summed over the joints) with the coefficient above mu_s and
     beyond the law's envelope 2 mu_s + s2 |v_t| (the quadratures of
     :mod:`workbench.models._friction_report`, NaN without them). Empty without friction."""
-    if "friction_coefficient" in ds:
-        mu = ds["friction_coefficient"]
+    if "friction_ratio" in ds:
+        mu = ds["friction_ratio"]
     elif "friction_force" in ds and "contact_force" in ds:
         fn = ds["contact_force"]
         mu = abs(ds["friction_force"]).where(fn > 0, 0.0) / fn.where(fn > 0, 1.0)

@@ -24,6 +24,14 @@ template                    generates, per model
 ``placeholder_hooks``       (not generated) the stand-in model of the templates
 ==========================  ========================================================
 
+Every compiled function here and in the solver modules they import (``_numerics``, ``_radau``,
+``_linalg``, ``_no_events``) is compiled with ``nogil=True``: the loop's entry points
+(``start``, ``initial_step``, ``advance``) release the GIL for the whole integration, so that the
+threads of one process (a dask worker with N threads) integrate N points at once. Inside the
+loop every call (to the steps, the numerics and the model's hooks) is a native call that never
+touches the GIL, so a model's own hooks need no flag; on the other functions it matters where
+Python calls them directly (a model's Jacobian from the analysis layer).
+
 ``workbench kernel MODEL`` (or :func:`workbench.solver.generated_source`) prints what was
 generated for a model.
 """

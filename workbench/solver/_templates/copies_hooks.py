@@ -49,20 +49,20 @@ from workbench.solver._templates.placeholder_hooks import rhs as model_rhs  # @@
 N_META = 7
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _meta(ip):
     """(n, na, ne, copies, len(model p), renormalise) from the tail of ``ip``."""
     k = ip.size - N_META
     return ip[k], ip[k + 1], ip[k + 2], ip[k + 3], ip[k + 4], ip[k + 5]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _measured(ip):
     """How many leading states of a copy its separation is measured and renormalised in."""
     return ip[ip.size - 1]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, ne, copies, npm, renorm = _meta(ip)
     pm = p[:npm]
@@ -80,7 +80,7 @@ def rhs(t, Y, p, ip, aux, work, dY):
     return result
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def separation(Y, p, n, npm, c, nm):
     """Scaled distance between copy c and the fiducial copy 0 in their first ``nm`` states."""
     acc = 0.0
@@ -90,7 +90,7 @@ def separation(Y, p, n, npm, c, nm):
     return math.sqrt(acc)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def event_values(t, Y, p, ip, aux, work, g):
     n, na, ne, copies, npm, renorm = _meta(ip)
     pm = p[:npm]
@@ -109,7 +109,7 @@ def event_values(t, Y, p, ip, aux, work, g):
             g[copies * ne + c - 1] = (math.log(d / d0) if d > 0.0 else -math.inf) - growth - wait
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def apply_event(k, t, Y, p, ip, aux, work):
     n, na, ne, copies, npm, renorm = _meta(ip)
     if k < copies * ne:
@@ -137,7 +137,7 @@ def apply_event(k, t, Y, p, ip, aux, work):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _same_mode(t, Y, p, ip, aux, work, c):
     """Whether copy c and copy 0 lie on the same side of every event surface (g <= 0 or
     g > 0) and agree on which discrete states are active (nonzero)."""

@@ -66,7 +66,7 @@ from workbench.solver._tableaux import (
 from workbench.solver._templates.placeholder_hooks import event_values, rhs  # @@HOOKS@@
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _rk_step(method, t, h, m, st, w):
     """One RK step from (t, st.y, st.f); stages in K, derivative at the step's end in K[ns]
     (FSAL).
@@ -135,7 +135,7 @@ def _rk_step(method, t, h, m, st, w):
     return code, inside_stage, False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _dense_prepare(method, t, h, m, st, w, im):
     """Coefficients of the continuous extension over the last step (t, t + h). Returns the
     hook code. DOP853 needs 3 extra stages, ARK548 one extra derivative (at t + h/3, see
@@ -172,7 +172,7 @@ def _dense_prepare(method, t, h, m, st, w, im):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _any_crossed(t, y, m, aux, g_old, g):
     """Whether any event function crosses between ``g_old`` and its values at (t, y), which are
     written into ``g``."""
@@ -186,7 +186,7 @@ def _any_crossed(t, y, m, aux, g_old, g):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, m, aux, yint, gtmp):
     """Root of event k in [t_a, t_b] by the Illinois method on the dense output.
 
@@ -206,7 +206,7 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, m, aux, yint, gtm
     return t_b
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
     """Try explicit steps from t until one is accepted or the step underflows.
 

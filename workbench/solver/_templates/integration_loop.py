@@ -136,7 +136,7 @@ from workbench.solver._templates.radau_step import (  # @@IMPLICIT@@
 _crossed = crossed  # the name tests and older callers use
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def start(t, m, st):
     """Derivative, event functions and stiff decay rates (into ``ctrl[N_CTRL:]``) at the
     point (t, st.y, st.aux). Returns the hook code (0, a failure code, or EVENT_INSIDE_STEP when
@@ -150,7 +150,7 @@ def start(t, m, st):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def initial_step(method, t0, t_end, s, m, st):
     """Initial step size (Hairer et al. 1993, Sec. II.4, "starting step size") from the point
     (t0, st.y) with derivative st.f, s; NaN where none can be formed (the state or its
@@ -189,7 +189,7 @@ def initial_step(method, t0, t_end, s, m, st):
     return min(100.0 * h0, h1, interval, s.max_step)
 
 
-@njit(cache=True, inline="always")  # no call boundary per step
+@njit(cache=True, nogil=True, inline="always")  # no call boundary per step
 def _attempts(current, t, t_end, h_abs, f_inside, s, m, st, im, w):
     """A step of the method in use (``current``): Radau IIA or an explicit pair."""
     if im is not None:
@@ -198,7 +198,7 @@ def _attempts(current, t, t_end, h_abs, f_inside, s, m, st, im, w):
     return _explicit_attempts(current, t, t_end, h_abs, f_inside, s, m, st, w)
 
 
-@njit(cache=True, inline="always")  # no call boundary per step
+@njit(cache=True, nogil=True, inline="always")  # no call boundary per step
 def _switch(current, h, h_next, s, st, im, K, before):
     """The automatic method's stiffness tests after an accepted step (see
     :func:`workbench.solver._radau.explicit_test` and ``implicit_test``). Returns the method
@@ -220,7 +220,7 @@ def _switch(current, h, h_next, s, st, im, K, before):
     return DOP853
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def advance(t_end, t_pause, step_pause, s, m, st, im):
     """Integrate from st.ctrl[CT_T] until t_end (or the first step ending at or after t_pause,
     or until st.stats[ST_STEPS] reaches ``step_pause``: the caller's chance to see signals).

@@ -35,7 +35,7 @@ HAS_ANALYTIC = True  # @@FLAG@@
 EPS3 = 2.220446049250313e-16 ** (1.0 / 3.0)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def step(y_j, s_j):
     """Central-difference step for a state of value ``y_j`` and scale ``s_j`` (state units),
     rounded so that ``y_j + h`` and ``y_j - h`` are exact machine numbers apart by 2 h."""
@@ -48,7 +48,7 @@ def step(y_j, s_j):
     return (y_j + h) - y_j
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def fd_jacobian(t, y, p, ip, aux, work, scale, J):
     """``J[i, j] = d f_i / d y_j`` by central differences of ``rhs`` (steps: :func:`step`).
 
@@ -74,7 +74,7 @@ def fd_jacobian(t, y, p, ip, aux, work, scale, J):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def fd_aux_jacobian(t, y, p, ip, aux, work, need, yd, fp, fm, Ja):
     """``Ja[i, k] = d f_i / d aux_k`` by central differences of ``rhs`` for the discrete states
     with ``need[k]`` that are active (``aux_k`` finite and nonzero: a zero discrete state means
@@ -106,7 +106,7 @@ def fd_aux_jacobian(t, y, p, ip, aux, work, need, yd, fp, fm, Ja):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def jacobian(t, y, p, ip, aux, work, scale, J):
     """The model's Jacobian ``J[i, j] = d f_i / d y_j``: its analytic hook where it has one,
     else :func:`fd_jacobian`. ``scale`` (state units) sizes the difference steps."""
@@ -115,7 +115,7 @@ def jacobian(t, y, p, ip, aux, work, scale, J):
     return fd_jacobian(t, y, p, ip, aux, work, scale, J)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def jacobians_along(t, Y, AUX, p, ip, work, scale, Js, Jas):
     """:func:`jacobian` (into ``Js[k]``) and :func:`fd_aux_jacobian` (every active discrete
     state, into ``Jas[k]``) at every record (rows of ``Y`` and ``AUX``); returns the model

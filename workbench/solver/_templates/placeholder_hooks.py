@@ -11,14 +11,14 @@ from numba import njit
 from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rhs(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
     for i in range(y.size):
         dydt[i] = -y[i]
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def jacobian(t, y, p, ip, aux, work, J):  # noqa: ARG001
     """Analytic Jacobian of dy/dt = -y: J = -I (the optional ``jacobian`` hook)."""
     n = y.size

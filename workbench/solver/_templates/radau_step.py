@@ -72,7 +72,7 @@ from workbench.solver._templates.jacobian import HAS_ANALYTIC, jacobian  # @@JAC
 from workbench.solver._templates.placeholder_hooks import rhs  # @@HOOKS@@
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _jacobian(t, m, st, im):
     """The model's Jacobian at the current point into im.J (analytic, or central differences
     of rhs: 2n evaluations, counted), and its spectral radius. Returns the hook code."""
@@ -90,7 +90,7 @@ def _jacobian(t, m, st, im):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _newton(t, h, fnewt, m, st, im, ytmp):
     """Simplified Newton iteration for Radau IIA's collocation system from the starting values
     in im.Z, im.W (Hairer & Wanner 1996, Sec. IV.8; RADAU5's stopping criteria).
@@ -152,7 +152,7 @@ def _newton(t, h, fnewt, m, st, im, ytmp):
     return FAILED, NEWTON_MAX, inside, 0, 0.5
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
     """Try Radau IIA steps from t until one is accepted or the step underflows (Hairer & Wanner
     1996, Sec. IV.8; RADAU5's step control, Jacobian and LU reuse).

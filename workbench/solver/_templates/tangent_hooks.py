@@ -120,20 +120,20 @@ SURFACE_FRACTION = 0.02
 MIN_STEP_FACTOR = 1e-3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _meta(ip):
     """(n, na, m, ne, len(p), len(ip), work size) of the model, from the tail of ``ip``."""
     k = ip.size - N_META
     return ip[k], ip[k + 1], ip[k + 2], ip[k + 3], ip[k + 4], ip[k + 5], ip[k + 6]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reorthonormalising(ip):
     """Whether the system re-orthonormalises its vectors (and integrates their volume)."""
     return ip[ip.size - 1] != 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
@@ -233,7 +233,7 @@ def rhs(t, Y, p, ip, aux, work, dY):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
     """The difference step along ``v`` (a multiple of it), shortened so that no event function
     changes by more than SURFACE_FRACTION of its value at ``y`` (``g0``) across the stencil:
@@ -256,7 +256,7 @@ def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
     return eps
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def event_values(t, Y, p, ip, aux, work, g):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g[:ne])
@@ -266,7 +266,7 @@ def event_values(t, Y, p, ip, aux, work, g):
         g[ne] = defect(Y, n, nx, m, w) - p[npm + n + nx + 1]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reset(k, t, y, a, pm, ipm, wm, out):
     """``out = R(t, (y, a))``: the model's event update applied to copies."""
     n = y.size
@@ -277,14 +277,14 @@ def _reset(k, t, y, a, pm, ipm, wm, out):
     out[n:] = ac
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _reorthonormalise(Y, n, nx, m, w):
     """Gram-Schmidt on the directions, their log sizes taking log R_kk; counted."""
     gram_schmidt(Y, n, nx, m, w, n + m * nx + 1)
     Y[n + m * nx + 1 + m + 2] += 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def apply_event(k, t, Y, p, ip, aux, work):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
