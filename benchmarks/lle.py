@@ -87,9 +87,10 @@ def equations(label: str, scene, lyapunov_exponents: int | None) -> None:
     )
     print(
         f"{label:>10} {'variational spectrum (QR)':>26} {float(v.exponent[0]):9.4f} "
-        f"{str(bool(v.converged[0])):>9} {wall_v:8.1f}   rtol/10: "
+        f"{str(bool(v.converged)):>9} {wall_v:8.1f}   rtol/100: "
         f"{float(v.exponent_tight[0]):.4g}, stderr {float(v.stderr[0]):.3g}, sum "
-        f"{float(v.spectrum_sum):.4g} (divergence {float(v.divergence):.4g})"
+        f"{float(v.spectrum_sum):.4g} (volume rate {float(v.volume_rate):.4g}, sum check "
+        f"{float(v.sum_check):.2g})"
     )
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from workbench import load_scene
-from workbench.analysis import lle_from_equations, lyapunov_spectrum
+from workbench.analysis import ConvergenceWarning, lle_from_equations, lyapunov_spectrum
 from workbench.models import get_model
 from workbench.solver import integrate
 from workbench.solver._compile import jacobian_for
@@ -322,16 +322,101 @@ def test_bad_arguments_are_refused():
 @pytest.mark.slow
 def test_chaos_case_two_trajectory_and_variational_agree():
     """The chaos study's case (A+B, c = 0.1 mm, omega = 2 pi, Coulomb c_f = 0.01), 4
-    transient + 3 cycles, default arguments: the five separation/growth variants agree within
-    5 % (converged), and the variational equations with saltation, carried by the same
+    transient + 3 cycles, no room to grow and no tolerance check: the five separation/growth
+    variants agree within 5 %, and the variational equations with saltation, carried by the same
     fiducial trajectory, give the same exponent (measured: 29.474 and 29.475 1/s, variants
-    29.473-29.483). Before the kernel applied simultaneous events together, a copy whose
-    contact onset fell on the fiducial's double in time missed it, and the variants spread by
-    20 %."""
+    29.473-29.483), but three cycles are far from the error target, and the estimate says so.
+    Before the kernel applied simultaneous events together, a copy whose contact onset fell on
+    the fiducial's double in time missed it, and the variants spread by 20 %."""
     scene = load_scene("studies/chaos/chaos.toml").replace(run={"cycles": 3, "transient_cycles": 4})
-    r = lle_from_equations(scene)
-    assert bool(r.converged), r.estimate.values
+    with pytest.warns(ConvergenceWarning):
+        r = lle_from_equations(scene, budget=3, check=False)
+    assert float(r.spread) < 0.05, r.estimate.values
+    assert not bool(r.converged) and "error target" in r.attrs["failed"]
     assert float(r.method_difference) < 0.15
     assert 5.0 < float(r.lle) < 200.0  # 1/s: an impacting mechanism, chaotic
     assert r.lle_per_period.attrs["units"] == "1"
     assert r.sizes["pilot_separation"] == 8 and np.all(np.isfinite(r.pilot_rate))
+
+
+_OBLIQUE_JOURNAL = {
+    "model": {"name": "free_journal"},
+    "initial": {"vy": 0.2, "vx": 0.05},
+    "run": {"duration": 0.02},
+    "solver": {"rtol": 1e-8, "atol": 1e-8},
+}
+
+
+def test_spectrum_sum_check_with_contact_memory_is_exact():
+    """A free journal launched obliquely (12 impacts in 0.02 s, the damping set by the held
+    onset velocity): the log volume the four tangent vectors span, integrated with the tangent
+    system (the feedback of the held onset velocity included), equals the spectrum's sum to
+    1e-5 (measured 2.1e-7 at rtol 1e-8); the trace of J and the volume jumps at events alone
+    (divergence) leave out memory_rate. The spectrum is sorted (its accumulators were not, over
+    so short a window) and no exponent is trusted without a tolerance check."""
+    with pytest.warns(ConvergenceWarning, match="tolerance check: not run"):
+        r = lyapunov_spectrum(_OBLIQUE_JOURNAL, check=False, budget=0.02)
+    assert float(r.sum_check) < 1e-5
+    assert float(r.spectrum_sum) == pytest.approx(float(r.volume_rate), rel=1e-5)
+    assert float(r.divergence) + float(r.memory_rate) == pytest.approx(float(r.volume_rate))
+    assert r.attrs["memory"] == 1 and float(r.memory_rate) != 0.0
+    lam = r.exponent.values
+    assert np.all(np.diff(lam) <= 0) and r.attrs["reordered"] == 1
+    assert not bool(r.converged) and not r.trusted.values.any()
+    assert r.stderr.attrs["units"] == "s-1" and r.volume_rate.attrs["units"] == "s-1"
+
+
+def test_spectrum_that_misses_its_targets_says_which():
+    """Lorenz over 20 s with no room to grow: the largest exponent's error is far above 3 %,
+    so the estimate is not converged, says so in ``failed`` and warns; an exponent whose error
+    exceeds 20 % of it is not trusted, whatever the tolerance check says."""
+    scene = {"model": {"name": "lorenz"}, "run": {"duration": 20.0, "transient": 10.0}}
+    with pytest.warns(ConvergenceWarning, match="error target"):
+        r = lyapunov_spectrum(scene, budget=20.0)
+    assert not bool(r.converged)
+    assert "error target" in r.attrs["failed"] and r.attrs["duration"] == pytest.approx(20.0)
+    rel = r.stderr.values / np.abs(r.exponent.values)
+    assert rel[0] > 0.03
+    assert not r.trusted.values.any()
+    assert r.exponent_tight.attrs["long_name"] == f"exponent at rtol = {r.attrs['rtol'] / 100:g}"
+
+
+def test_spectrum_window_grows_to_its_error_target():
+    """Lorenz from 50 s with a budget of 800 s: the run is continued (doubled) until the
+    largest exponent's standard error is 3 % of it, and the spectrum then matches Sprott's
+    within that error; the sum check closes (the trace of Lorenz is constant)."""
+    scene = {"model": {"name": "lorenz"}, "run": {"duration": 50.0, "transient": 10.0}}
+    r = lyapunov_spectrum(scene, budget=800.0, check=False)
+    followed = r.attrs["duration"]
+    assert followed in (100.0, 200.0, 400.0, 800.0)
+    assert float(r.elapsed[-1]) == pytest.approx(followed)
+    err = float(r.stderr[0])
+    assert err <= 0.03 * float(r.exponent[0]) or followed == 800.0
+    assert float(r.exponent[0]) == pytest.approx(LORENZ_SPECTRUM[0], abs=3 * err + 0.02)
+    assert float(r.sum_check) < 1e-6  # measured 1.1e-9
+
+
+def test_implicit_method_is_refused_in_a_lyapunov_window():
+    """radau (and auto, ark548) would be silently replaced by DOP853 for the tangent system:
+    refused with what to do, and measured with DOP853 when asked."""
+    scene = {
+        "model": {"name": "lorenz"},
+        "run": {"duration": 1.0},
+        "solver": {"method": "radau"},
+    }
+    with pytest.raises(ValueError, match="solver.method='radau'.*method='dop853'"):
+        lyapunov_spectrum(scene, check=False)
+    with pytest.raises(ValueError, match="solver.method='radau'"):
+        lle_from_equations(scene)
+    with pytest.warns(ConvergenceWarning):
+        r = lyapunov_spectrum(scene, check=False, method="dop853", budget=1.0)
+    assert r.exponent.size == 3
+
+
+def test_two_trajectory_estimate_that_misses_its_targets_says_which():
+    """Lorenz over 30 s with no room to grow: not converged, the error target named."""
+    scene = {"model": {"name": "lorenz"}, "run": {"duration": 30.0, "transient": 10.0}}
+    with pytest.warns(ConvergenceWarning, match="error target"):
+        r = lle_from_equations(scene, budget=30.0, separation=1e-7)
+    assert not bool(r.converged) and "error target" in r.attrs["failed"]
+    assert r.lle_tight.attrs["units"] == "s-1"

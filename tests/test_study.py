@@ -2,12 +2,14 @@
 claims, figures and a dataset with units, and the report shows ensemble statistics."""
 
 import json
+import math
 import re
 
 import numpy as np
 import pytest
 import xarray as xr
 
+from workbench import load_scene
 from workbench.cli import main
 from workbench.study import available_studies, load_study, run_study, write_report
 from workbench.study._claims import evaluate_claim
@@ -248,7 +250,7 @@ def test_chaos_and_bifurcation_claims_over_samples():
     )
     assert out["verdict"] == "reproduced" and "27 +/- 7 1/s" in out["evidence"]
     out = evaluate_claim(chaos, {"exponents": _exponents(27.0, 7.0, False), "zero_one_K": k})
-    assert out["verdict"] == "not resolved" and "variants disagree" in out["reason"]
+    assert out["verdict"] == "not resolved" and "did not converge" in out["reason"]
     out = evaluate_claim(chaos, {"exponents": _exponents(5.0, 7.0, True), "zero_one_K": k})
     assert out["verdict"] == "not resolved" and "two standard errors" in out["reason"]
     low = {c: [0.1, 0.05] for c in k}
@@ -435,3 +437,64 @@ def test_exponent_numbers_are_written_as_json():
 
     values = [_native(v) for v in (1.0, np.float32(2.5), np.nan, np.bool_(True), "n", 3)]
     assert json.dumps(values) == '[1.0, 2.5, null, true, "n", 3]'
+
+
+def _exponent_numbers(lle, lv, stderr, trusted):
+    return {
+        "method": ["two trajectories", "variational, same trajectory", "Wolf, 100 per cycle"],
+        "lle": [lle, lv, 30.0],
+        "lle_per_cycle": [lle, lv, 30.0],
+        "stderr": [stderr, stderr, math.nan],
+        "trusted": [trusted, trusted, False],
+        "note": ["n", "n", "flagged"],
+        "wall_time": [1.0, 0.0, 1.0],
+        "spectrum": [26.4, 1.6, -5.0],
+        "spectrum_stderr": [0.5, 0.5, 2.0],
+        "spectrum_trusted": [True, False, False],
+        "spectrum_cycles": 40.0,
+        "sum_check": 2e-5,
+        "forcing_period": 1.0,
+        "cycles": 40,
+        "transient_cycles": 20,
+        "coordinate": "clearance_x at A",
+    }
+
+
+def test_exponent_report_says_no_more_than_its_numbers():
+    """The report's exponent paragraph: every exponent of the spectrum with its error and trust,
+    the sum check, and 'this is the exponent' only where the two estimates on one trajectory
+    agree within two standard errors and the estimate converged (issue 24 item 6)."""
+    from workbench.study._report import _exponent_table
+
+    text = "\n".join(_exponent_table(_exponent_numbers(26.5, 26.4, 0.3, True)))
+    assert "26.4 +/- 0.5, 1.6 +/- 0.5 (not trusted), -5 +/- 2 (not trusted)" in text
+    assert "relative difference 2e-05" in text and "this is the exponent" in text
+    text = "\n".join(_exponent_table(_exponent_numbers(28.0, 26.4, 0.3, True)))
+    assert "differ" in text and "this is the exponent" not in text
+    text = "\n".join(_exponent_table(_exponent_numbers(26.5, 26.4, 0.3, False)))
+    assert "did not converge" in text and "this is the exponent" not in text
+
+
+@pytest.mark.slow
+def test_exponent_table_of_the_chaos_case_at_small_size():
+    """The chaos study's exponent table over 2 cycles (no room to grow): every estimate from the
+    equations is reported with its error and is not trusted (2 cycles are far from the 3 %
+    target), the failed conditions in the notes, the spectrum sorted with its errors and sum
+    check (which does not close to 1e-3 at rtol 1e-6 here: see below)."""
+    from workbench.study._exponents import exponent_table
+
+    scene = load_scene("studies/chaos/chaos.toml")
+    t = exponent_table(
+        scene, cycles=2, budget_cycles=2, transient_cycles=1, spectrum_exponents=2,
+        wolf_sampling=((100, 20),), strobe_cycles=110,
+    )  # fmt: skip
+    rows = list(t.method.values)
+    assert rows[:3] == ["two trajectories", "variational, same trajectory", "variational spectrum"]
+    assert not t.trusted.values[:3].any()
+    assert "not converged: error target" in str(t.note.values[0])
+    assert np.all(np.isfinite(t.stderr.values[:3])) and t.stderr.attrs["units"] == "s-1"
+    assert t.spectrum.values[0] >= t.spectrum.values[1]
+    assert t.spectrum_stderr.attrs["units"] == "s-1"
+    # rtol 1e-6, defect 10: measured 3.2e-3 (below 1e-3 at defect 3): the directions' parts
+    # orthogonal to the others, e^-10 of their size, are integrated to rtol e^10 only
+    assert t.attrs["sum_check"] < 1e-2

@@ -96,10 +96,10 @@ def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     assert abs(lam[0] - SPROTT[0]) < 0.02 * SPROTT[0]
     assert abs(lam[2] - SPROTT[2]) < 0.02 * abs(SPROTT[2])
     assert abs(lam[1]) < 0.02 * SPROTT[0]  # the flow direction: zero
-    # converged: the blocks' standard error is below the 2 % asked for
-    assert err[0] < 0.02 * SPROTT[0] and err[2] < 0.02 * abs(SPROTT[2])
+    # the window grew until the blocks' standard error was below the 1 % asked for
+    assert err[0] < 0.01 * lam[0] and spectrum.attrs["duration"] > 20000.0
     # the sum of the spectrum is the mean phase-space contraction (mean trace of the Jacobian)
-    assert abs(lam.sum() - float(spectrum.divergence)) < 0.01 * abs(float(spectrum.divergence))
+    assert abs(lam.sum() - float(spectrum.divergence)) < 1e-6 * abs(float(spectrum.divergence))
     run = ns["run"]
     assert run.attrs["model"] == "rossler" and run.attrs["model_parameters"] == "a b c"
     assert run.c.attrs == {
@@ -110,17 +110,11 @@ def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     for printed, expected in lines:
         assert printed.split() == expected.split()
     # the numbers of the page's text
-    longer = ns["lyapunov_spectrum"](
-        {**ns["scene"], "run": {"duration": 50000.0, "transient": 200.0}}, check=False
-    )
-    lam50 = longer.exponent.values
-    assert round(100 * abs(lam[0] / SPROTT[0] - 1), 1) == 0.4
-    assert round(100 * err[0] / SPROTT[0], 1) == 1.4
-    assert round(float(lam50[0]), 4) == 0.0722 and abs(lam50[0] / SPROTT[0] - 1) < 0.02
-    assert round(100 * abs(lam50[0] - lam[0]) / SPROTT[0], 1) == 0.8
-    assert round(100 * abs(lam[2] / SPROTT[2] - 1), 1) == 0.2
-    assert round(float(lam.sum()), 4) == -5.3346
-    assert round(100 * abs(lam.sum() / float(spectrum.divergence) - 1), 1) == 0.3
+    assert round(100 * abs(lam[0] / SPROTT[0] - 1), 1) == 0.3
+    assert round(2 * abs(lam[0] - SPROTT[0]) / err[0]) == 1  # half a standard error
+    assert 100 * abs(lam[2] / SPROTT[2] - 1) < 0.01
+    assert round(float(lam.sum()), 4) == -5.3227
+    assert float(spectrum.sum_check) < 1e-7  # measured 4.4e-8
 
 
 def test_events_discrete_state_and_outputs_of_a_user_model(user_modules):

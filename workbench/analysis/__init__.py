@@ -22,6 +22,7 @@ from workbench.analysis import _delay, _embedding, _rosenstein, _wolf, _zero_one
 from workbench.analysis._benettin import lle_from_equations
 from workbench.analysis._bifurcation import bifurcation_diagram
 from workbench.analysis._broadcast import over_parameters
+from workbench.analysis._convergence import ConvergenceWarning
 from workbench.analysis._degenerate import no_dynamics
 from workbench.analysis._embedding import embed
 from workbench.analysis._lyapunov import lyapunov_spectrum
@@ -39,6 +40,7 @@ wolf_lle = over_parameters(_wolf.wolf_lle)
 zero_one_test = over_parameters(_zero_one.zero_one_test)
 
 __all__ = [
+    "ConvergenceWarning",
     "bifurcation_diagram",
     "crossing_section",
     "delay_acf",

@@ -11,121 +11,45 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench.run import Prepared, prepare
-from workbench.run import integrate as integrate_scene
+from workbench.analysis._convergence import (
+    BATCHES,
+    TARGET,
+    TRUST,
+    agree,
+    batch_error,
+    judge,
+)
+from workbench.analysis._window import Window, length_limit, measurement_window, time_scale
 from workbench.scene import SceneSource
 from workbench.solver import (
-    COMPILED_METHODS,
-    Problem,
-    RunResult,
-    integrate,
-    jacobian_for,
     state_scale,
+    tangent_growths,
     tangent_problem,
     tangent_state,
+    tangent_volume,
 )
 
 __all__ = ["lyapunov_spectrum"]
 
-#: largest growth (log) of a tangent vector between two re-orthonormalisations before the
-#: interval is halved (e^25 ~ 7e10 keeps ~5 significant digits of the weakest column), and the
-#: smallest before it is doubled
-_MAX_LOG_GROWTH = 25.0
-_MIN_LOG_GROWTH = 2.0
-_BATCHES = 10
-
-
-@dataclasses.dataclass(frozen=True)
-class Window:
-    """The measurement window of an exponent: a scene prepared at the end of its transient
-    (``prepared.problem`` starts there), the measured length (s) and the solver settings."""
-
-    prepared: Prepared
-    length: float
-    method: str
-    rtol: float
-    atol: float
-    max_step: float
-    max_steps: int
-
-    @property
-    def problem(self) -> Problem:
-        return self.prepared.problem
-
-    @property
-    def period(self) -> float | None:
-        return self.prepared.period
-
-    def solve(self, problem: Problem, t_rec: np.ndarray, rtol: float) -> RunResult:
-        """Integrate a problem derived from this window's (a tangent system, copies) with the
-        window's explicit method (DOP853 for ARK548, whose implicit stages are the model's, not
-        the derived system's, and for Radau IIA and ``auto``, whose Jacobian is the model's) at
-        ``rtol`` (``atol`` in proportion); raises on a failed run."""
-        res = integrate(
-            problem,
-            t_rec,
-            method=self.method if self.method in ("dop853", "dopri5") else "dop853",
-            rtol=rtol,
-            atol=self.atol * rtol / self.rtol,
-            max_step=self.max_step,
-            max_steps=self.max_steps,
-        )
-        res.raise_for_status()
-        return res
-
-
-def measurement_window(
-    scene: SceneSource,
-    *,
-    cycles: int | None = None,
-    duration: float | None = None,
-    method: str | None = None,
-    rtol: float | None = None,
-) -> Window:
-    """A scene's bare motion (no outputs, no energy quadratures) advanced through its transient
-    with its solver, and the measured length: ``cycles`` forcing periods (forced models) or
-    ``duration`` seconds, default the scene's. ``method`` and ``rtol`` override the scene's
-    solver for the measurement (``atol`` follows ``rtol`` in proportion)."""
-    prep = prepare(scene, variables=())
-    s = prep.scene.solver
-    method = method or s["method"]
-    if method not in COMPILED_METHODS:
-        raise ValueError(
-            f"method={method!r}: Lyapunov exponents from the equations need a compiled method "
-            f"{COMPILED_METHODS!r}"
-        )
-    rtol_used = float(rtol) if rtol is not None else float(s["rtol"])
-    atol = float(s["atol"]) * rtol_used / float(s["rtol"])
-    if prep.period is not None:
-        n = cycles if cycles is not None else prep.scene.run.get("cycles", 1)
-        length = n * prep.period
-    else:
-        length = duration if duration is not None else float(prep.scene.run["duration"])
-    if not length > 0:
-        raise ValueError(f"the measured length must be positive; got {length!r} s")
-    start = float(prep.times[0])
-    if start > prep.problem.t0:
-        res = integrate_scene(prep, [start])
-        res.raise_for_status()
-        prep = prep.restart(start, res.Y[-1].copy(), res.AUX[-1].copy())
-    return Window(prep, float(length), method, rtol_used, atol, s["max_step"], s["max_steps"])
-
-
-def _time_scale(prep: Window) -> float:
-    return prep.period if prep.period is not None else 1.0
-
-
-def _qr(V: np.ndarray, scale: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Re-orthonormalise tangent vectors in the scaled state (the discrete-state components are
-    carried along): returns the new vectors and log of the growth of each, ``log R_kk``."""
-    Q, R = np.linalg.qr(V[:n] / scale[:, None])
-    d = np.diag(R)
-    if not np.all(np.isfinite(d)) or np.any(d == 0.0):
-        raise FloatingPointError(
-            "the tangent vectors became degenerate or non-finite; shorten the interval"
-        )
-    R = R * np.sign(d)[:, None]
-    return np.linalg.solve(R.T, V.T).T, np.log(np.abs(d))
+#: orthogonality defect (the tangent directions' log sizes minus the log of the volume they
+#: span) at which the tangent system re-orthonormalises them. e^D bounds the condition number
+#: of the directions and e^2D that of their Gram matrix, whose solves give the volume rate:
+#: at 10, 5e8 leaves ~7 digits. Each re-orthonormalisation is an event after which the solver
+#: restarts its step size, and the nine-bar's contacts stretch the directions apart within
+#: microseconds: on the chaos case (8 exponents, the 0.1 s after one transient cycle, rtol
+#: 1e-6) D = 6, 10, 15, 30 took 9 366, 2 763, 765, 9 re-orthonormalisations and 18.0, 6.9,
+#: 2.5, 0.8 s CPU, with the same five leading exponents to 0.1 1/s and sum checks 2-6e-5; at
+#: D = 3, 16 183 over 0.05 s (21.6 s); Lorenz's sum check over 400 s grows with D (1.6e-9 at
+#: 3, 1.4e-7 at 10, 3.8e-6 at 15) as the Gram matrix's condition does.
+DEFECT = 10.0
+#: records of the accumulated growths (running estimate, batch means)
+RECORDS = 400
+_STATS = ("steps", "rejected_steps", "rhs_evaluations", "events")
+#: the tolerance check runs at rtol / CHECK_FACTOR
+CHECK_FACTOR = 100.0
+#: largest relative difference of the spectrum's sum and the integrated volume rate that
+#: counts as closed
+SUM_CHECK = 1e-3
 
 
 def tangent_run(
@@ -133,101 +57,94 @@ def tangent_run(
     m: int,
     *,
     rtol: float | None = None,
-    interval: float | None = None,
+    defect: float = DEFECT,
+    records: int = RECORDS,
     seed: int = 0,
-    samples_per_interval: int = 16,
+    length: float | None = None,
+    resume: dict | None = None,
 ) -> dict:
-    """Integrate the model and ``m`` tangent vectors over the prepared window, re-orthonormalised
-    every ``interval`` (s; halved or doubled on the way so that the growth between two
-    re-orthonormalisations stays within e^2 .. e^25, and at most a fortieth of the window so
-    that each of the ten batches of the standard error holds four intervals).
+    """Integrate the model and ``m`` tangent vectors over the prepared window (or ``length``
+    seconds of it) in one run of the tangent system, which re-orthonormalises them wherever
+    their orthogonality defect reaches ``defect`` (see :func:`workbench.solver.tangent_problem`),
+    and read the accumulated log growths at ``records`` equally spaced times. ``resume``: a
+    run returned by this function, continued from its end (its tolerance and vectors).
 
-    Returns a dict: ``times`` (s) and ``log_growth`` (per interval and vector), the volume
-    terms (integral of the Jacobian's trace, s-1 * s; sum of log |det S_yy| at events), whether
-    the discrete state fed back on the flow (``memory``), solver statistics.
+    Returns a dict: ``times`` (s) and ``log_growth`` (per record interval and vector: the
+    increments of Benettin's accumulators), per record interval the change of the log volume
+    the vectors span, integrated with the tangent system (``log_volume``: its sum over the
+    window is that of the growths; ``log_volume_memory``: the discrete state's feedback in it)
+    and of the sum of ``log |det S_yy|`` at events (``log_det_events``), the number of
+    re-orthonormalisations, solver statistics, and the system and its end state (``problem``,
+    ``end``) to resume from.
     """
     pb = prep.problem
     n, na = pb.y0.size, pb.aux0.size
     if not 1 <= m <= n:
         raise ValueError(f"exponents={m!r}: must lie in 1..{n} (the model's state size)")
-    rtol = prep.rtol if rtol is None else float(rtol)
-    scale = state_scale(pb)
-    rng = np.random.default_rng(seed)
-    Q0, _ = np.linalg.qr(rng.standard_normal((n, n)))
-    V = np.zeros((n + na, m))
-    V[:n] = scale[:, None] * Q0[:, :m]
-    tau = interval if interval is not None else (
-        prep.period / 64 if prep.period is not None else 0.1
-    )  # fmt: skip
-    t, t_end = pb.t0, pb.t0 + prep.length
-    # at least four intervals per batch of the standard error
-    tau_max = prep.length / (4 * _BATCHES) if interval is None else 4 * interval
-    tau = min(tau, tau_max)
-    y, aux, log_det = pb.y0.copy(), pb.aux0.copy(), 0.0
-    jac = jacobian_for(pb.hooks)
-    work = np.zeros(max(pb.work_size, 1))
-    times, growth = [], []
-    trace_integral, memory = 0.0, False
-    stats = {"steps": 0, "rejected_steps": 0, "rhs_evaluations": 0, "events": 0}
-    while t < t_end * (1 - 1e-14):
-        t1 = min(t + tau, t_end)
-        t_rec = np.linspace(t, t1, samples_per_interval + 1)
-        tp = tangent_problem(
-            dataclasses.replace(pb, y0=y, aux0=aux, t0=t), V, time_scale=_time_scale(prep),
-            log_det=log_det,
-        )  # fmt: skip
-        res = prep.solve(tp, t_rec, rtol)
-        for k in stats:
-            stats[k] += res.stats[k]
-        Yb = np.ascontiguousarray(res.Y[:, :n])
-        Js = np.empty((t_rec.size, n, n))
-        Jas = np.empty((t_rec.size, n, na))
-        codes = jac.jacobians_along(res.t, Yb, res.AUX, pb.p, pb.ip, work, scale, Js, Jas)
-        if codes.any():
-            raise FloatingPointError(f"the model failed at a record: {pb.failure(codes.max())}")
-        tr = np.trace(Js, axis1=1, axis2=2)
-        trace_integral += float(np.trapezoid(tr, res.t))
-        memory = memory or bool(np.any(Jas != 0.0))
-        y, U, log_size, log_det = tangent_state(res.Y[-1], n, na, m)
-        y, aux = y.copy(), res.AUX[-1].copy()
-        V, g = _qr(U.copy(), scale, n)
-        g = g + log_size  # the vectors are U e^log_size: R_kk of V is R_kk of U times e^l_k
-        times.append(t1)
-        growth.append(g)
-        t = t1
-        big = float(np.max(np.abs(g)))
-        if big > _MAX_LOG_GROWTH:
-            tau /= 2
-        elif big < _MIN_LOG_GROWTH and 2 * tau <= tau_max:
-            tau *= 2
+    if not defect > 0:
+        raise ValueError(f"defect={defect!r}: must be a positive orthogonality defect")
+    length = prep.length if length is None else float(length)
+    if resume is None:
+        rtol = prep.rtol if rtol is None else float(rtol)
+        scale = state_scale(pb)
+        rng = np.random.default_rng(seed)
+        Q0, _ = np.linalg.qr(rng.standard_normal((n, n)))
+        V = np.zeros((n + na, m))
+        V[:n] = scale[:, None] * Q0[:, :m]
+        tp = tangent_problem(pb, V, time_scale=time_scale(prep), reorthonormalise=defect)
+        first, start = tp, pb.t0
+        t0 = pb.t0
+    else:
+        rtol, tp, start = resume["rtol"], resume["problem"], resume["start"]
+        Y_end, aux_end, t0 = resume["end"]
+        first = dataclasses.replace(tp, y0=Y_end.copy(), aux0=aux_end.copy(), t0=t0)
+    times = t0 + length * np.linspace(0.0, 1.0, records + 1)[1:]
+    res = prep.solve(first, times, rtol)
+    total = np.zeros((times.size + 1, m))
+    volume = np.zeros((times.size + 1, 3))
+    count = 0
+    for r, Y in enumerate([first.y0, *res.Y]):
+        total[r] = tangent_growths(tp, Y)  # as if re-orthonormalised here
+        w, w_memory, count = tangent_volume(Y, n, na, m)
+        volume[r] = (w, w_memory, tangent_state(Y, n, na, m)[3])
     return {
-        "start": pb.t0,
-        "times": np.array(times),
-        "log_growth": np.array(growth),
-        "trace_integral": trace_integral,
-        "log_det_events": log_det,
-        "memory": memory,
+        "start": start,
+        "times": times,
+        "log_growth": np.diff(total, axis=0),
+        "log_volume": np.diff(volume[:, 0]),
+        "log_volume_memory": np.diff(volume[:, 1]),
+        "log_det_events": np.diff(volume[:, 2]),
+        "reorthonormalisations": count,
         "rtol": rtol,
-        "stats": stats,
+        "stats": {k: res.stats[k] for k in _STATS},
+        "problem": tp,
+        "end": (res.Y[-1].copy(), res.AUX[-1].copy(), float(times[-1])),
     }
 
 
-def batch_error(times: np.ndarray, contributions: np.ndarray, start: float) -> np.ndarray:
-    """Standard error of an exponent from ``_BATCHES`` batch means of its per-interval
-    contributions (log growth over each interval ending at ``times``), per column."""
-    edges = np.linspace(start, times[-1], _BATCHES + 1)
-    idx = np.clip(np.searchsorted(edges, times, side="left") - 1, 0, _BATCHES - 1)
-    lam = []
-    prev = np.concatenate([[start], times[:-1]])
-    for b in range(_BATCHES):
-        sel = idx == b
-        if sel.any():
-            dur = float(np.sum(times[sel] - prev[sel]))
-            lam.append(contributions[sel].sum(axis=0) / dur)
-    lam = np.array(lam)
-    if lam.shape[0] < 2:
-        return np.full(contributions.shape[1:], np.nan)
-    return lam.std(axis=0, ddof=1) / math.sqrt(lam.shape[0])
+def _joined(a: dict, b: dict) -> dict:
+    """Run ``a`` followed by its continuation ``b`` (:func:`tangent_run` with ``resume=a``)."""
+    out = dict(b)
+    out["start"] = a["start"]
+    for key in ("times", "log_growth", "log_volume", "log_volume_memory", "log_det_events"):
+        out[key] = np.concatenate([a[key], b[key]])
+    out["stats"] = {k: a["stats"][k] + b["stats"][k] for k in _STATS}
+    return out
+
+
+def grown_run(prep: Window, m: int, *, limit: float, target: float, **kwargs) -> dict:
+    """:func:`tangent_run` over the window, continued (its length doubled each time) while the
+    standard error of the largest exponent exceeds ``target`` of its magnitude and the doubled
+    length stays within ``limit`` (s)."""
+    run = tangent_run(prep, m, **kwargs)
+    while True:
+        elapsed = run["times"][-1] - run["start"]
+        lam = run["log_growth"][:, 0].sum() / elapsed
+        err = batch_error(run["times"], run["log_growth"][:, :1], run["start"])[0]
+        if err <= target * abs(lam) or 2 * elapsed > limit * (1 + 1e-12):
+            return run
+        more = tangent_run(prep, m, length=elapsed, resume=run, **kwargs)
+        run = _joined(run, more)
 
 
 def lyapunov_spectrum(
@@ -236,8 +153,11 @@ def lyapunov_spectrum(
     exponents: int | None = None,
     cycles: int | None = None,
     duration: float | None = None,
+    budget: float | None = None,
+    target: float = TARGET,
     rtol: float | None = None,
-    interval: float | None = None,
+    method: str | None = None,
+    defect: float = DEFECT,
     check: bool = True,
     seed: int = 0,
 ) -> xr.Dataset:
@@ -245,9 +165,22 @@ def lyapunov_spectrum(
 
     ``exponents`` tangent vectors (default: all n) follow the scene's run from the end of its
     transient, with the saltation matrix applied at every event (contact onset and end, state
-    resets), and are re-orthonormalised by QR in the state scaled by each state's size; the
-    exponents are the mean logarithmic growths (Benettin et al. 1980). Valid for the non-smooth
-    contact models, whose impacts the two-trajectory method sees only through its separation.
+    resets), and are re-orthonormalised (Gram-Schmidt in the state scaled by each state's size)
+    wherever they lose their orthogonality; the exponents are the mean logarithmic growths
+    (Benettin et al. 1980), sorted, each with its standard error (batch means). The window grows
+    (its length doubled, the run continued) until the largest exponent's standard error is
+    below ``target`` of its magnitude or the ``budget`` is spent. Valid for the non-smooth
+    contact models, whose impacts the two-trajectory method sees only through its separation;
+    the reference for :func:`workbench.analysis.lle_from_equations`.
+
+    ``converged`` holds only where the error target is met, a run at ``rtol / 100`` over the
+    same window agrees with every exponent within two standard errors of the difference, and
+    the spectrum's sum equals the rate of the log volume the vectors span, integrated with the
+    tangent system (trace of its generator, the held onset velocity's feedback included, plus
+    the volume jumps at events), to SUM_CHECK; otherwise the ``failed`` attribute says which
+    failed and a :class:`ConvergenceWarning` is raised. An exponent is ``trusted`` where the
+    estimate converged, its own standard error is at most 20 % of its magnitude (a zero
+    exponent never is) and the tighter run agrees with it.
 
     Parameters
     ----------
@@ -256,56 +189,104 @@ def lyapunov_spectrum(
         How many exponents (1 .. n), largest first.
     cycles, duration : optional
         Measured length: forcing periods (forced models) or seconds; default the scene's.
+    budget : float, optional
+        Longest window, forcing periods (forced models) or seconds; default BUDGET (8) times
+        the measured length.
+    target : float
+        Relative standard error of the largest exponent the window grows to (default 3 %).
     rtol : float, optional
         Tolerance of the tangent run (default the scene's); ``atol`` scales with it.
-    interval : float, optional
-        First re-orthonormalisation interval, s (adapted on the way; default T/64 or 0.1 s).
+    method : str, optional
+        ``dop853`` or ``dopri5`` (default the scene's; an implicit method is refused).
+    defect : float
+        Orthogonality defect of the tangent vectors at which they are re-orthonormalised
+        (default DEFECT; see :func:`tangent_run`).
     check : bool
-        Also run at ``rtol / 10`` over the same window and report that estimate
-        (``exponent_tight``) and whether the two agree (``converged``: within 5 % of the
-        largest exponent's magnitude or two standard errors of the difference).
+        Also run at ``rtol / 100`` over the same window (``exponent_tight``, ``agrees``);
+        without it the estimate is never ``converged``.
     seed : int
         Seed of the random initial tangent vectors.
 
     Returns
     -------
     xarray.Dataset
-        ``exponent`` (dim ``index``, s-1) with its ``stderr`` (batch means), ``running``
-        estimates over ``elapsed`` (s), ``exponent_per_period`` (forced models), the sum and
-        the mean phase-space contraction rate ``divergence`` (mean trace of the Jacobian plus
-        the log volume change at events per time, s-1; equal to the sum of the full spectrum
-        when the discrete state does not feed back on the flow, see ``memory``), and the
-        check at the tighter tolerance.
+        ``exponent`` (dim ``index``, s-1, descending) with its ``stderr`` (batch means) and
+        ``trusted``, ``running`` estimates over ``elapsed`` (s), ``exponent_per_period`` (forced
+        models), ``spectrum_sum``, ``volume_rate`` and ``sum_check``; with all n exponents the
+        mean phase-space contraction rate ``divergence`` and the discrete state's share
+        ``memory_rate`` (their sum is the volume rate); ``converged`` and the check at the
+        tighter tolerance; attributes ``cycles`` or ``duration`` followed, ``failed``.
 
     Examples
     --------
     >>> r = lyapunov_spectrum({"model": {"name": "lorenz"},
-    ...                        "run": {"duration": 400.0, "transient": 10.0}}, check=False)
-    >>> [round(float(v), 1) for v in r.exponent]
-    [0.9, 0.0, -14.6]
+    ...                        "run": {"duration": 400.0, "transient": 10.0}},
+    ...                       check=False, budget=400.0)
+    >>> [round(float(v), 1) for v in r.exponent], bool(r.converged)
+    ([0.9, 0.0, -14.6], False)
+    >>> print(r.attrs["failed"])
+    tolerance check: not run (check=False)
     """
-    prep = measurement_window(scene, cycles=cycles, duration=duration)
+    if not 0 < target < 1:
+        raise ValueError(f"target={target!r}: must be a relative error in (0, 1)")
+    prep = measurement_window(scene, cycles=cycles, duration=duration, method=method)
+    prep.require_explicit()
+    limit = length_limit(prep, budget)
     n = prep.problem.y0.size
     m = n if exponents is None else int(exponents)
-    run = tangent_run(prep, m, rtol=rtol, interval=interval, seed=seed)
+    run = grown_run(prep, m, limit=limit, target=target, rtol=rtol, defect=defect, seed=seed)
     out = _spectrum_dataset(prep, run)
+    length = float(out.elapsed[-1])
+    lam, err = out["exponent"].values, out["stderr"].values
+    unit, units = time_scale(prep), ("cycles" if prep.period is not None else "s")
+    rel = float(err[0] / abs(lam[0])) if lam[0] != 0 else math.inf
+    conditions = {
+        "error target": (
+            rel <= target,
+            f"the largest exponent's standard error is {rel:.1%} of it after "
+            f"{length / unit:g} {units} (target {target:.0%}, budget {limit / unit:g} {units})",
+        ),
+        "sum check": (
+            float(out.sum_check) <= SUM_CHECK,
+            f"the spectrum's sum and the integrated volume rate differ by "
+            f"{float(out.sum_check):.2g} of it (allowed {SUM_CHECK:g})",
+        ),
+    }
+    agrees = np.zeros(m, bool)
     if check:
-        tight = tangent_run(prep, m, rtol=run["rtol"] / 10, interval=interval, seed=seed)
-        lam_t = tight["log_growth"].sum(axis=0) / prep.length
+        tight = tangent_run(
+            prep, m, rtol=run["rtol"] / CHECK_FACTOR, defect=defect, seed=seed, length=length
+        )
+        lam_t = np.sort(tight["log_growth"].sum(axis=0) / length)[::-1]
         err_t = batch_error(tight["times"], tight["log_growth"], tight["start"])
-        lam = out["exponent"].values
-        diff = np.abs(lam_t - lam)
-        allowed = np.maximum(0.05 * abs(lam[0]), 2.0 * np.hypot(out["stderr"].values, err_t))
+        err_t = err_t[np.argsort(tight["log_growth"].sum(axis=0))[::-1]]
+        agrees = agree(lam, lam_t, err, err_t)
         out["exponent_tight"] = (
             "index",
             lam_t,
             {"units": "s-1", "long_name": f"exponent at rtol = {tight['rtol']:g}"},
         )
-        out["converged"] = (
+        out["agrees"] = (
             "index",
-            diff <= allowed,
-            {"long_name": "agrees with the tighter run (5 % of |lambda_1| or 2 stderr)"},
+            agrees,
+            {"long_name": "agrees with the tighter run within 2 standard errors"},
         )
+        conditions["tolerance check"] = (
+            bool(agrees.all()),
+            f"at rtol {tight['rtol']:g} the exponents read {np.round(lam_t, 4).tolist()} 1/s "
+            f"against {np.round(lam, 4).tolist()}",
+        )
+    else:
+        conditions["tolerance check"] = (False, "not run (check=False)")
+    converged, failed = judge(conditions, "the Lyapunov spectrum")
+    out["converged"] = ((), converged, {"long_name": "every convergence condition holds"})
+    out["trusted"] = (
+        "index",
+        converged & agrees & (err <= TRUST * np.abs(lam)),
+        {"long_name": f"converged, agrees at rtol/100, standard error <= {TRUST:.0%}"},
+    )
+    out.attrs["failed"] = failed
+    out.attrs["cycles" if prep.period is not None else "duration"] = length / unit
     return out
 
 
@@ -313,17 +294,24 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
     times, growth, start = run["times"], run["log_growth"], run["start"]
     T = times[-1] - start
     lam = growth.sum(axis=0) / T
+    # Gram-Schmidt orders the accumulators by their long-run growth; over a short window two of
+    # them can still be out of order
+    order = np.argsort(-lam, kind="stable")
+    reordered = bool(np.any(order != np.arange(lam.size)))
+    lam, growth = lam[order], growth[:, order]
     running = np.cumsum(growth, axis=0) / (times - start)[:, None]
     err = batch_error(times, growth, start)
-    divergence = (run["trace_integral"] + run["log_det_events"]) / T
     m = lam.size
+    volume = float(np.sum(run["log_volume"])) / T
+    memory = float(np.sum(run["log_volume_memory"])) / T
+    closure = abs(float(lam.sum()) - volume) / max(abs(volume), 1e-300)
     ds = xr.Dataset(
         {
             "exponent": ("index", lam, {"units": "s-1", "long_name": "Lyapunov exponent"}),
             "stderr": (
                 "index",
                 err,
-                {"units": "s-1", "long_name": f"standard error ({_BATCHES} batch means)"},
+                {"units": "s-1", "long_name": f"standard error ({BATCHES} batch means)"},
             ),
             "running": (
                 ("elapsed", "index"),
@@ -331,13 +319,23 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
                 {"units": "s-1", "long_name": "running estimate"},
             ),
             "spectrum_sum": ((), float(lam.sum()), {"units": "s-1", "long_name": "sum"}),
-            "divergence": (
+            "volume_rate": (
                 (),
-                divergence,
+                volume,
                 {
                     "units": "s-1",
-                    "long_name": "mean phase-space contraction rate (trace of J + log |det S| "
-                    "at events, per time)",
+                    "long_name": "mean rate of the log volume the tangent vectors span, "
+                    "integrated with the tangent system (trace of its generator on their span, "
+                    "the discrete state's feedback included, plus the volume jumps at events); "
+                    "equals the sum of the exponents",
+                },
+            ),
+            "sum_check": (
+                (),
+                closure,
+                {
+                    "units": "1",
+                    "long_name": "relative difference of the spectrum's sum and volume_rate",
                 },
             ),
         },
@@ -346,17 +344,42 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
             "elapsed": ("elapsed", times - start, {"units": "s", "long_name": "time followed"}),
         },
         attrs={
-            "method": "variational equations with saltation at events, QR re-orthonormalisation "
-            "(Benettin et al. 1980; Mueller 1995; Dellago, Posch & Hoover 1996)",
-            "memory": int(run["memory"]),
-            "memory_note": "1: the discrete state (e.g. a contact's held onset velocity) feeds "
-            "back on the flow, so the full spectrum's sum need not equal the divergence",
+            "method": "variational equations with saltation at events, Gram-Schmidt "
+            "re-orthonormalisation (Benettin et al. 1980; Mueller 1995; Dellago, Posch & Hoover "
+            "1996)",
             "rtol": run["rtol"],
             "start_time": start,
-            "reorthonormalisations": int(times.size),
+            "reorthonormalisations": int(run["reorthonormalisations"]),
+            "reordered": int(reordered),
+            "reordered_note": "1: the accumulators' order was not descending over this window "
+            "(the exponents were sorted; the window is short for them to separate)",
             **{f"solver_{k}": v for k, v in run["stats"].items()},
         },
     )
+    if m == prep.problem.y0.size:  # all n exponents: the volume is the phase-space volume
+        ds["divergence"] = (
+            (),
+            volume - memory,
+            {
+                "units": "s-1",
+                "long_name": "mean phase-space contraction rate (trace of J plus the log volume "
+                "jumps at events, per time)",
+            },
+        )
+        ds["memory_rate"] = (
+            (),
+            memory,
+            {
+                "units": "s-1",
+                "long_name": "part of volume_rate fed back by the discrete state (a contact's "
+                "held onset velocity): the trace of J_a's share of the generator",
+            },
+        )
+        ds.attrs["memory"] = int(memory != 0.0)
+        ds.attrs["memory_note"] = (
+            "1: the discrete state (e.g. a contact's held onset velocity) feeds back on the "
+            "flow, and the spectrum's sum is the divergence plus memory_rate"
+        )
     if prep.period is not None:
         ds["exponent_per_period"] = (
             "index",

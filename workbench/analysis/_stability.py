@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
-from workbench.analysis._lyapunov import Window, measurement_window
+from workbench.analysis._window import Window, measurement_window
 from workbench.run import integrate as integrate_scene
 from workbench.run import prepare
 from workbench.scene import Scene, SceneSource, scene_from_toml

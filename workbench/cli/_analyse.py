@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import warnings
 
 from workbench.cli._console import positive_int
 from workbench.cli._exit_codes import UsageError
@@ -136,9 +137,17 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
     print(f"  Rosenstein LLE (nolds, same embedding): {float(ros.lle):.4g} {_units(ros.lle)}")
     equations = None
     if args.equations:
-        bench = analysis.lle_from_equations(scene_from_toml(ds.attrs["scene"]))
+        with warnings.catch_warnings():  # its failed conditions are printed below
+            warnings.simplefilter("ignore", analysis.ConvergenceWarning)
+            bench = analysis.lle_from_equations(scene_from_toml(ds.attrs["scene"]))
         equations = float(bench.lle)
-        print(f"  LLE from the equations (Benettin): {equations:.4g} 1/s")
+        verdict = "converged" if bool(bench.converged) else "not converged"
+        print(
+            f"  LLE from the equations (Benettin): {equations:.4g} +/- "
+            f"{float(bench.stderr):.2g} 1/s, {verdict}"
+        )
+        for line in bench.attrs["failed"].splitlines():
+            print(f"    {line}")
     figures = {
         "embedding": plot.embedding_figure(wolf),
         "lle": plot.lle_figure(wolf, float(ros.lle), label, equations=equations),

@@ -308,6 +308,7 @@ def mechanism_problem(
         aux0=np.zeros(n),
         event_direction=np.array([1, -1] * len(present), dtype=np.int64),
         atol_scale=state_scales(states, c_min, omega),
+        aux_scale=np.full(n, c_min * omega),  # held onset velocities, m s-1
         work_size=work.size,
         failure=lambda code: codes.get(code, f"model failure code {code}"),
         data={"joints": tuple(present), "all_joints": joints, "IP": IP},

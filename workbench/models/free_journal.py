@@ -125,6 +125,8 @@ class FreeJournal(Model):
             aux0=np.array([0.0, np.nan]),
             event_direction=np.array([1, -1]),
             atol_scale=np.array([c, c, c * 1e3, c * 1e3]),
+            # the held onset velocity feeds back on the flow (m s-1); the last one is a record
+            aux_scale=np.array([c * 1e3, np.inf]),
         )
 
     def derive(self, problem, t, Y, AUX, requested):

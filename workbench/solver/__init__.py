@@ -15,7 +15,15 @@ from workbench.solver._copies import copies_problem, split_copies
 from workbench.solver._integrate import COMPILED_METHODS, METHODS, PAUSE_SECONDS, integrate
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, SolverError, Status
-from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem, tangent_state
+from workbench.solver._tangent import (
+    state_scale,
+    tangent_columns,
+    tangent_growths,
+    tangent_problem,
+    tangent_state,
+    tangent_volume,
+    tangent_weights,
+)
 
 __all__ = [
     "COMPILED_METHODS",
@@ -35,5 +43,8 @@ __all__ = [
     "state_scale",
     "tangent_columns",
     "tangent_problem",
+    "tangent_growths",
     "tangent_state",
+    "tangent_volume",
+    "tangent_weights",
 ]

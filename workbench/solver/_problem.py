@@ -55,6 +55,11 @@ class Problem:
     atol_scale : ndarray
         Per state: the scene's ``atol`` is multiplied by this (a characteristic size of the
         state), so that one number means the same for states of very different magnitude.
+    aux_scale : ndarray
+        Per discrete state that the flow depends on (a contact's held onset velocity): its
+        characteristic size (units of the discrete state), in which tangent vectors measure
+        their discrete-state components; inf (the default) for a discrete state the flow does
+        not depend on (a counter, the time of the last event), left out of their size.
     t0 : float
         Initial time, s.
     work_size : int
@@ -80,6 +85,7 @@ class Problem:
     aux0: np.ndarray = field(default_factory=lambda: np.zeros(0))
     event_direction: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     atol_scale: np.ndarray | None = None
+    aux_scale: np.ndarray | None = None
     t0: float = 0.0
     work_size: int = 0
     failure: Callable[[int], str] = lambda code: f"model failure code {code}"
@@ -97,6 +103,9 @@ class Problem:
         if self.atol_scale is None:
             self.atol_scale = np.ones_like(self.y0)
         self.atol_scale = np.ascontiguousarray(self.atol_scale, dtype=np.float64)
+        if self.aux_scale is None:
+            self.aux_scale = np.full(self.aux0.shape, np.inf)
+        self.aux_scale = np.ascontiguousarray(self.aux_scale, dtype=np.float64)
         self.stiff_states = np.ascontiguousarray(self.stiff_states, dtype=np.int64)
         self.stiff_slots = np.ascontiguousarray(self.stiff_slots, dtype=np.int64)
         if self.stiff_states.shape != self.stiff_slots.shape or (

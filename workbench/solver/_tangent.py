@@ -14,9 +14,18 @@ import numpy as np
 from workbench.solver._compile import tangent_for
 from workbench.solver._problem import Problem
 
-__all__ = ["tangent_problem", "tangent_columns", "tangent_state", "state_scale", "N_META"]
+__all__ = [
+    "N_META",
+    "state_scale",
+    "tangent_columns",
+    "tangent_problem",
+    "tangent_state",
+    "tangent_growths",
+    "tangent_volume",
+    "tangent_weights",
+]
 
-N_META = 7
+N_META = 8
 
 
 @dataclass(frozen=True)
@@ -36,13 +45,31 @@ def state_scale(problem: Problem) -> np.ndarray:
     return np.where(np.isfinite(s) & (s > 0), s, 1.0)
 
 
+def tangent_weights(problem: Problem) -> np.ndarray:
+    """Weights of the inner product in which tangent vectors of the extended state ``(y, aux)``
+    are measured: ``1 / s^2`` per state (:func:`state_scale`) and ``1 / s_a^2`` per discrete
+    state with a finite positive ``aux_scale`` (0 for the others, which the flow does not depend
+    on: counters, records of the last event)."""
+    sa = np.asarray(problem.aux_scale, dtype=float)
+    wa = np.zeros(sa.size)
+    ok = np.isfinite(sa) & (sa > 0)
+    wa[ok] = 1.0 / sa[ok] ** 2
+    return np.concatenate([1.0 / state_scale(problem) ** 2, wa])
+
+
 def tangent_problem(
-    problem: Problem, V: np.ndarray, *, time_scale: float = 1.0, log_det: float = 0.0
+    problem: Problem,
+    V: np.ndarray,
+    *,
+    time_scale: float = 1.0,
+    log_det: float = 0.0,
+    reorthonormalise: float | None = None,
 ) -> Problem:
     """The problem's state extended by the tangent vectors ``V`` (shape ``(n + na, m)``: state
     then discrete-state components, in their units) and the accumulated ``log |det S_yy|``.
-    Each vector is carried as a direction of unit scaled size and its log size (read them with
-    :func:`tangent_state`, or the vectors with :func:`tangent_columns`).
+    Each vector is carried as a direction of unit size (in the inner product of
+    :func:`tangent_weights`) and its log size (read them with :func:`tangent_state`, the vectors
+    with :func:`tangent_columns`, Benettin's accumulators with :func:`tangent_growths`).
 
     Parameters
     ----------
@@ -55,6 +82,12 @@ def tangent_problem(
         the event update and event function.
     log_det : float
         Initial value of the accumulated log volume change at events.
+    reorthonormalise : float, optional
+        Orthogonality defect (the columns' log sizes minus the log of the volume they span)
+        at which the system re-orthonormalises its vectors by Gram-Schmidt, adding ``log
+        R_kk`` to their log sizes (Benettin's accumulators), and integrates the log volume
+        they span (:func:`tangent_volume`). Default None: never; the vectors stay ``Phi V``
+        (a monodromy matrix).
     """
     n, na = problem.y0.size, problem.aux0.size
     V = np.asarray(V, dtype=float)
@@ -65,8 +98,9 @@ def tangent_problem(
     m = V.shape[1]
     hooks = tangent_for(problem.hooks).__name__
     scale = state_scale(problem)
-    # each column as a direction of unit scaled size (state part) and its log size
-    size = np.linalg.norm(V[:n] / scale[:, None], axis=0)
+    w = tangent_weights(problem)
+    # each column as a direction of unit size and its log size
+    size = np.sqrt(np.einsum("j,jc,jc->c", w, V, V))
     size = np.where((size > 0) & np.isfinite(size), size, 1.0)
     U, log_size = V / size[None, :], np.log(size)
     states = tuple(problem.states) + tuple(
@@ -76,18 +110,32 @@ def tangent_problem(
     )
     states += (_State("_log_det_saltation", "1", "sum of log |det S_yy| at events"),)
     states += tuple(_State(f"_log_size_{c}", "1", "log size of tangent vector") for c in range(m))
+    states += (
+        _State("_log_volume", "1", "log volume spanned by the tangent vectors"),
+        _State("_log_volume_memory", "1", "part of it fed back by the discrete state"),
+        _State("_reorthonormalisations", "1", "re-orthonormalisations of the vectors"),
+    )
     vscale = np.concatenate([scale, np.ones(na)])
-    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(1 + m)])
+    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(4 + m)])
+    qr = reorthonormalise is not None
+    if qr and not float(reorthonormalise) > 0:
+        raise ValueError(
+            f"reorthonormalise={reorthonormalise!r}: must be a positive orthogonality defect"
+        )
     meta = [n, na, m, problem.event_direction.size, problem.p.size, problem.ip.size]
-    meta.append(problem.work_size)
+    meta += [problem.work_size, int(qr)]
+    direction = problem.event_direction
+    if qr:  # the re-orthonormalisation event, on a rising defect
+        direction = np.concatenate([direction, np.ones(1, dtype=direction.dtype)])
     return Problem(
         hooks=hooks,
         states=states,
-        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size]),
-        p=np.concatenate([problem.p, scale, [time_scale]]),
+        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size, [0.0, 0.0, 0.0]]),
+        p=np.concatenate([problem.p, scale, w, [time_scale, float(reorthonormalise or 0.0)]]),
         ip=np.concatenate([problem.ip, np.array(meta, dtype=np.int64)]),
         aux0=problem.aux0,
-        event_direction=problem.event_direction,
+        aux_scale=problem.aux_scale,
+        event_direction=direction,
         atol_scale=atol_scale,
         t0=problem.t0,
         work_size=problem.work_size + 3 * n + n * na + n * n + 2 * problem.event_direction.size,
@@ -106,6 +154,27 @@ def tangent_state(
     k = n + m * (n + na)
     U = Y[n:k].reshape(m, n + na).T
     return y, U, Y[k + 1 : k + 1 + m].copy(), float(Y[k])
+
+
+def tangent_volume(Y: np.ndarray, n: int, na: int, m: int) -> tuple[float, float, int]:
+    """With re-orthonormalisation: the log volume the tangent vectors span, since the start
+    (its rate is the sum of their exponents), and the part of it that the discrete state fed
+    back between events (see :mod:`workbench.solver._templates.tangent_hooks`; zeros without); and
+    the number of re-orthonormalisations."""
+    k = n + m * (n + na) + 1 + m
+    return float(Y[k]), float(Y[k + 1]), int(Y[k + 2])
+
+
+def tangent_growths(tangent: Problem, Y: np.ndarray) -> np.ndarray:
+    """Benettin's accumulators of the tangent vectors of a tangent-system state ``Y`` (of the
+    problem ``tangent`` from :func:`tangent_problem`): ``l_k + log R_kk`` for the QR
+    decomposition of the directions in the inner product of :func:`tangent_weights`, the log
+    growth of each vector as if re-orthonormalised now (``m`` values)."""
+    n, na, m = (int(v) for v in tangent.ip[-N_META : -N_META + 3])
+    w = tangent.p[-(n + na) - 2 : -2]
+    _, U, log_size, _ = tangent_state(Y, n, na, m)
+    _, R = np.linalg.qr(np.sqrt(w)[:, None] * U)
+    return log_size + np.log(np.abs(np.diag(R)))
 
 
 def tangent_columns(Y: np.ndarray, n: int, na: int, m: int) -> tuple[np.ndarray, np.ndarray, float]:

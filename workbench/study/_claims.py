@@ -180,7 +180,10 @@ def _chaos(measures: dict) -> dict:
         return _result("contradicted", evidence, reason="a negative exponent and K near 0")
     why = []
     if not ref["trusted"]:
-        why.append("the exponent's separation and renormalisation variants disagree")
+        why.append(
+            "the exponent did not converge (error target, knob variants, tolerance check or "
+            "the variational exponent: see its note)"
+        )
     elif abs(lle) <= 2 * err:
         why.append(f"the exponent is within two standard errors ({err:.2g} 1/s) of 0")
     if K_CHAOTIC >= k_med >= 1 - K_CHAOTIC:

@@ -1,37 +1,40 @@
 """Compiled tangent (variational) system of a model, with saltation at events (a template,
 specialised per model by :func:`workbench.solver._compile.tangent_for`).
 
-The state of the tangent system is ``Y = [y (n), U (m columns of N = n + na), L, l (m)]``: the
-model's state ``y``, ``m`` tangent vectors of the *extended* state ``x = (y, aux)`` (the discrete
-state ``aux`` is part of the state the future depends on: a contact's held onset velocity sets
-its damping), each stored as a direction ``u`` of unit scaled size and its log size ``l``
-(the tangent vector is ``v = e^l u``), and ``L``, the sum of ``log |det S_yy|`` over the events
-so far (the state block of each saltation matrix; the phase-space volume change at events, for
-the contraction check).
+The state of the tangent system is ``Y = [y (n), U (m columns of nx = n + na), L, l (m), W, M,
+K]``: the model's state ``y``; ``m`` tangent vectors of the *extended* state ``x = (y, aux)``
+(the discrete state ``aux`` is part of the state the future depends on: a contact's held onset
+velocity sets its damping), each stored as a direction ``u`` of unit size and its log size ``l``
+(the tangent vector is ``v = e^l u``); ``L``, the sum of ``log |det S_yy|`` over the events so far
+(the state block of each saltation matrix); with re-orthonormalisation (below) the log volume
+``W`` the vectors span and the part ``M`` of it that the discrete state fed back between events,
+and the count ``K`` of re-orthonormalisations. Sizes, angles and volumes are those of the state
+divided by its scales ``s`` and the discrete state by its scales ``s_a`` (a discrete state that
+the flow does not depend on, such as a counter, has none and is left out: see
+:mod:`workbench.solver._tangent_numerics`).
 
 Between events ``dy/dt = f(t, y, aux)`` and for each column ``v = (v_y, v_a)``
 
     dv_y/dt = J_y v_y + J_a v_a,        dv_a/dt = 0,
 
 with ``J_y = df/dy`` from the model's Jacobian (its analytic ``jacobian`` hook, or a central
-difference of ``rhs`` along ``v_y``: two evaluations per column, with the step
-DIRECTION_STEP, shortened near event surfaces) and ``J_a = df/daux`` by central
-differences over the discrete states that a column carries and that are active (``aux_k != 0``;
-a zero discrete state means "inactive", e.g. no contact, and is not differenced). Written for
-``v = e^l u`` with any rate ``a(t)`` of the log size this is
+difference of ``rhs`` along ``v_y``: two evaluations per column, with the step DIRECTION_STEP,
+shortened near event surfaces) and ``J_a = df/daux`` by central differences over the discrete
+states that a column carries and that are active (``aux_k != 0``; a zero discrete state means
+"inactive", e.g. no contact, and is not differenced). Written for ``v = e^l u`` with any rate
+``a(t)`` of the log size this is
 
     du/dt = (J_y u_y + J_a u_a, 0) - a u,        dl/dt = a,
 
-and the system takes ``a = <u_y, J_y u_y + J_a u_a> / <u_y, u_y>`` (inner product of the state
-divided by its scales ``s``), the rate at which the size of ``u_y`` would change: ``u`` keeps its
-size (1 from the start and after every event) while ``l`` carries the growth (continuous
-normalisation, e.g. Geist, Parlitz & Lauterborn 1990, Prog. Theor. Phys. 83, 875). Why: the
-solver controls the error of every component relative to its own size, with the absolute floor
-``atol s_i``. A tangent vector that grows by e^20 between re-orthonormalisations (the nine-bar's
-chaos does so within a fraction of a second) holds components some 1e9 smaller than its size,
-whose tolerance lies far below the rounding of its derivative (which scales with the vector's
-size): the step size then collapsed to the smallest step where the model's own run integrates
-fine. With the size split off every component is measured against the vector's size
+and the system takes ``a = <u, du/dt + a u> / <u, u>``, the rate at which the size of ``u`` would
+change: ``u`` keeps its size (1 from the start and after every event) while ``l`` carries the
+growth (continuous normalisation, e.g. Geist, Parlitz & Lauterborn 1990, Prog. Theor. Phys. 83,
+875). Why: the solver controls the error of every component relative to its own size, with the
+absolute floor ``atol s_i``. A tangent vector that grows by e^20 between re-orthonormalisations
+(the nine-bar's chaos does so within a fraction of a second) holds components some 1e9 smaller
+than its size, whose tolerance lies far below the rounding of its derivative (which scales with
+the vector's size): the step size then collapsed to the smallest step where the model's own run
+integrates fine. With the size split off every component is measured against the vector's size
 (``atol s_i`` is ``atol`` times the size), which is what the accuracy of a direction means.
 
 At an event with event function ``g`` and reset ``x+ = R(t, x-)`` every column jumps by the
@@ -41,14 +44,33 @@ Phys. Rev. E 53, 1485; Leine & Nijmeijer 2004, Sec. 3.5):
     S = DR + (F+ - DR F- - dR/dt) grad(g)^T / (grad(g) . F- + dg/dt),
 
 where ``F-`` and ``F+`` are the extended vector fields ``(f, 0)`` before and after the reset,
-and is normalised again (its log size added to ``l``).
-``DR``, ``dR/dt``, ``grad g`` and ``dg/dt`` are central differences of the model's
-``apply_event`` and ``event_values`` (steps: :func:`workbench.solver._templates.jacobian.step`).
+and is normalised again (its log size added to ``l``). ``DR``, ``dR/dt``, ``grad g`` and
+``dg/dt`` are central differences of the model's ``apply_event`` and ``event_values`` (steps:
+:func:`workbench.solver._templates.jacobian.step`).
 
-Layout (set by :func:`workbench.solver._tangent.tangent_problem`): ``p = [model p, s (n),
-time scale]`` with the state scales ``s`` (state units) and a time scale (s) for the difference
-steps; ``ip = [model ip, n, na, m, ne, len(model p), len(model ip), model work size]``;
-``work = [model work, scratch]``; the kernel's ``aux`` is the model's.
+Re-orthonormalisation (optional, for Lyapunov exponents): the directions tend to the most
+expanding one, and a direction whose part orthogonal to the others has shrunk by e^-D relative
+to its size is known to rtol e^D of that part only. Event ``ne`` (after the model's ``ne``)
+fires where the orthogonality defect ``D`` (the columns' log sizes minus the log of the volume
+they span, Hadamard) reaches ``D_max`` and re-orthonormalises them by Gram-Schmidt (``V <- V
+R^-1``, ``l_k += log R_kk``: Benettin's accumulators; the nested subspaces and the volume stay);
+so does an event of the model whose saltation left ``D`` beyond ``D_max`` (the event function
+would start beyond its surface). Without it the vectors stay ``Phi V`` (a monodromy matrix).
+
+The volume: the log volume ``W`` of the m vectors grows at ``tr(G^-1 U^T S^-2 A U)`` (``G`` the
+Gram matrix of the directions, ``A = [[J_y, J_a], [0, 0]]`` the generator of the extended
+tangent flow: the trace of the generator on the vectors' span, the feedback of the held onset
+velocity ``J_a`` included, whose share is ``M``) and jumps at an event by the log of the volume
+ratio of the columns after and before the saltation. The sum of the m largest exponents is the
+mean rate of ``W`` (``sum log R_kk = W`` after any re-orthonormalisation): ``W`` integrated with
+the solver's error control and the accumulators from the integrated directions are an exact
+check of the spectrum's sum.
+
+Layout (set by :func:`workbench.solver._tangent.tangent_problem`): ``p = [model p, s (n), w
+(nx), time scale, D_max]`` with the state scales ``s`` (state units), the weights ``w`` of the
+inner product (``1 / s^2``, ``1 / s_a^2`` or 0) and a time scale (s) for the difference steps;
+``ip = [model ip, n, na, m, ne, len(model p), len(model ip), model work size, re-orthonormalise
+(0/1)]``; ``work = [model work, scratch]``; the kernel's ``aux`` is the model's.
 """
 
 from __future__ import annotations
@@ -58,6 +80,14 @@ import math
 import numpy as np
 from numba import njit
 
+from workbench.solver._tangent_numerics import (
+    column_dot,
+    columns_log_volume,
+    defect,
+    gram_schmidt,
+    normalise,
+    volume_rates,
+)
 from workbench.solver._templates.jacobian import (  # @@MODEL_JACOBIAN@@
     HAS_ANALYTIC,
     fd_aux_jacobian,
@@ -72,7 +102,7 @@ from workbench.solver._templates.placeholder_hooks import (
 )
 from workbench.solver._templates.placeholder_hooks import rhs as model_rhs  # @@HOOKS@@
 
-N_META = 7
+N_META = 8
 
 #: central-difference step along a direction of unit scaled size (a model without an analytic
 #: Jacobian): 1e-4 of each state's size. The difference's rounding error, eps |f| / step, enters
@@ -98,17 +128,24 @@ def _meta(ip):
 
 
 @njit(cache=True, nogil=True)
+def _reorthonormalising(ip):
+    """Whether the system re-orthonormalises its vectors (and integrates their volume)."""
+    return ip[ip.size - 1] != 0
+
+
+@njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
     ipm = ip[:nip]
     wm = work[:ws]
+    nx = n + na
     scale = p[npm : npm + n]
+    w = p[npm + n : npm + n + nx]
     y = Y[:n]
     code = model_rhs(t, y, pm, ipm, aux, wm, dY[:n])
     if code > 0:
         return code
-    nx = n + na
     o = ws
     yd = work[o : o + n]
     fp = work[o + n : o + 2 * n]
@@ -120,6 +157,9 @@ def rhs(t, Y, p, ip, aux, work, dY):
     gd = work[ge + ne : ge + 2 * ne]
     if ne > 0 and not HAS_ANALYTIC:
         model_event_values(t, y, pm, ipm, aux, wm, g0)
+    volume = _reorthonormalising(ip)
+    D = np.zeros((nx, m))  # the directions' rates before the normalisation (state rows)
+    Dm = np.zeros((n, m))  # their discrete state's share
     # J_a: columns of the active discrete states that some tangent vector carries
     need = np.zeros(na, np.bool_)
     for k in range(na):
@@ -142,16 +182,13 @@ def rhs(t, Y, p, ip, aux, work, dY):
                 acc = 0.0
                 for j in range(n):
                     acc += jy[i * n + j] * Y[b + j]
-                dY[b + i] = acc
+                D[i, c] = acc
         else:
             nv = 0.0
             for j in range(n):
                 nv += (Y[b + j] / scale[j]) ** 2
             nv = math.sqrt(nv)
-            if nv == 0.0:
-                for i in range(n):
-                    dY[b + i] = 0.0
-            else:
+            if nv > 0.0:
                 eps = DIRECTION_STEP / nv
                 if ne > 0:
                     eps = _near_surface_step(t, y, Y[b : b + n], eps, pm, ipm, aux, wm, g0, gd, yd)
@@ -166,26 +203,33 @@ def rhs(t, Y, p, ip, aux, work, dY):
                 if c2 > 0:
                     return c2
                 for i in range(n):
-                    dY[b + i] = (fp[i] - fm[i]) / (2.0 * eps)
+                    D[i, c] = (fp[i] - fm[i]) / (2.0 * eps)
         for k in range(na):
             va = Y[b + n + k]
             if va != 0.0:
                 for i in range(n):
-                    dY[b + i] += ja[i * na + k] * va
-        # continuous normalisation: the log size l takes the growth rate a of u_y
-        num = 0.0
-        den = 0.0
+                    D[i, c] += ja[i * na + k] * va
+                    Dm[i, c] += ja[i * na + k] * va
+    iv = n + m * nx + 1 + m  # W, M, K
+    dY[n + m * nx] = 0.0
+    dY[iv] = 0.0
+    dY[iv + 1] = 0.0
+    dY[iv + 2] = 0.0
+    if volume:
+        dY[iv], dY[iv + 1] = volume_rates(Y, n, nx, m, w, D, Dm)
+    # continuous normalisation: the log size l takes the growth rate a of u
+    for c in range(m):
+        b = n + c * nx
+        size = column_dot(Y, b, b, nx, w)
+        rate = 0.0
         for i in range(n):
-            w = Y[b + i] / scale[i]
-            num += w * dY[b + i] / scale[i]
-            den += w * w
-        a = num / den if den > 0.0 else 0.0
+            rate += w[i] * Y[b + i] * D[i, c]
+        a = rate / size if size > 0.0 else 0.0
         for i in range(n):
-            dY[b + i] -= a * Y[b + i]
+            dY[b + i] = D[i, c] - a * Y[b + i]
         for k in range(na):
             dY[b + n + k] = -a * Y[b + n + k]
         dY[n + m * nx + 1 + c] = a
-    dY[n + m * nx] = 0.0
     return code
 
 
@@ -215,7 +259,11 @@ def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
 @njit(cache=True, nogil=True)
 def event_values(t, Y, p, ip, aux, work, g):
     n, na, m, ne, npm, nip, ws = _meta(ip)
-    model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g)
+    model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g[:ne])
+    if _reorthonormalising(ip):
+        nx = n + na
+        w = p[npm + n : npm + n + nx]
+        g[ne] = defect(Y, n, nx, m, w) - p[npm + n + nx + 1]
 
 
 @njit(cache=True, nogil=True)
@@ -230,14 +278,26 @@ def _reset(k, t, y, a, pm, ipm, wm, out):
 
 
 @njit(cache=True, nogil=True)
+def _reorthonormalise(Y, n, nx, m, w):
+    """Gram-Schmidt on the directions, their log sizes taking log R_kk; counted."""
+    gram_schmidt(Y, n, nx, m, w, n + m * nx + 1)
+    Y[n + m * nx + 1 + m + 2] += 1.0
+
+
+@njit(cache=True, nogil=True)
 def apply_event(k, t, Y, p, ip, aux, work):
     n, na, m, ne, npm, nip, ws = _meta(ip)
     pm = p[:npm]
     ipm = ip[:nip]
     wm = work[:ws]
-    scale = p[npm : npm + n]
-    h_t = step(t, p[npm + n])
     nx = n + na
+    scale = p[npm : npm + n]
+    w = p[npm + n : npm + n + nx]
+    h_t = step(t, p[npm + n + nx])
+    volume = _reorthonormalising(ip)
+    if k == ne:  # the directions lost their orthogonality: re-orthonormalise
+        _reorthonormalise(Y, n, nx, m, w)
+        return 0
     y = Y[:n]
     carried = False
     for i in range(n, n + m * nx):
@@ -320,6 +380,7 @@ def apply_event(k, t, Y, p, ip, aux, work):
             S[i, j] = DR[i, j] - jump[i] * grad[j] / g_dot
     det = abs(np.linalg.det(S))
     Y[n + m * nx] += math.log(det) if det > 0.0 else -math.inf
+    before = columns_log_volume(Y, n, nx, m, w) if volume else 0.0
     # every column: v <- DR v - jump * dt, dt = -(grad . v_y) / g_dot the event-time shift
     v = np.empty(nx)
     for c in range(m):
@@ -335,19 +396,12 @@ def apply_event(k, t, Y, p, ip, aux, work):
             for j in range(nx):
                 acc += DR[i, j] * v[j]
             Y[b + i] = acc
-        normalise(Y, b, n, nx, scale, n + m * nx + 1 + c)
+    if volume:  # the jump of the log volume the columns span
+        Y[n + m * nx + 1 + m] += columns_log_volume(Y, n, nx, m, w) - before
+    for c in range(m):
+        normalise(Y, n + c * nx, nx, w, n + m * nx + 1 + c)
+    # a saltation can leave the defect beyond D_max, where the event function would start
+    # beyond its surface and never fire
+    if volume and defect(Y, n, nx, m, w) > p[npm + n + nx + 1]:
+        _reorthonormalise(Y, n, nx, m, w)
     return stop
-
-
-@njit(cache=True, nogil=True)
-def normalise(Y, b, n, nx, scale, il):
-    """Scale the column ``u = Y[b : b + nx]`` to unit scaled size of its state part and add
-    the log of its size to ``Y[il]`` (a column without a state part is left as it is)."""
-    size = 0.0
-    for i in range(n):
-        size += (Y[b + i] / scale[i]) ** 2
-    size = math.sqrt(size)
-    if size > 0.0 and math.isfinite(size):
-        for i in range(nx):
-            Y[b + i] /= size
-        Y[il] += math.log(size)
