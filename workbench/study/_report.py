@@ -330,13 +330,19 @@ def _exponent_table(e: dict | None) -> list[str]:
             f"{_fmt(e['stderr'][i])} | {'yes' if e['trusted'][i] else 'no'} | {e['note'][i]} |"
         )
     ref = e["lle"][e["method"].index("two trajectories")]
-    spectrum = ", ".join(
-        f"{_fmt(v)} +/- {_fmt(err)}{'' if ok else ' (not trusted)'}"
-        for v, err, ok in zip(
-            e.get("spectrum", []), e.get("spectrum_stderr", []), e.get("spectrum_trusted", []),
-            strict=True,
+    values = e.get("spectrum", [])
+    errors, trusted = e.get("spectrum_stderr"), e.get("spectrum_trusted")
+    if errors is None or trusted is None or len(errors) != len(values):
+        # a summary written before the exponents carried errors: its values, said so
+        spectrum = ", ".join(_fmt(v) for v in values) + (
+            " (no standard errors: this summary predates them; `workbench study chaos` "
+            "computes them)"
         )
-    )  # fmt: skip
+    else:
+        spectrum = ", ".join(
+            f"{_fmt(v)} +/- {_fmt(err)}{'' if ok else ' (not trusted)'}"
+            for v, err, ok in zip(values, errors, trusted, strict=True)
+        )
     spp = 100
     per_sample = ref * T / spp
     lines += [
