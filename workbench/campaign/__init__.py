@@ -81,20 +81,49 @@ statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluation
 TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It
 stores only what the scene records: ``record.samples_per_period = 1`` keeps strobe samples only.
 
+The pieces another package runs its own tasks with (:mod:`workbench.continuation`'s continued
+sweeps): :class:`Store`, :func:`execute` (with its own ``runner``), :func:`block_dataset`
+(:func:`run_outcome`, :func:`invalid_outcome`) and :func:`assemble_blocks`.
+
 Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--scheduler ADDRESS]
 [--chunk K] [--restart]`` and ``workbench bifurcation sweep.nc --var x [-o fig.png]``.
 """
 
-from workbench.campaign._assemble import summary
+from workbench.campaign._assemble import assemble_blocks, summary
+from workbench.campaign._block import (
+    block_dataset,
+    failed,
+    invalid_outcome,
+    run_outcome,
+)
+from workbench.campaign._execute import available_workers, execute
 from workbench.campaign._run import run_campaign, store_paths
-from workbench.campaign._store import CampaignError, CampaignWarning, SweepGrid, expand_sweep
+from workbench.campaign._store import (
+    CampaignError,
+    CampaignWarning,
+    Store,
+    SweepGrid,
+    campaign_id,
+    expand_sweep,
+    parameter_attrs,
+)
 
 __all__ = [
     "CampaignError",
     "CampaignWarning",
+    "Store",
     "SweepGrid",
+    "assemble_blocks",
+    "available_workers",
+    "block_dataset",
+    "campaign_id",
+    "execute",
     "expand_sweep",
+    "failed",
+    "invalid_outcome",
+    "parameter_attrs",
     "run_campaign",
+    "run_outcome",
     "store_paths",
     "summary",
 ]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import signal
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +23,18 @@ from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
 
-__all__ = ["BlockTask", "INVALID", "STATUS", "STATS", "failed", "run_block", "worker_start"]
+__all__ = [
+    "BlockTask",
+    "INVALID",
+    "STATUS",
+    "STATS",
+    "block_dataset",
+    "failed",
+    "invalid_outcome",
+    "run_block",
+    "run_outcome",
+    "worker_start",
+]
 
 # Per-point outcome (int8 ``status``, CF flag_values / flag_meanings): the run's Status, or
 # INVALID for a point that did not run.
@@ -67,7 +79,9 @@ PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork s
 
 @dataclass(frozen=True)
 class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points, where to write."""
+    """What one task needs: the campaign scene (TOML), which points, where to write, and the
+    function (if any) that measures each point's run in the worker (``per_point``, see
+    :func:`workbench.run_campaign`)."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -76,6 +90,7 @@ class BlockTask:
     path: str
     campaign_id: str
     block: int
+    per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -104,15 +119,34 @@ def failed(status: np.ndarray) -> np.ndarray:
     return (status != Status.OK) & (status != Status.TERMINATED)
 
 
-def _point(scene: Scene, params: dict[str, float]) -> dict:
+def invalid_outcome(exc: SceneError, wall: float) -> dict:
+    """The outcome of a point whose parameters the model rejects (it did not run)."""
+    out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
+    return out | {"ds": None, "times": np.zeros(0)}
+
+
+def run_outcome(ds: xr.Dataset, wall: float) -> dict:
+    """The outcome of a point that ran: its status and failure message from the run's
+    dataset (see :func:`block_dataset`)."""
+    status = run_status(ds)
+    failure = f"{status.label}: {ds.attrs['run_message']}" if status.failed else ""
+    if status is Status.TERMINATED:
+        failure = "terminated: a terminal event ended the run early"
+    out = {"status": int(status), "failure": failure, "ds": ds, "times": ds["time"].values}
+    return out | {"wall": wall}
+
+
+def _point(scene: Scene, params: dict[str, float], per_point=None) -> dict:
     """Run one point; a failed run and rejected parameters become data, anything else raises."""
     t0 = time.perf_counter()
     try:
-        ds = simulate(scene.with_parameters(**params), throw=False)
+        point = scene.with_parameters(**params)
+        ds = simulate(point, throw=False)
+        measured = None
+        if per_point is not None and not run_status(ds).failed:
+            measured = per_point(point, ds)
     except SceneError as exc:
-        wall = time.perf_counter() - t0
-        out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
-        return out | {"ds": None, "times": np.zeros(0)}
+        return invalid_outcome(exc, time.perf_counter() - t0)
     except Exception as exc:
         shown = ", ".join(f"{k}={v:.6g}" for k, v in params.items())
         raise RuntimeError(
@@ -121,12 +155,7 @@ def _point(scene: Scene, params: dict[str, float]) -> dict:
             "else is a bug or a broken setup. Finished blocks are kept: fix the cause and run "
             "the campaign again."
         ) from exc
-    status = run_status(ds)
-    failure = f"{status.label}: {ds.attrs['run_message']}" if status.failed else ""
-    if status is Status.TERMINATED:
-        failure = "terminated: a terminal event ended the run early"
-    out = {"status": int(status), "failure": failure, "ds": ds, "times": ds["time"].values}
-    return out | {"wall": time.perf_counter() - t0}
+    return run_outcome(ds, time.perf_counter() - t0) | {"measured": measured}
 
 
 def run_block(task: BlockTask) -> dict:
@@ -141,8 +170,11 @@ def run_block(task: BlockTask) -> dict:
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
     scene = scene_from_toml(task.scene_toml)
-    runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
-    ds = _block_dataset(scene, task, runs)
+    runs = [
+        _point(scene, dict(zip(task.dims, v, strict=True)), task.per_point) for v in task.values
+    ]
+    ds = block_dataset(scene, task.flat, runs)
+    ds.attrs.update(campaign_id=task.campaign_id, block=task.block)
     ds.attrs.update(
         worker_pid=os.getpid(),
         worker_task_number=_TASKS_IN_PROCESS,
@@ -163,7 +195,10 @@ def run_block(task: BlockTask) -> dict:
     }
 
 
-def _block_dataset(scene: Scene, task: BlockTask, runs: list[dict]) -> xr.Dataset:
+def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
+    """The dataset of a block: the points ``flat`` (flat grid indices) with their outcomes
+    (:func:`run_outcome`, :func:`invalid_outcome`; an outcome's ``measured`` dataset, if any,
+    becomes per-point variables, NaN where a point has none)."""
     model = get_model(scene.model)
     n = len(runs)
     n_time = max([len(r["times"]) for r in runs] + [0])
@@ -208,12 +243,23 @@ def _block_dataset(scene: Scene, task: BlockTask, runs: list[dict]) -> xr.Datase
     coords = {
         "point": (
             "point",
-            np.array(task.flat, np.int64),
+            np.array(flat, np.int64),
             {"long_name": "flat (C-order) index of the point in the grid", "units": "1"},
         )
     }
     for d, (values, attrs) in mcoords.items():
         coords[d] = (d, list(values), dict(attrs))
     ds = xr.Dataset(data_vars, coords=coords)
-    ds.attrs.update(campaign_id=task.campaign_id, block=task.block, model=scene.model)
+    ds = ds.merge(_measured(runs), combine_attrs="override")
+    ds.attrs.update(model=scene.model)
     return ds
+
+
+def _measured(runs: list[dict]) -> xr.Dataset:
+    """The per-point measurements of a block over ``point`` (NaN where a point has none)."""
+    found = [r.get("measured") for r in runs]
+    template = next((m for m in found if m is not None), None)
+    if template is None:
+        return xr.Dataset()
+    blank = xr.full_like(template, np.nan, dtype=np.float64)
+    return xr.concat([blank if m is None else m for m in found], dim="point")

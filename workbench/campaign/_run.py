@@ -7,6 +7,7 @@ import math
 import os
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +52,7 @@ def run_campaign(
     chunk: int | None = None,
     restart: bool = False,
     progress: bool = False,
+    per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None,
 ) -> xr.Dataset:
     """Run every point of a scene's ``[sweep]`` grid in parallel and return one dataset.
 
@@ -84,6 +86,13 @@ def run_campaign(
         it, a store of a different scene or chunk size is refused with the differences named.
     progress : bool
         Show a progress bar over points with an ETA (and the dashboard link of a client).
+    per_point : callable, optional
+        ``per_point(scene, run)``, called in the worker on each point's single-run scene and
+        its run (the dataset of :func:`workbench.simulate`) when the run succeeded; returns a
+        Dataset of measurements without a ``time`` dim (e.g. a chaos indicator with its
+        units), which become variables over the parameter dims (NaN where a run failed). A
+        module-level function (it is pickled to the workers); its qualified name is part of
+        the campaign's identity, so a store of another measurement is refused.
 
     Returns
     -------
@@ -147,6 +156,14 @@ def run_campaign(
     """
     wall0 = time.perf_counter()
     scene = load_scene(scene)
+    if scene.continuation:
+        raise CampaignError(
+            "the scene's [sweep] asks for a continued sweep (continuation = "
+            f"{scene.continuation['direction']!r}): each point starts from its neighbour's "
+            "state, which run_campaign does not do; run it with "
+            "workbench.continuation.continued_sweep (CLI: workbench campaign), or remove "
+            "sweep.continuation"
+        )
     grid = expand_sweep(scene)
     workers = _positive_int("workers", workers)
     chunk = _positive_int("chunk", chunk)
@@ -157,7 +174,9 @@ def run_campaign(
         )
     st = Store(store)
     with st.lock():
-        return _run_locked(scene, grid, st, client, workers, chunk, restart, progress, wall0)
+        return _run_locked(
+            scene, grid, st, client, workers, chunk, restart, progress, wall0, per_point
+        )
 
 
 def _run_locked(
@@ -170,13 +189,14 @@ def _run_locked(
     restart: bool,
     progress: bool,
     wall0: float,
+    per_point: Callable | None = None,
 ) -> xr.Dataset:
     """run_campaign while holding the store's lock."""
     if restart:
         st.clear()
     manifest = st.read_manifest()
     if manifest is None:
-        reused = _complete_archive(st, scene, chunk)
+        reused = _complete_archive(st, scene, chunk, per_point)
         if reused is not None:
             reused.attrs.update(
                 campaign_workers=0,
@@ -187,11 +207,17 @@ def _run_locked(
         if chunk is None:
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
-        cid = campaign_id(scene, chunk)
+        cid = campaign_id(scene, chunk, per_point)
         manifest = st.write_manifest(scene, grid, chunk, cid)
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
         cid = manifest["campaign_id"]
+        if cid != campaign_id(scene, chunk, per_point):
+            raise CampaignError(
+                f"{str(st.blocks_dir)!r} holds a campaign measured per point by another function "
+                f"(per_point={_name(per_point)}); pass restart=True (CLI --restart) to start "
+                "afresh, or choose another output path"
+            )
     st.remove_temporaries()
     blocks = grid.blocks(chunk)
     done = st.verified_blocks(manifest, blocks)
@@ -204,6 +230,7 @@ def _run_locked(
             path=str(st.block_path(i)),
             campaign_id=cid,
             block=i,
+            per_point=per_point,
         )
         for i, rng in enumerate(blocks)
         if i not in done
@@ -253,6 +280,7 @@ def _run_locked(
             "campaign_block_sha256": " ".join(
                 manifest["checksums"][str(i)] for i in range(len(blocks))
             ),
+            "campaign_per_point": _name(per_point),
         },
         in_memory,
     )
@@ -263,7 +291,13 @@ def _run_locked(
     return ds
 
 
-def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset | None:
+def _name(fn: Callable | None) -> str:
+    return "None" if fn is None else f"{fn.__module__}.{fn.__qualname__}"
+
+
+def _complete_archive(
+    st: Store, scene: Scene, chunk: int | None, per_point: Callable | None = None
+) -> xr.Dataset | None:
     """The stored archive if it is this campaign, complete, and its blocks are gone; a
     CampaignError if the file at the store path is something else; None if there is none."""
     if not st.archive.is_file():
@@ -282,6 +316,8 @@ def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset 
             "choose another output path"
         )
     st.check_scene(ds.attrs["scene"], scene, repr(str(st.archive)))
+    if ds.attrs.get("campaign_per_point", "None") != _name(per_point):
+        return None  # same runs, another measurement: recompute
     if chunk is not None and chunk != int(ds.attrs["campaign_chunk"]):
         return None  # same numbers, other blocks: recompute with the chunk size asked for
     ds.attrs.update(computed_blocks=0, reused_blocks=int(ds.attrs["campaign_blocks"]))

@@ -131,10 +131,13 @@ def format_point(point: Mapping[str, float]) -> str:
     return ", ".join(f"{k}={v:.6g}" for k, v in point.items())
 
 
-def campaign_id(scene: Scene, chunk: int) -> str:
-    """Digest of what fixes the content of every block: the scene and the chunk size."""
+def campaign_id(scene: Scene, chunk: int, per_point=None) -> str:
+    """Digest of what fixes the content of every block: the scene, the chunk size and the
+    function that measures each point (its qualified name; None: none)."""
     h = hashlib.sha256(scene.to_toml().encode())
     h.update(f"\nchunk={chunk}".encode())
+    if per_point is not None:
+        h.update(f"\nper_point={per_point.__module__}.{per_point.__qualname__}".encode())
     return h.hexdigest()[:16]
 
 
