@@ -60,15 +60,18 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             announce_compile(scene)
         with warnings.catch_warnings():  # the summary below lists every failed point
             warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
-            ds = run_campaign(
-                scene,
-                args.output,
-                client=client,
-                workers=args.workers,
-                chunk=args.chunk,
-                restart=args.restart,
-                progress=not args.quiet,
-            )
+            if scene.continuation:  # [sweep] continuation: points from their neighbours
+                ds = _continued(scene, args, client)
+            else:
+                ds = run_campaign(
+                    scene,
+                    args.output,
+                    client=client,
+                    workers=args.workers,
+                    chunk=args.chunk,
+                    restart=args.restart,
+                    progress=not args.quiet,
+                )
     finally:
         if client is not None:
             client.close()
@@ -85,6 +88,25 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
         )
         report_failures("campaign", f"{n_failed} of {flags.size} points failed ({counts})", code)
     return code
+
+
+def _continued(scene, args: argparse.Namespace, client):
+    """A continued sweep (``[sweep] continuation``): segments, not chunks, make its tasks."""
+    from workbench.continuation import continued_sweep
+
+    if args.chunk is not None:
+        raise UsageError(
+            f"--chunk {args.chunk}: a continued sweep ([sweep] continuation) is cut into "
+            "segments, not chunks; set sweep.continuation.segments in the scene instead"
+        )
+    return continued_sweep(
+        scene,
+        args.output,
+        client=client,
+        workers=args.workers,
+        restart=args.restart,
+        progress=not args.quiet,
+    )
 
 
 def campaign_exit_code(flags) -> int:
@@ -164,7 +186,9 @@ def register_cli(sub) -> None:
         help="run a scene's [sweep] grid in parallel into one netCDF campaign (resumable)",
         description="Run every point of a scene's [sweep] grid as tasks (a local process "
         "pool, or a dask.distributed scheduler) and assemble one netCDF archive. Blocks go to "
-        "OUTPUT.blocks/; running the same command again computes only missing blocks.",
+        "OUTPUT.blocks/; running the same command again computes only missing blocks. With "
+        "[sweep] continuation = 'up' | 'down' | 'both' each point starts from its neighbour's "
+        "settled state (a continued sweep, in parallel by segments).",
     )
     p.add_argument("scene", help="scene file (TOML) with a [sweep] table")
     p.add_argument("-o", "--output", required=True, help="campaign netCDF file to write")
