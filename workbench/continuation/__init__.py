@@ -7,6 +7,8 @@ Above the run and analysis layers, beside campaign (whose store, executors and b
 uses for its parallel parts).
 """
 
+from workbench.continuation._orbits import continue_orbit, periodic_orbit
+from workbench.continuation._strobe import StrobeMap
 from workbench.continuation._sweep import continued_sweep
 
-__all__ = ["continued_sweep"]
+__all__ = ["StrobeMap", "continue_orbit", "continued_sweep", "periodic_orbit"]
