@@ -263,19 +263,19 @@ def trace(
                 break
             continue
         out.evaluations += B.evaluations
-        if not lo <= B.p <= hi:
-            out.ended = "the parameter left its range"
-            break
         if float(A.tau @ B.tau) < 0.5 and h > cfg.min_step:  # too sharp a turn: halve
             h /= 2.0
             continue
-        ta, tb = _tests(A), _tests(B)
-        for kind in _detect(ta, tb):
+        for kind in _detect(_tests(A), _tests(B)):
             pt, evals = _locate(smap, A, B, h, kind, cfg)
             out.evaluations += evals
-            out.points.append(pt)
-            out.labels.append(kind)
-            out.critical.append(_critical(pt, kind))
+            if lo <= pt.p <= hi:
+                out.points.append(pt)
+                out.labels.append(kind)
+                out.critical.append(_critical(pt, kind))
+        if not lo <= B.p <= hi:
+            out.ended = "the parameter left its range"
+            break
         out.points.append(B)
         out.labels.append("regular")
         out.critical.append(complex(np.nan, np.nan))
@@ -286,9 +286,10 @@ def trace(
             h /= 1.5
     else:
         out.ended = f"{cfg.max_points} points reached"
-    # the special points were appended before the regular point that bracketed them: order by
-    # arclength (they lie between their neighbours by construction)
-    out.labels[-1] = "end" if len(out.points) > 1 else out.labels[-1]
+    # a located point is appended before the regular point that brackets it with the one
+    # before: the list is in order of arclength
+    if len(out.points) > 1 and out.labels[-1] == "regular":
+        out.labels[-1] = "end"
     out.wall_time = time.perf_counter() - wall0
     return out
 
@@ -297,7 +298,11 @@ def switch_at_doubling(
     smap: StrobeMap, pd: OrbitPoint, cfg: Settings, epsilon: float = 0.05
 ) -> tuple[StrobeMap, OrbitPoint, np.ndarray]:
     """The first point of the period-2k branch born at the period doubling ``pd`` of the
-    period-k branch of ``smap``, and the direction to continue it in (away from ``pd``)."""
+    period-k branch of ``smap``, and the direction to continue it in (away from ``pd``).
+
+    The offset ``epsilon`` (scaled units) along the eigenvector is halved until the corrected
+    point lies within ``1e-3`` of the parameter range from the bifurcation: the doubled
+    branch leaves as a parabola (p - p* ~ epsilon^2) whose width shrinks down a cascade."""
     mu, vecs = np.linalg.eig(pd.value.M)
     i = int(np.argmin(np.abs(mu + 1.0)))
     v = np.real(vecs[:, i])
@@ -307,17 +312,28 @@ def switch_at_doubling(
     u_star = pd.u(s, cfg.pscale)
     m = v.size
     tau0 = np.concatenate([v, [0.0]])
-    u0 = u_star + epsilon * tau0
-    pred = _predict(smap, pd, u0, cfg.pscale)
-    first = correct(
-        double,
-        pred,
-        tau0,
-        u0,
-        cfg.pscale,
-        tolerance=cfg.tolerance,
-        max_iterations=2 * cfg.max_iterations,
-    )
+    failure: Exception | None = None
+    while epsilon >= 1e-5:
+        u0 = u_star + epsilon * tau0
+        pred = _predict(smap, pd, u0, cfg.pscale)
+        try:
+            first = correct(
+                double,
+                pred,
+                tau0,
+                u0,
+                cfg.pscale,
+                tolerance=cfg.tolerance,
+                max_iterations=2 * cfg.max_iterations,
+            )
+        except NewtonFailure as exc:
+            failure, epsilon = exc, epsilon / 2.0
+            continue
+        if abs(first.p - pd.p) <= 1e-3 * cfg.pscale:
+            break
+        epsilon /= 2.0
+    else:
+        raise NewtonFailure(f"no doubled orbit near the period doubling ({failure})")
     if first.value.M.shape[0] != m:
         raise NewtonFailure("the doubled orbit has other live discrete states; cannot switch")
     away = first.u(s, cfg.pscale) - u_star

@@ -221,161 +221,115 @@ def continue_orbit(
     return ds
 
 
+def _attrs(long_name: str, units: str = "1", **extra) -> dict:
+    return {"long_name": long_name, "units": units, **extra}
+
+
+METHOD = (
+    "shooting on the stroboscopic map (Newton), monodromy matrix from the tangent system with "
+    "saltation at events, pseudo-arclength continuation; bifurcations from the Floquet "
+    "multipliers (det(M - I), det(M + I), complex multipliers outside the unit circle) and "
+    "the events per period (grazing located on the extreme of an event function)"
+)
+
+
 def _dataset(
-    branches: list[Traced], parameter: str | None, tolerance: float, max_points
+    branches: list[Traced], parameter: str | None, tolerance: float, max_points: int
 ) -> xr.Dataset:
+    """The branches as one dataset (layout: :func:`continue_orbit`)."""
     smap = branches[0].smap
     pb = smap.prepared(smap.value).problem
     states = [q for q in pb.states if not q.name.startswith("_")]
     index = {q.name: i for i, q in enumerate(pb.states)}
     rows = [
-        (b, k, pt, lab, crit)
+        (b, pt, lab, crit)
         for b, tr in enumerate(branches)
-        for k, (pt, lab, crit) in enumerate(zip(tr.points, tr.labels, tr.critical, strict=True))
+        for pt, lab, crit in zip(tr.points, tr.labels, tr.critical, strict=True)
     ]
     n = len(rows)
-    m = max(pt.value.M.shape[0] for _, _, pt, _, _ in rows)
+    m = max(pt.value.M.shape[0] for _, pt, _, _ in rows)
     kmax = max(tr.smap.periods for tr in branches)
     mu = np.full((n, m), np.nan + 0j)
     strobe = {q.name: np.full((n, kmax), np.nan) for q in states}
-    for i, (b, _, pt, _, _) in enumerate(rows):
+    for i, (b, pt, _, _) in enumerate(rows):
         mult = pt.multipliers
         mu[i, : mult.size] = mult
         samples = branches[b].smap.orbit_samples(pt.y, pt.aux, pt.p)
         for q in states:
             strobe[q.name][i, : samples.shape[0]] = samples[:, index[q.name]]
     modulus = np.abs(mu)
-    data = {}
+    periods = np.array([branches[b].smap.periods for b, _, _, _ in rows], np.int32)
+    data: dict = {}
     if parameter is not None:
         par = get_model(smap.scene.model).parameter(parameter)
-        data[parameter] = (
-            "point",
-            np.array([r[2].p for r in rows]),
-            {"units": par.units, "long_name": par.long_name},
-        )
+        p_attrs = _attrs(par.long_name, par.units)
+        data[parameter] = ("point", np.array([r[1].p for r in rows]), p_attrs)
     for q in states:
-        data[f"orbit_{q.name}"] = (
-            "point",
-            np.array([r[2].y[index[q.name]] for r in rows]),
-            {"units": q.units, "long_name": f"{q.long_name} on the orbit at the strobe time"},
-        )
-        data[f"strobe_{q.name}"] = (
-            ("point", "sample"),
-            strobe[q.name],
-            {"units": q.units, "long_name": f"{q.long_name} at the orbit's strobe times"},
-        )
-    data["branch"] = (
-        "point",
-        np.array([r[0] for r in rows], np.int32),
-        {"long_name": "branch index (0: the first; b + 1 switched from b)", "units": "1"},
-    )
-    data["periods"] = (
-        "point",
-        np.array([branches[r[0]].smap.periods for r in rows], np.int32),
-        {"long_name": "period of the orbit in forcing periods", "units": "1"},
-    )
-    data["multiplier_real"] = (
-        ("point", "multiplier"),
-        mu.real,
-        {"long_name": "real part of a Floquet multiplier", "units": "1"},
-    )
-    data["multiplier_imag"] = (
-        ("point", "multiplier"),
-        mu.imag,
-        {"long_name": "imaginary part of a Floquet multiplier", "units": "1"},
-    )
-    data["multiplier_modulus"] = (
-        ("point", "multiplier"),
-        modulus,
-        {"long_name": "modulus of a Floquet multiplier", "units": "1"},
-    )
+        y = np.array([r[1].y[index[q.name]] for r in rows])
+        long_name = f"{q.long_name} on the orbit at the strobe time"
+        data[f"orbit_{q.name}"] = ("point", y, _attrs(long_name, q.units))
+        long_name = f"{q.long_name} at the orbit's strobe times"
+        data[f"strobe_{q.name}"] = (("point", "sample"), strobe[q.name], _attrs(long_name, q.units))
+    branch = np.array([r[0] for r in rows], np.int32)
+    data["branch"] = ("point", branch, _attrs("branch index (b + 1 switched from b)"))
+    data["periods"] = ("point", periods, _attrs("period of the orbit in forcing periods"))
+    pm = ("point", "multiplier")
+    data["multiplier_real"] = (pm, mu.real, _attrs("real part of a Floquet multiplier"))
+    data["multiplier_imag"] = (pm, mu.imag, _attrs("imaginary part of a Floquet multiplier"))
+    data["multiplier_modulus"] = (pm, modulus, _attrs("modulus of a Floquet multiplier"))
+    stable = (np.nanmax(modulus, axis=1) < 1.0).astype(np.int8)
     data["stable"] = (
         "point",
-        (np.nanmax(modulus, axis=1) < 1.0).astype(np.int8),
-        {
-            "long_name": "all Floquet multipliers inside the unit circle",
-            "units": "1",
-            "flag_values": np.array([0, 1], np.int8),
-            "flag_meanings": "unstable stable",
-        },
+        stable,
+        _attrs(
+            "all Floquet multipliers inside the unit circle",
+            flag_values=np.array([0, 1], np.int8),
+            flag_meanings="unstable stable",
+        ),
     )
+    events = np.array([r[1].value.events for r in rows]) / periods
     data["events_per_period"] = (
         "point",
-        np.array([r[2].value.events / branches[r[0]].smap.periods for r in rows]),
-        {
-            "long_name": "events located per forcing period along the orbit (for the clearance mechanisms: contact onsets and ends)",
-            "units": "1",
-        },
+        events,
+        _attrs("events located per forcing period (the mechanisms: contact onsets and ends)"),
     )
-    data["label"] = ("point", np.array([LABELS[r[3]] for r in rows], np.int8), LABEL_ATTRS)
-    data["newton_iterations"] = (
-        "point",
-        np.array([r[2].iterations for r in rows], np.int32),
-        {"long_name": "Newton iterations of the point", "units": "1"},
+    data["label"] = ("point", np.array([LABELS[r[2]] for r in rows], np.int8), LABEL_ATTRS)
+    iterations = np.array([r[1].iterations for r in rows], np.int32)
+    data["newton_iterations"] = ("point", iterations, _attrs("Newton iterations of the point"))
+    residual = np.array([r[1].residual for r in rows])
+    data["residual"] = ("point", residual, _attrs("scaled residual max |P^k(x) - x| / s"))
+    special = [r for r in rows if r[2] not in ("regular", "start", "end")]
+    kinds = np.array([LABELS[r[2]] for r in special], np.int8)
+    data["bifurcation_label"] = (
+        "bifurcation",
+        kinds,
+        dict(LABEL_ATTRS, long_name="kind of the bifurcation"),
     )
-    data["residual"] = (
-        "point",
-        np.array([r[2].residual for r in rows]),
-        {"long_name": "scaled residual max |P^k(x) - x| / s", "units": "1"},
+    data["bifurcation_branch"] = (
+        "bifurcation",
+        np.array([r[0] for r in special], np.int32),
+        _attrs("branch index of the bifurcation"),
     )
-    special = [(r[0], r[2], r[3], r[4]) for r in rows if r[3] not in ("regular", "start", "end")]
-    bif = {
-        "bifurcation_label": (
-            "bifurcation",
-            np.array([LABELS[s[2]] for s in special], np.int8),
-            dict(LABEL_ATTRS, long_name="kind of the bifurcation"),
-        ),
-        "bifurcation_branch": (
-            "bifurcation",
-            np.array([s[0] for s in special], np.int32),
-            {"long_name": "branch index of the bifurcation", "units": "1"},
-        ),
-        "critical_real": (
-            "bifurcation",
-            np.array([s[3].real for s in special]),
-            {"long_name": "real part of the multiplier that crossed the unit circle", "units": "1"},
-        ),
-        "critical_imag": (
-            "bifurcation",
-            np.array([s[3].imag for s in special]),
-            {
-                "long_name": "imaginary part of the multiplier that crossed the unit circle",
-                "units": "1",
-            },
-        ),
-    }
+    crit = np.array([r[3] for r in special], complex)
+    long_name = "part of the multiplier that crossed the unit circle"
+    data["critical_real"] = ("bifurcation", crit.real, _attrs(f"real {long_name}"))
+    data["critical_imag"] = ("bifurcation", crit.imag, _attrs(f"imaginary {long_name}"))
     if parameter is not None:
-        bif["bifurcation_parameter"] = (
-            "bifurcation",
-            np.array([s[1].p for s in special]),
-            dict(data[parameter][2]),
-        )
-    data.update(bif)
+        where = np.array([r[1].p for r in special])
+        data["bifurcation_parameter"] = ("bifurcation", where, dict(p_attrs))
     coords = {
-        "point": ("point", np.arange(n), {"long_name": "index along the branches", "units": "1"}),
-        "multiplier": (
-            "multiplier",
-            np.arange(m),
-            {"long_name": "multiplier index (largest modulus first)", "units": "1"},
-        ),
-        "sample": (
-            "sample",
-            np.arange(kmax),
-            {"long_name": "strobe sample of the orbit (k T after the first)", "units": "1"},
-        ),
-        "bifurcation": (
-            "bifurcation",
-            np.arange(len(special)),
-            {"long_name": "located bifurcation", "units": "1"},
-        ),
+        "point": ("point", np.arange(n), _attrs("index along the branches")),
+        "multiplier": ("multiplier", np.arange(m), _attrs("multiplier (largest modulus first)")),
+        "sample": ("sample", np.arange(kmax), _attrs("strobe sample of the orbit (k T on)")),
+        "bifurcation": ("bifurcation", np.arange(len(special)), _attrs("located bifurcation")),
     }
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(provenance(smap.scene, by="workbench.continuation.continue_orbit"))
+    title = f"periodic orbits of model {smap.scene.model}"
     ds.attrs.update(
-        title=f"periodic orbits of model {smap.scene.model}"
-        + (f" continued over {parameter}" if parameter else ""),
+        title=title + (f" continued over {parameter}" if parameter else ""),
         continuation_parameter=parameter or "",
-        method="shooting on the stroboscopic map (Newton), monodromy matrix from the tangent system with saltation at events, pseudo-arclength continuation; bifurcations from the Floquet multipliers (det(M - I), det(M + I), complex multipliers outside the unit circle) and the events per period",
+        method=METHOD,
         rtol=smap.rtol,
         tolerance=tolerance,
         map_evaluations=int(sum(tr.evaluations for tr in branches)),
