@@ -142,6 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
 _COMMAND_MODULES: tuple[str, ...] = (
     "workbench.precision._cli",
     "workbench.campaign._cli",
+    "workbench.continuation._cli",
     "workbench.study._cli",
     "workbench.analysis._cli",
     "workbench.verification._cli",

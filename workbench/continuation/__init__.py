@@ -7,8 +7,23 @@ Above the run and analysis layers, beside campaign (whose store, executors and b
 uses for its parallel parts).
 """
 
+from workbench.continuation._indicators import (
+    chaos_indicators,
+    chaos_map,
+    lle_cycles,
+    strobe_period,
+)
 from workbench.continuation._orbits import continue_orbit, periodic_orbit
 from workbench.continuation._strobe import StrobeMap
 from workbench.continuation._sweep import continued_sweep
 
-__all__ = ["StrobeMap", "continue_orbit", "continued_sweep", "periodic_orbit"]
+__all__ = [
+    "StrobeMap",
+    "chaos_indicators",
+    "chaos_map",
+    "continue_orbit",
+    "continued_sweep",
+    "lle_cycles",
+    "periodic_orbit",
+    "strobe_period",
+]

@@ -14,6 +14,7 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import register_overview
+from workbench.plot._continuation import branch_figure, chaos_map_figure
 from workbench.plot._runs import (
     PANELS_PER_FIGURE,
     campaign_figure,
@@ -27,7 +28,9 @@ from workbench.plot._verify import verification_figure
 __all__ = [
     "PANELS_PER_FIGURE",
     "bifurcation_figure",
+    "branch_figure",
     "campaign_figure",
+    "chaos_map_figure",
     "embedding_figure",
     "floquet_figure",
     "jacobian_spectrum_figure",
