@@ -14,7 +14,13 @@ from scipy.optimize import brentq
 import workbench
 from workbench.campaign import CampaignError
 from workbench.cli import main
-from workbench.continuation import continue_orbit, continued_sweep, periodic_orbit
+from workbench.continuation import (
+    chaos_map,
+    continue_orbit,
+    continued_sweep,
+    periodic_orbit,
+    strobe_period,
+)
 from workbench.models.stop_oscillator import grazing_amplitude
 
 # x'' + 0.05 x' + x + 0.1 x^3 = 0.1 cos(omega t): a hysteresis window omega ~ 1.076 .. 1.116
@@ -259,3 +265,39 @@ def test_continuation_settings_are_validated(spec, key):
             }
         )
     assert info.value.key == key
+
+
+# -- chaos maps ----------------------------------------------------------------------------------
+def test_strobe_period_finds_the_least_period():
+    t = np.arange(40)
+    assert strobe_period(np.c_[np.cos(np.pi * t)]) == 2
+    assert strobe_period(np.c_[np.ones(40), np.cos(2 * np.pi * t / 3)]) == 3
+    assert strobe_period(np.c_[np.sin(0.7 * t)]) == 0  # quasi-periodic
+    assert strobe_period(np.c_[np.cos(np.pi * t)][:4]) == 0  # too short to tell
+
+
+def test_chaos_map_indicators_against_floquet_and_a_chaotic_point(tmp_path):
+    """Over gamma x delta of the default Duffing oscillator: the period-1 point's exponent is
+    ln|mu| / T of its Floquet multipliers (-delta / 2 for a complex pair: the trace of the
+    Jacobian is -delta), the chaotic point has K near 1 and a positive exponent."""
+    scene = workbench.load_scene(
+        {
+            "model": {"name": "duffing"},
+            "run": {"cycles": 500, "transient_cycles": 150},  # exponents over 100 cycles
+            "record": {"samples_per_period": 1},
+            "sweep": {"gamma": [0.2, 0.5], "delta": [0.3, 0.35]},
+        }
+    )
+    maps = chaos_map(scene, tmp_path / "map.nc", workers=2)
+    assert maps.lle.dims == ("gamma", "delta") and maps.lle.attrs["units"] == "s-1"
+    periodic = maps.sel(gamma=0.2, delta=0.3)
+    assert int(periodic.strobe_period) == 1 and float(periodic.zero_one_K) == 0.0
+    orbit = periodic_orbit(scene.with_parameters(gamma=0.2, delta=0.3))
+    T = 2 * math.pi / 1.2
+    expected = math.log(float(orbit.multiplier_modulus.max())) / T
+    assert abs(expected + 0.15) < 1e-6  # -delta / 2
+    assert abs(float(periodic.lle) - expected) < 3 * float(periodic.lle_stderr) + 1e-3
+    chaotic = maps.sel(gamma=0.5, delta=0.3)
+    assert int(chaotic.strobe_period) == 0 and float(chaotic.zero_one_K) > 0.8
+    assert float(chaotic.lle) > 3 * float(chaotic.lle_stderr) > 0
+    assert (maps.lle_status == 0).all()

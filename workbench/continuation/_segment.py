@@ -130,7 +130,7 @@ def continue_point(
 def run_segment(task: SegmentTask) -> dict:
     """Run a segment (in a worker) and write its block file (atomically); the summary has the
     fields of :func:`workbench.campaign._block.run_block`'s."""
-    wall0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     scene = scene_from_toml(task.scene_toml)
     carried = None
     if task.seed_state is not None:
@@ -156,6 +156,7 @@ def run_segment(task: SegmentTask) -> dict:
         state_names=" ".join(q.name for q in ran["states"]) if ran else "",
         worker_pid=os.getpid(),
         block_wall_time=time.perf_counter() - wall0,
+        block_cpu_time=time.process_time() - cpu0,
     )
     save_run(ds, task.path, classic=True)
     return {

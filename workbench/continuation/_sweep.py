@@ -76,6 +76,9 @@ def continued_sweep(
         (dim ``seam``: between segments j-1 and j) ``seam_distance`` and ``seam_spread`` (the
         cross and within distances of the check, fractions of the ranges) and
         ``seam_chained`` (1 where the segment was run again from its predecessor's state).
+        Attributes: those of a campaign, the settings (``continuation_*``), the rounds of
+        chained segments (``continuation_rounds``) and the workers' CPU time of the blocks
+        computed by this call (``campaign_cpu_time``, s).
 
     Examples
     --------
@@ -124,7 +127,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
     done = st.verified_blocks(manifest, [range(0)] * plan.n_blocks)
     n_workers = available_workers(client, workers)
     blocks: dict[int, xr.Dataset] = {}
-    stats = {"computed": 0, "reused": 0, "rounds": 0, "compute": 0.0}
+    stats = {"computed": 0, "reused": 0, "rounds": 0, "compute": 0.0, "cpu": 0.0}
     bar = _bar(plan, progress)
 
     def run(tasks: list[SegmentTask]) -> None:
@@ -141,6 +144,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
         def commit(result: dict) -> None:
             st.commit(manifest, result["block"], result["sha256"])
             blocks[result["block"]] = result["dataset"]
+            stats["cpu"] += result["dataset"].attrs["block_cpu_time"]
             if bar is not None:
                 bar.update(result["points"])
 
@@ -172,6 +176,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
         reused_blocks=stats["reused"],
         campaign_workers=n_workers if stats["computed"] else 0,
         campaign_compute_wall_time=stats["compute"],
+        campaign_cpu_time=stats["cpu"],
         continuation_rounds=stats["rounds"],
         campaign_wall_time=time.perf_counter() - wall0,
         campaign_block_sha256=" ".join(
