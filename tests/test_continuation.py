@@ -15,6 +15,7 @@ import workbench
 from workbench.campaign import CampaignError
 from workbench.cli import main
 from workbench.continuation import (
+    StrobeMap,
     chaos_map,
     continue_orbit,
     continued_sweep,
@@ -55,6 +56,9 @@ def test_folds_agree_with_harmonic_balance(response):
     (located to 1e-7 of the range) agree with them to 1e-7."""
     h7, h9 = hb_folds(**HARDENING, H=7), hb_folds(**HARDENING, H=9)
     assert np.allclose(h7, h9, rtol=0, atol=1e-12)
+    # the values docs/continuation.md quotes (and the single-harmonic ones)
+    assert np.allclose(h9, [1.0761313, 1.1161418], rtol=0, atol=5e-8)
+    assert np.allclose(hb_folds(**HARDENING, H=1), [1.0760671, 1.1155084], rtol=0, atol=5e-8)
     up, down = fold_values(response)
     assert abs(up - h9[0]) < 1e-7 and abs(down - h9[1]) < 1e-7, (up, down, h9)
     # along the branch: stable up to the first fold, unstable between the folds (the middle
@@ -120,8 +124,11 @@ def test_period_doubling_cascade_and_feigenbaum_ratio(cascade):
     assert (cascade.bifurcation_branch.values == np.arange(4)).all()
     assert np.allclose(cascade.critical_real.values, -1.0, atol=1e-4)
     g = cascade.bifurcation_parameter.values
+    # the values README.md and docs/continuation.md quote
+    assert np.allclose(g, [0.2655818, 0.2866932, 0.2910899, 0.2920310], rtol=0, atol=2e-7), g
     d1 = (g[1] - g[0]) / (g[2] - g[1])
     d2 = (g[2] - g[1]) / (g[3] - g[2])
+    assert (round(d1, 2), round(d2, 2)) == (4.80, 4.67)
     # the ratios of a flow's first doublings approach Feigenbaum's constant (geometrically)
     assert abs(d1 - FEIGENBAUM) < 0.05 * FEIGENBAUM, d1
     assert abs(d2 - FEIGENBAUM) < 0.01 * FEIGENBAUM, d2
@@ -169,6 +176,7 @@ def test_grazing_against_the_closed_form():
     grazing = r.bifurcation_parameter.values[r.bifurcation_label.values == 7]  # 7: grazing
     assert grazing.size == 1
     assert abs(grazing[0] - exact) < 1e-6 * exact, (grazing, exact)
+    assert round(exact, 7) == 0.7106874  # as docs/continuation.md quotes
     assert (r.events_per_period[r.omega < grazing[0]] == 0).all()
     # one onset and one end per period; contacts shallower than ~1e-4 m (within ~2e-5 rad/s
     # past grazing) last a few ms and fall inside one solver step: their events are not seen
@@ -301,3 +309,23 @@ def test_chaos_map_indicators_against_floquet_and_a_chaotic_point(tmp_path):
     assert int(chaotic.strobe_period) == 0 and float(chaotic.zero_one_K) > 0.8
     assert float(chaotic.lle) > 3 * float(chaotic.lle_stderr) > 0
     assert (maps.lle_status == 0).all()
+
+
+@pytest.mark.parametrize(
+    ("scene", "value", "rtol"),
+    [
+        ({"model": {"name": "duffing"}, "parameters": {"gamma": 0.3}}, 0.3, 1e-8),
+        # an impacting orbit (two events per period; the stop's force has a kink)
+        ({"model": {"name": "stop_oscillator"}, "parameters": {"omega": 0.8}}, 0.8, 1e-4),
+    ],
+)
+def test_monodromy_by_copies_agrees_with_the_tangent_system(scene, value, rtol):
+    scene = dict(scene, run={"transient_cycles": 100})
+    param = next(iter(scene["parameters"]))
+    a = StrobeMap(scene, param, rtol=1e-10, monodromy="tangent")
+    b = StrobeMap(scene, param, rtol=1e-10, monodromy="copies")
+    y, aux = a.initial(value)
+    va, vb = a(y, aux, value), b(y, aux, value)
+    assert np.abs(va.y1 - vb.y1).max() < 1e-9
+    assert np.abs(va.M - vb.M).max() < rtol * np.abs(va.M).max(), (va.M, vb.M)
+    assert va.events == vb.events

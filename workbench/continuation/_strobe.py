@@ -13,6 +13,18 @@ orbit (a contact that never ends) does not evolve and is a constant of that orbi
 unknown (it would add a multiplier of exactly 1). The states are measured in scaled units
 (each divided by its characteristic size, :func:`workbench.solver.state_scale`), the discrete
 states in their own units.
+
+The monodromy matrix comes either from the tangent system (``monodromy="tangent"``) or from
+central differences of the map by *copies* of the model integrated side by side in one step
+sequence (``"copies"``; :func:`workbench.solver.copies_problem`), each started ``h = 1e-6``
+(scaled) off the orbit along one unknown: the shared steps make the differences far more
+accurate than the tolerance (the error of a difference is the tolerance times the difference,
+plus O(h^2) and the rounding 1e-16 / h), and events are located per copy. The tangent system is
+exact but carries the model's Jacobian along every column: by central differences of the rhs for
+the mechanisms, which have no analytic Jacobian, where it took 50x the steps of the bare model on
+a nine-bar orbit in lasting contact (measured: 373 494 against ~7 000 steps per crank cycle at
+omega = 1.5 pi). ``"auto"`` (default) takes the tangent system for a model with an analytic
+Jacobian and copies otherwise.
 """
 
 from __future__ import annotations
@@ -30,7 +42,10 @@ from workbench.scene import Scene, SceneSource, load_scene
 from workbench.solver import (
     COMPILED_METHODS,
     RunResult,
+    copies_problem,
     integrate,
+    jacobian_for,
+    split_copies,
     state_scale,
     tangent_columns,
     tangent_problem,
@@ -69,7 +84,12 @@ class StrobeMap:
         ``k``, forcing periods per map iteration.
     rtol : float, optional
         Integration tolerance (default ``min(scene rtol, 1e-9)``; ``atol`` scales with it).
+    monodromy : str
+        ``"tangent"``, ``"copies"`` or ``"auto"`` (see the module docstring).
     """
+
+    #: central-difference step of the copies (scaled units; discrete states: relative)
+    COPIES_STEP = 1e-6
 
     def __init__(
         self,
@@ -78,6 +98,7 @@ class StrobeMap:
         *,
         periods: int = 1,
         rtol: float | None = None,
+        monodromy: str = "auto",
     ) -> None:
         scene = load_scene(scene)
         self.scene: Scene = scene.replace(sweep={}) if scene.sweep else scene
@@ -98,6 +119,12 @@ class StrobeMap:
         base = self.prepared(self.value)
         if base.period is None:
             raise ValueError(f"model {self.scene.model!r} is not forced: it has no strobe map")
+        if monodromy not in ("auto", "tangent", "copies"):
+            raise ValueError(f"monodromy={monodromy!r}; allowed: 'auto', 'tangent', 'copies'")
+        if monodromy == "auto":
+            analytic = jacobian_for(base.problem.hooks).HAS_ANALYTIC
+            monodromy = "tangent" if analytic else "copies"
+        self.monodromy = monodromy
         if self.method not in COMPILED_METHODS:  # pragma: no cover - guarded above
             raise ValueError(self.method)
 
@@ -115,7 +142,9 @@ class StrobeMap:
 
     def with_periods(self, periods: int) -> StrobeMap:
         """The same map over another number of periods."""
-        return StrobeMap(self.scene, self.parameter, periods=periods, rtol=self.rtol)
+        return StrobeMap(
+            self.scene, self.parameter, periods=periods, rtol=self.rtol, monodromy=self.monodromy
+        )
 
     def scale(self) -> np.ndarray:
         """The characteristic size of each state (state units)."""
@@ -165,19 +194,22 @@ class StrobeMap:
             return MapValue(y1, aux1, live, None, int(res.stats["events"]), res.stats)
         s = state_scale(pb)
         m = n + active.size
-        V = np.zeros((n + na, m))
-        V[:n, :n] = np.diag(s)
-        for c, k in enumerate(active):
-            V[n + k, n + c] = 1.0
-        res = self._solve(tangent_problem(start, V, time_scale=span), t_end)
-        Y = res.Y[-1]
-        y1 = Y[:n].copy()
-        aux1 = res.AUX[-1].copy()
-        _, W, _ = tangent_columns(Y, n, na, m)
+        if self.monodromy == "copies":
+            y1, aux1, W, events, stats = self._copies(start, active, t_end)
+        else:
+            V = np.zeros((n + na, m))
+            V[:n, :n] = np.diag(s)
+            for c, k in enumerate(active):
+                V[n + k, n + c] = 1.0
+            res = self._solve(tangent_problem(start, V, time_scale=span), t_end)
+            Y = res.Y[-1]
+            y1, aux1 = Y[:n].copy(), res.AUX[-1].copy()
+            _, W, _ = tangent_columns(Y, n, na, m)
+            events, stats = int(res.stats["events"]), res.stats
         # a discrete state held through the orbit: its own column unchanged and nothing set it
         held = np.array(
             [
-                abs(W[n + k, n + c] - 1.0) <= 1e-12 and aux1[k] == aux[k]
+                abs(W[n + k, n + c] - 1.0) <= 1e-9 and aux1[k] == aux[k]
                 for c, k in enumerate(active)
             ],
             dtype=bool,
@@ -187,7 +219,42 @@ class StrobeMap:
         rows = np.concatenate([W[:n], W[n + live]], axis=0)
         scale_rows = np.concatenate([s, np.ones(live.size)])
         M = rows[:, keep_cols] / scale_rows[:, None]
-        return MapValue(y1, aux1, live, M, int(res.stats["events"]), res.stats)
+        return MapValue(y1, aux1, live, M, events, stats)
+
+    def _copies(self, start, active: np.ndarray, t_end: float):
+        """The map and its Jacobian columns (extended state per unknown: the states scaled, the
+        active discrete states in their units) by central differences of copies integrated in
+        one step sequence."""
+        n, na = start.y0.size, start.aux0.size
+        s = state_scale(start)
+        h = self.COPIES_STEP
+        rows_y = [start.y0]
+        rows_a = [start.aux0]
+        steps = []
+        for j in range(n):
+            d = np.zeros(n)
+            d[j] = h * s[j]
+            rows_y += [start.y0 + d, start.y0 - d]
+            rows_a += [start.aux0, start.aux0]
+            steps.append(h)
+        for k in active:
+            ha = h * abs(start.aux0[k])
+            for sign in (1.0, -1.0):
+                a = start.aux0.copy()
+                a[k] += sign * ha
+                rows_y.append(start.y0)
+                rows_a.append(a)
+            steps.append(ha)
+        k_copies = len(rows_y)
+        system = copies_problem(start, np.array(rows_y), np.array(rows_a))
+        res = self._solve(system, t_end)
+        Yc, Ac, _, _ = split_copies(res.Y[-1], res.AUX[-1], k_copies)
+        X = np.concatenate([Yc, Ac], axis=1)
+        W = np.empty((n + na, len(steps)))
+        for c, step in enumerate(steps):
+            W[:, c] = (X[1 + 2 * c] - X[2 + 2 * c]) / (2.0 * step)
+        events = int(round(res.stats["events"] / k_copies))
+        return Yc[0].copy(), Ac[0].copy(), W, events, res.stats
 
     def parameter_derivative(
         self, y: np.ndarray, aux: np.ndarray, p: float, live: np.ndarray, pscale: float
