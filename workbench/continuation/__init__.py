@@ -10,8 +10,10 @@ uses for its parallel parts).
 from workbench.continuation._indicators import (
     chaos_indicators,
     chaos_map,
+    exponent_method,
     lle_cycles,
     strobe_period,
+    strobe_zero_one,
 )
 from workbench.continuation._orbits import continue_orbit, periodic_orbit
 from workbench.continuation._strobe import StrobeMap
@@ -23,7 +25,9 @@ __all__ = [
     "chaos_map",
     "continue_orbit",
     "continued_sweep",
+    "exponent_method",
     "lle_cycles",
     "periodic_orbit",
     "strobe_period",
+    "strobe_zero_one",
 ]

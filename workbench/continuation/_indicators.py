@@ -4,10 +4,15 @@ over parameters.
 Per point: the **period of the strobe** (the least k with x(t + kT) = x(t) over the recorded
 strobe samples, 0 when none up to :data:`MAX_PERIOD`: quasi-periodic or chaotic), the **0-1
 test's K** (Gottwald & Melbourne 2004, 2009) on the strobe samples of every recorded variable,
-and the **largest Lyapunov exponent** from the variational equations with saltation
-(:func:`workbench.analysis.lyapunov_spectrum`) with its batch-means standard error, measured
-over :func:`lle_cycles` forcing periods after the scene's transient. A failure of the exponent's
-tangent run is recorded (``lle_status``), not raised, so one hard point does not stop a map.
+and the **largest Lyapunov exponent** with its batch-means standard error, measured over
+:func:`lle_cycles` forcing periods after the scene's transient: from the variational equations
+with saltation (:func:`workbench.analysis.lyapunov_spectrum`) for a model with an analytic
+Jacobian, else by the linearised two-trajectory method (:func:`workbench.analysis.
+lle_from_equations`: copies in one step sequence, renormalised before they leave the linear
+range), because the tangent system of a mechanism carries central differences of the rhs along
+its column and took 50x the bare model's steps on a nine-bar orbit in lasting contact
+(:mod:`workbench.continuation._strobe`). A failure of the exponent's run is recorded
+(``lle_status``), not raised, so one hard point does not stop a map.
 """
 
 from __future__ import annotations
@@ -15,12 +20,26 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.analysis import lyapunov_spectrum, poincare_section, zero_one_test
+from workbench.analysis import (
+    lle_from_equations,
+    lyapunov_spectrum,
+    poincare_section,
+    zero_one_test,
+)
 from workbench.campaign import run_campaign
+from workbench.run import prepare
 from workbench.scene import Scene, SceneSource, load_scene
-from workbench.solver import SolverError
+from workbench.solver import SolverError, jacobian_for
 
-__all__ = ["MAX_PERIOD", "chaos_indicators", "chaos_map", "lle_cycles", "strobe_period"]
+__all__ = [
+    "MAX_PERIOD",
+    "chaos_indicators",
+    "chaos_map",
+    "exponent_method",
+    "lle_cycles",
+    "strobe_period",
+    "strobe_zero_one",
+]
 
 #: the longest strobe period looked for (forcing periods)
 MAX_PERIOD = 16
@@ -53,6 +72,20 @@ def strobe_period(samples: np.ndarray, tolerance: float = PERIOD_TOLERANCE) -> i
     return 0
 
 
+METHODS = {
+    "variational": "variational equations with saltation, QR (workbench.analysis."
+    "lyapunov_spectrum)",
+    "copies": "linearised two-trajectory method, copies in one step sequence (workbench."
+    "analysis.lle_from_equations)",
+}
+
+
+def exponent_method(scene: Scene) -> str:
+    """``"variational"`` for a model with an analytic Jacobian, else ``"copies"``."""
+    hooks = prepare(scene.replace(sweep={}) if scene.sweep else scene, variables=()).problem.hooks
+    return "variational" if jacobian_for(hooks).HAS_ANALYTIC else "copies"
+
+
 def lle_cycles(scene: Scene) -> int:
     """Forcing periods over which a map point's exponent is measured: a fifth of the recorded
     cycles, at least 10 (the exponent's batch-means error needs ten batches)."""
@@ -81,7 +114,7 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
         columns.append(values)
         per = []
         for j in range(values.shape[1]):
-            per.append(_zero_one(values[:, j]))
+            per.append(strobe_zero_one(values[:, j]))
         ks += per
         extra = [d for d in da.dims if d != "strobe"]
         shape = tuple(da.sizes[d] for d in extra)
@@ -106,13 +139,24 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
         {"long_name": "0-1 test K, median over the recorded variables", "units": "1"},
     )
     lam, err, status = np.nan, np.nan, 0
+    method = exponent_method(scene)
     try:
-        spec = lyapunov_spectrum(scene, exponents=1, cycles=lle_cycles(scene), check=False)
-        lam, err = float(spec.exponent[0]), float(spec.stderr[0])
+        if method == "variational":
+            spec = lyapunov_spectrum(scene, exponents=1, cycles=lle_cycles(scene), check=False)
+            lam, err = float(spec.exponent[0]), float(spec.stderr[0])
+        else:
+            spec = lle_from_equations(
+                scene, cycles=lle_cycles(scene), tighten=False, variational=False
+            )
+            lam, err = float(spec.lle), float(spec.stderr)
     except (SolverError, FloatingPointError, ValueError):
         status = 1
     period_s = float(run.attrs["forcing_period"])
-    out["lle"] = ((), lam, {"long_name": "largest Lyapunov exponent", "units": "s-1"})
+    out["lle"] = (
+        (),
+        lam,
+        {"long_name": "largest Lyapunov exponent", "units": "s-1", "method": METHODS[method]},
+    )
     out["lle_stderr"] = (
         (),
         err,
@@ -127,8 +171,10 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
     return xr.Dataset(out)
 
 
-def _zero_one(x: np.ndarray) -> float:
-    """K of one strobe series; 0 for a constant one (a period-1 orbit), NaN for too few."""
+def strobe_zero_one(x: np.ndarray) -> float:
+    """The 0-1 test's K of one series of strobe samples (:func:`workbench.analysis.
+    zero_one_test`); 0 for a constant one (a period-1 orbit, where K is undefined), NaN for
+    fewer than 100 samples."""
     x = x[np.isfinite(x)]
     if x.size < 100:
         return np.nan

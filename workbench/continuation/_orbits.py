@@ -65,6 +65,7 @@ def periodic_orbit(
     tolerance: float = 1e-8,
     max_iterations: int = 30,
     rtol: float | None = None,
+    monodromy: str = "auto",
 ) -> xr.Dataset:
     """A period-``k`` orbit of a forced scene's stroboscopic map, stable or not, by Newton's
     method (shooting) with the monodromy matrix of the tangent system (saltation at events),
@@ -85,6 +86,10 @@ def periodic_orbit(
         Newton stops when the scaled residual ``max |P^k(x) - x| / s`` is below this.
     rtol : float, optional
         Integration tolerance (default ``min(scene rtol, 1e-9)``).
+    monodromy : str
+        How the map's Jacobian is computed: ``"tangent"`` (the tangent system with saltation),
+        ``"copies"`` (central differences of copies in one step sequence) or ``"auto"``
+        (tangent for a model with an analytic Jacobian; :mod:`workbench.continuation._strobe`).
 
     Returns
     -------
@@ -98,7 +103,7 @@ def periodic_orbit(
     >>> bool(r.stable[0]), int(r.newton_iterations[0]) <= 5
     (True, True)
     """
-    smap = StrobeMap(scene, None, periods=periods, rtol=rtol)
+    smap = StrobeMap(scene, None, periods=periods, rtol=rtol, monodromy=monodromy)
     t0 = time.perf_counter()
     y, aux = _guess(smap, math.nan, state, discrete_state, None)
     pt = start_point(smap, y, aux, math.nan, Settings(1.0, (-math.inf, math.inf), tolerance))
@@ -122,6 +127,7 @@ def continue_orbit(
     max_step: float = 0.05,
     max_points: int = 300,
     rtol: float | None = None,
+    monodromy: str = "auto",
 ) -> xr.Dataset:
     """Continue a branch of period-``k`` orbits over ``parameter`` by pseudo-arclength (so it
     passes folds), with Floquet multipliers at every point and its bifurcations detected,
@@ -158,6 +164,8 @@ def continue_orbit(
         Points per branch at most.
     rtol : float, optional
         Integration tolerance (default ``min(scene rtol, 1e-9)``).
+    monodromy : str
+        ``"tangent"``, ``"copies"`` or ``"auto"`` (see :func:`periodic_orbit`).
 
     Returns
     -------
@@ -183,7 +191,7 @@ def continue_orbit(
     [0.266]
     """
     base = load_scene(scene)
-    smap = StrobeMap(base, parameter, periods=periods, rtol=rtol)
+    smap = StrobeMap(base, parameter, periods=periods, rtol=rtol, monodromy=monodromy)
     p0 = smap.value if start is None else float(start)
     stop = float(stop)
     if not (math.isfinite(stop) and stop != p0):
@@ -330,6 +338,7 @@ def _dataset(
         title=title + (f" continued over {parameter}" if parameter else ""),
         continuation_parameter=parameter or "",
         method=METHOD,
+        monodromy=smap.monodromy,
         rtol=smap.rtol,
         tolerance=tolerance,
         map_evaluations=int(sum(tr.evaluations for tr in branches)),

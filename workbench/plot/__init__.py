@@ -14,7 +14,7 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import register_overview
-from workbench.plot._continuation import branch_figure, chaos_map_figure
+from workbench.plot._continuation import LABEL_MARKS, branch_figure, chaos_map_figure
 from workbench.plot._runs import (
     PANELS_PER_FIGURE,
     campaign_figure,
@@ -26,6 +26,7 @@ from workbench.plot._stability import floquet_figure, jacobian_spectrum_figure
 from workbench.plot._verify import verification_figure
 
 __all__ = [
+    "LABEL_MARKS",
     "PANELS_PER_FIGURE",
     "bifurcation_figure",
     "branch_figure",
