@@ -382,3 +382,64 @@ def test_exponent_numbers_are_written_as_json():
 
     values = [_native(v) for v in (1.0, np.float32(2.5), np.nan, np.bool_(True), "n", 3)]
     assert json.dumps(values) == '[1.0, 2.5, null, true, "n", 3]'
+
+
+def test_route_section_says_where_and_how_the_periodic_motion_ends():
+    """The route section is written from the numbers alone: the first loss of stability, the
+    hysteresis, the agreement of the strobe period, the 0-1 test and the exponents."""
+    import math
+
+    from workbench.study._route_report import route_section
+
+    pi = math.pi
+    values = [1.0 * pi, 1.5 * pi, 2.0 * pi, 2.5 * pi]
+    route = {
+        "status": "computed",
+        "parameter": "omega",
+        "values": values,
+        "cycles": [100, 3],
+        "chained_seams": 1,
+        "cpu_time_continued_sweep": 120.0,
+        "wall_time": {"continued_sweep": 90.0},
+        "directions": {
+            "up": {"period": [1, 1, 0, 0], "spread": [0.0, 0.0, 0.2, 0.3], "K": [0, 0, 0.9, 0.95]},
+            "down": {"period": [1, 1, 0, 0], "spread": [0.0, 0.1, 0.2, 0.3], "K": [0, 0, 0.8, 0.9]},
+        },
+        "hysteresis": {"values": [1.5 * pi], "tolerance": 0.05, "differs": [0, 1, 0, 0]},
+        "branch": {
+            "start": pi,
+            "stop": 2.6 * pi,
+            "values": [pi, 1.5 * pi, 1.8 * pi, 1.9 * pi],
+            "stable": [1, 1, 1, 0],
+            "largest_modulus": [0.2, 0.5, 0.99, 1.2],
+            "events_per_period": [0, 0, 0, 0],
+            "monodromy": "copies",
+            "ended": "the parameter left its range",
+            "map_evaluations": 123,
+            "bifurcations": [
+                {
+                    "type": "neimark_sacker",
+                    "value": 1.85 * pi,
+                    "critical": [0.6, 0.8],
+                    "multipliers": [[0.6, 0.8], [0.6, -0.8]],
+                    "stable_before": True,
+                    "stable_after": False,
+                    "events_before": 0.0,
+                    "events_after": 0.0,
+                }
+            ],
+        },
+        "exponents": [
+            {"value": 1.0 * pi, "lle": -3.0, "stderr": 0.5},
+            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0},
+        ],
+    }
+    text = "\n".join(route_section(route))
+    assert "loses stability at omega = 1.85 pi by a **neimark sacker**" in text
+    assert "+0.6000+0.8000i (|mu| 1.0000)" in text
+    assert "different attractors at 1 of 4 values (1.5 pi" in text
+    assert "both directions are period-1 at 2 of 4 values (1 pi .. 1.5 pi)" in text
+    assert "K > 0.5 both ways at 2 (2 pi .. 2.5 pi)" in text
+    assert "positive beyond two standard errors at 2.5 pi, negative at 1 pi" in text
+    assert "the nearest continued orbit is stable at 2" in text
+    assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 |" in text
