@@ -281,7 +281,9 @@ def test_strobe_period_finds_the_least_period():
     assert strobe_period(np.c_[np.cos(np.pi * t)]) == 2
     assert strobe_period(np.c_[np.ones(40), np.cos(2 * np.pi * t / 3)]) == 3
     assert strobe_period(np.c_[np.sin(0.7 * t)]) == 0  # quasi-periodic
-    assert strobe_period(np.c_[np.cos(np.pi * t)][:4]) == 0  # too short to tell
+    assert strobe_period(np.c_[np.cos(np.pi * t)][:8]) == 0  # too short to tell
+    settling = np.c_[1 + 0.5**t * np.cos(np.pi * t)]  # a period-1 orbit approached
+    assert strobe_period(settling) == 1 and strobe_period(settling[:10]) == 0
 
 
 def test_chaos_map_indicators_against_floquet_and_a_chaotic_point(tmp_path):

@@ -13,7 +13,10 @@ Sec. 10.2):
   bifurcation;
 * the number of events per period (for the clearance mechanisms: contact onsets and ends):
   a **grazing** (contact) bifurcation, where the orbit touches an event surface (Nordmark 1991;
-  di Bernardo et al. 2008, Ch. 2).
+  di Bernardo et al. 2008, Ch. 2);
+* the tangent's parameter component changes sign while no multiplier passes +1: a
+  **nonsmooth fold**, where the branch turns at a point the map is not smooth at (e.g. a
+  contact about to lift off; a border-collision pair, di Bernardo et al. 2008, Ch. 3).
 
 Each is located by the Illinois (regula falsi) method along the arclength between the two
 points (bisection for the integer event count), each trial point corrected onto the branch.
@@ -50,6 +53,7 @@ LABELS = {
     "period_doubling": 5,
     "neimark_sacker": 6,
     "grazing": 7,
+    "nonsmooth_fold": 8,
 }
 #: a multiplier counts as complex when its imaginary part exceeds this fraction of its modulus
 COMPLEX = 1e-6
@@ -110,8 +114,11 @@ def _detect(a: dict, b: dict) -> list[str]:
     if a["size"] != b["size"]:
         return []
     found = []
+    turned = np.sign(a["turn"]) != np.sign(b["turn"])
     if np.sign(a["fold"]) != np.sign(b["fold"]):
-        found.append("fold" if np.sign(a["turn"]) != np.sign(b["turn"]) else "branch_point")
+        found.append("fold" if turned else "branch_point")
+    elif turned:
+        found.append("nonsmooth_fold")
     if np.sign(a["pd"]) != np.sign(b["pd"]):
         found.append("period_doubling")
     if a["ns"] != b["ns"]:
@@ -178,7 +185,8 @@ def _locate(smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: Settin
         value = lambda pt: _tests(pt)["pd"]  # noqa: E731
     elif kind == "neimark_sacker":
         value = _ns_value
-    else:
+    elif kind == "nonsmooth_fold":
+        value = lambda pt: float(pt.tau[-1])  # noqa: E731
         value = _grazing_test(smap, A, B)
         if value is None:
             integer = True
@@ -224,6 +232,8 @@ def _critical(pt: OrbitPoint, kind: str) -> complex:
         return complex(mu[np.argmin(np.abs(mu - 1.0))])
     if kind == "period_doubling":
         return complex(mu[np.argmin(np.abs(mu + 1.0))])
+    if kind == "nonsmooth_fold":
+        return complex(mu[0])
     if kind == "neimark_sacker":
         cplx = np.abs(mu.imag) > COMPLEX * np.abs(mu)
         if cplx.any():
@@ -260,11 +270,19 @@ def trace(
             h /= 2.0
             if h < cfg.min_step:
                 out.ended = f"the corrector failed at the smallest step ({exc})"
+                _mark_end(smap, A, h, cfg, out)
                 break
             continue
         out.evaluations += B.evaluations
-        if float(A.tau @ B.tau) < 0.5 and h > cfg.min_step:  # too sharp a turn: halve
+        if float(A.tau @ B.tau) < 0.5:  # too sharp a turn: halve
             h /= 2.0
+            if h < cfg.min_step:
+                out.ended = (
+                    f"the branch turns sharply at {A.p:.10g} however short the step (the map "
+                    "is not smooth there)"
+                )
+                _mark_end(smap, A, h, cfg, out)
+                break
             continue
         for kind in _detect(_tests(A), _tests(B)):
             pt, evals = _locate(smap, A, B, h, kind, cfg)
@@ -292,6 +310,40 @@ def trace(
         out.labels[-1] = "end"
     out.wall_time = time.perf_counter() - wall0
     return out
+
+
+def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: Settings, out: Traced) -> None:
+    """Where a branch ends because it cannot be continued: if a contact appears, ends or is
+    held differently just beyond the last point (the events per period or the live discrete
+    states differ at the predicted next point), the last point is where the orbit's contact
+    structure changes: labelled grazing. With a discrete state that is held through a lasting
+    contact (the mechanisms' onset velocity of the contact damping), the map jumps there: a
+    contact that starts again takes a new onset velocity, so the branch cannot be continued
+    through it."""
+    s = smap.scale()
+    u = A.u(s, cfg.pscale) + 4 * cfg.min_step * A.tau
+    beyond = _predict(smap, A, u, cfg.pscale)
+    try:
+        v = smap(beyond.y, beyond.aux, beyond.p, tangent=False)
+    except Exception:  # noqa: BLE001 - the reason is reported as it is
+        return
+    changed = v.events != A.value.events or not np.array_equal(v.live, A.value.live)
+    try:
+        gmax, gmin = smap.event_extrema(A.y, A.aux, A.p)
+        if gmax.size:
+            out.ended += (
+                f"; event functions along the last orbit: largest {gmax.max():.3g}, smallest "
+                f"{gmin.min():.3g}"
+            )
+    except Exception:  # noqa: BLE001, S110 - a diagnosis only
+        pass
+    if changed and out.points and out.points[-1] is A:
+        out.labels[-1] = "grazing"
+        out.ended += (
+            f"; the contact structure changes there (events per {smap.periods} period(s) "
+            f"{A.value.events} -> {v.events}, live discrete states {A.value.live.tolist()} -> "
+            f"{v.live.tolist()})"
+        )
 
 
 def switch_at_doubling(

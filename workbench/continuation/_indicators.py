@@ -55,13 +55,16 @@ LLE_STATUS = {
 
 
 def strobe_period(samples: np.ndarray, tolerance: float = PERIOD_TOLERANCE) -> int:
-    """The least k (1 .. :data:`MAX_PERIOD`) such that every strobe sample equals the one k
-    periods later (rows: samples, columns: variables; equal within ``tolerance`` times each
-    column's largest magnitude), or 0 when there is none (quasi-periodic or chaotic motion, or
-    too few samples: at least 2 k + 1 are needed)."""
+    """The least k (1 .. :data:`MAX_PERIOD`) such that every strobe sample of the second half
+    of the series equals the one k periods later (rows: samples, columns: variables; equal
+    within ``tolerance`` times each column's largest magnitude), or 0 when there is none
+    (quasi-periodic or chaotic motion, or too few samples: at least 2 k + 1 are needed). The
+    first half is left to what remains of a transient (a continued point settles for only a
+    few cycles before its records)."""
     x = np.asarray(samples, dtype=float)
     x = x.reshape(x.shape[0], -1)
     x = x[np.isfinite(x).all(axis=1)]
+    x = x[x.shape[0] // 2 :]
     size = np.max(np.abs(x), axis=0) if x.size else np.zeros(0)
     tol = tolerance * np.where(size > 0, size, 1.0)
     for k in range(1, MAX_PERIOD + 1):

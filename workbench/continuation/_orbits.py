@@ -33,7 +33,9 @@ LABEL_ATTRS = {
     "comment": "fold: a real multiplier through +1 where the parameter turns back; "
     "branch_point: through +1 without a turn; period_doubling: a real multiplier through -1; "
     "neimark_sacker: a complex pair leaves the unit circle; grazing: the number of events per "
-    "period changes (a contact appears or vanishes)",
+    "period changes (a contact appears or vanishes), or the branch ends where it would; "
+    "nonsmooth_fold: the parameter turns back with no multiplier at +1 (the map is not smooth "
+    "there)",
 }
 
 

@@ -260,8 +260,10 @@ class StrobeMap:
         self, y: np.ndarray, aux: np.ndarray, p: float, live: np.ndarray, pscale: float
     ) -> np.ndarray:
         """d P^k / d(p / pscale) in the scaled unknowns, by central differences (step
-        ``rtol^(1/3) pscale``)."""
-        h = self.rtol ** (1.0 / 3.0) * pscale
+        ``sqrt(rtol) pscale``: two runs with their own steps differ by ~rtol, so the column is
+        good to ~sqrt(rtol), enough for Newton; a shorter stencil than rtol^(1/3) stays on one
+        side of a nonsmooth point sooner)."""
+        h = math.sqrt(self.rtol) * pscale
         a = self(y, aux, p + h, tangent=False)
         b = self(y, aux, p - h, tangent=False)
         s = np.concatenate([self.scale(), np.ones(live.size)])

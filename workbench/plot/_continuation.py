@@ -19,6 +19,7 @@ LABEL_MARKS = {
     "period_doubling": ("o", "PD", "tab:green"),
     "neimark_sacker": ("^", "NS", "tab:orange"),
     "grazing": ("v", "G", "tab:brown"),
+    "nonsmooth_fold": ("X", "NF", "tab:pink"),
 }
 _DIRECTION_COLOURS = {"up": "tab:blue", "down": "tab:orange"}
 
