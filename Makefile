@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test test-fast lint format studies data benchmarks clean
+.PHONY: demo test test-fast lint format studies chaos-maps data benchmarks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -38,6 +38,14 @@ test-fast: $(STAMP)
 # Every study of the paper (archives and figures in $(OUT)/studies), then studies/REPORT.md.
 studies: $(STAMP)
 	$(VENV)/bin/workbench study all -o $(OUT)/studies
+
+# Chaos indicators of the nine-bar over (omega, c) and (c, c_f) (docs/continuation.md states
+# their cost): campaigns whose workers measure the strobe period, 0-1 K and largest exponent.
+chaos-maps: $(STAMP)
+	$(VENV)/bin/workbench chaos-map studies/chaos_maps/omega_clearance.toml --workers 2 -q \
+		-o $(OUT)/chaos_maps/omega_clearance.nc --figure $(OUT)/chaos_maps/omega_clearance.png
+	$(VENV)/bin/workbench chaos-map studies/chaos_maps/clearance_friction.toml --workers 2 -q \
+		-o $(OUT)/chaos_maps/clearance_friction.nc --figure $(OUT)/chaos_maps/clearance_friction.png
 
 # The small archives the notebooks open.
 data: $(STAMP)

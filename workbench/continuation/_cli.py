@@ -129,6 +129,7 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
 
         scales = {d: 1 / math.pi for d in ds.attrs["campaign_dims"].split() if d == "omega"}
         labels = {"omega": "crank speed omega / pi"} if scales else {}
+        Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
         chaos_map_figure(ds, scales=scales, labels=labels).savefig(args.figure, dpi=150)
         print(f"figure: {args.figure}")
     print(f"-> {Path(args.output)}")
