@@ -145,11 +145,16 @@ def _agreement(r: dict) -> list[str]:
         for v, a, b in zip(values, up["K"], down["K"], strict=True)
         if a is not None and b is not None and math.isfinite(a) and a > 0.5 and b > 0.5
     ]
+    tested = any(k is not None and math.isfinite(k) for k in up["K"] + down["K"])
     text = [
         f"Agreement: both directions are period-1 at {len(periodic)} of {len(values)} values"
         + (f" ({_v(min(periodic), p)} .. {_v(max(periodic), p)})" if periodic else "")
-        + f"; the 0-1 test gives K > 0.5 both ways at {len(chaotic)}"
-        + (f" ({_v(min(chaotic), p)} .. {_v(max(chaotic), p)})" if chaotic else "")
+        + (
+            f"; the 0-1 test gives K > 0.5 both ways at {len(chaotic)}"
+            + (f" ({_v(min(chaotic), p)} .. {_v(max(chaotic), p)})" if chaotic else "")
+            if tested
+            else f"; no 0-1 test (it needs 100 strobe samples, these record {r['cycles'][0]})"
+        )
         + "."
     ]
     b = r.get("branch")
