@@ -187,6 +187,7 @@ def _locate(smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: Settin
         value = _ns_value
     elif kind == "nonsmooth_fold":
         value = lambda pt: float(pt.tau[-1])  # noqa: E731
+    else:
         value = _grazing_test(smap, A, B)
         if value is None:
             integer = True
