@@ -443,3 +443,23 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
     assert "positive beyond two standard errors at 2.5 pi, negative at 1 pi" in text
     assert "the nearest continued orbit is stable at 2" in text
     assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 |" in text
+
+
+def test_quick_route_of_the_speed_sweep(tmp_path):
+    """A study's [route] end to end, shortened (no branch, no exponents): the sweep continued
+    both ways, per direction the strobe spread, period and K, the hysteresis, the figures."""
+    from workbench.study._route import route
+    from workbench.study._route_figures import route_figures
+    from workbench.study._route_report import route_section
+
+    study = load_study("bifurcation_speed")
+    r = route(study, tmp_path, quick=True, workers=2)
+    assert r["parameter"] == "omega" and len(r["values"]) >= 4
+    for d in ("up", "down"):
+        assert len(r["directions"][d]["spread"]) == len(r["values"])
+    assert len(r["hysteresis"]["differs"]) == len(r["values"])
+    paths = route_figures(study, r, tmp_path)
+    assert [p.name for p in paths] == ["fig32-route.png", "fig32-route-indicators.png"]
+    assert all(p.stat().st_size > 20_000 for p in paths)
+    text = "\n".join(route_section(r))
+    assert "continued both ways" in text and "no 0-1 test" in text
