@@ -26,7 +26,10 @@ from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["continued_sweep"]
 
-DIRECTION_ATTRS = {"long_name": "direction of the continuation over the swept parameter"}
+DIRECTION_ATTRS = {
+    "long_name": "direction of the continuation over the swept parameter",
+    "units": "1",
+}
 
 
 def continued_sweep(

@@ -134,7 +134,7 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
 def _hysteresis(clouds: dict, values: list[float]) -> dict:
     """Per value: the distance of the up and down attractors (mean nearest-record distance,
     in units of c) and whether they differ (beyond the tolerance and their own spacing)."""
-    from workbench.continuation._seams import attractor_distance
+    from workbench.continuation import attractor_distance
 
     cross, within, differs = [], [], []
     for a, b in zip(clouds["up"], clouds["down"], strict=True):
