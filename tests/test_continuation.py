@@ -331,3 +331,17 @@ def test_monodromy_by_copies_agrees_with_the_tangent_system(scene, value, rtol):
     assert np.abs(va.y1 - vb.y1).max() < 1e-9
     assert np.abs(va.M - vb.M).max() < rtol * np.abs(va.M).max(), (va.M, vb.M)
     assert va.events == vb.events
+
+
+def test_detection_rules_of_the_branch():
+    """Which sign changes between two branch points name which bifurcation."""
+    from workbench.continuation._branch import _detect
+
+    base = {"size": 2, "fold": 1.0, "pd": 1.0, "ns": 0, "events": 0, "turn": 0.5}
+    assert _detect(base, dict(base, fold=-1.0, turn=-0.5)) == ["fold"]
+    assert _detect(base, dict(base, fold=-1.0)) == ["branch_point"]
+    assert _detect(base, dict(base, pd=-1.0)) == ["period_doubling"]
+    assert _detect(base, dict(base, ns=2)) == ["neimark_sacker"]
+    assert _detect(base, dict(base, events=2)) == ["grazing"]
+    assert _detect(base, dict(base, turn=-0.5)) == ["nonsmooth_fold"]  # no multiplier at +1
+    assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
