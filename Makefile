@@ -6,12 +6,12 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test test-fast lint format studies chaos-maps data benchmarks clean
+.PHONY: demo test test-fast lint format studies chaos-maps data notebooks docs benchmarks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test,verify]"
+	$(PY) -m pip install --quiet -e ".[test,verify,docs]"
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -19,15 +19,16 @@ demo: $(STAMP)
 	@echo "demo: netCDF run in $(OUT)/ninebar.nc, figures in $(OUT)/figures/"
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check workbench tests benchmarks studies
-	$(VENV)/bin/ruff format --check workbench tests benchmarks studies
+	$(VENV)/bin/ruff check workbench tests benchmarks studies docs/hooks.py
+	$(VENV)/bin/ruff format --check workbench tests benchmarks studies docs/hooks.py
 
 format: $(STAMP)
-	$(VENV)/bin/ruff format workbench tests benchmarks studies
-	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies
+	$(VENV)/bin/ruff format workbench tests benchmarks studies docs/hooks.py
+	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies docs/hooks.py
 
-# What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests
-# and every code block of README.md (tests/test_readme.py).
+# What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests,
+# every python block of README.md and of the docs' pages (tests/test_readme.py, test_docs.py),
+# the docs site built with warnings as errors, and the notebooks checked against the code.
 test: lint
 	$(PY) -m pytest -q --timeout=900 --doctest-modules tests workbench
 
@@ -35,9 +36,11 @@ test: lint
 test-fast: $(STAMP)
 	$(PY) -m pytest -q --timeout=900 --doctest-modules -m "not slow and not hard and not verify" tests workbench
 
-# Every study of the paper (archives and figures in $(OUT)/studies), then studies/REPORT.md.
+# Every study of the paper (archives and figures in $(OUT)/studies), then studies/REPORT.md,
+# and the key figures the docs site shows beside the report (docs/studies/figures/).
 studies: $(STAMP)
 	$(VENV)/bin/workbench study all -o $(OUT)/studies
+	$(PY) docs/hooks.py $(OUT)/studies
 
 # Chaos indicators of the nine-bar over (omega, c) and (c, c_f) (docs/continuation.md states
 # their cost): campaigns whose workers measure the strobe period, 0-1 K and largest exponent.
@@ -47,9 +50,17 @@ chaos-maps: $(STAMP)
 	$(VENV)/bin/workbench chaos-map studies/chaos_maps/clearance_friction.toml --workers 2 -q \
 		-o $(OUT)/chaos_maps/clearance_friction.nc --figure $(OUT)/chaos_maps/clearance_friction.png
 
-# The small archives the notebooks open.
+# The small archives the notebooks open (tests/test_data.py fails when they are stale), and the
+# notebooks executed in place on them (committed with their outputs: the site shows them).
 data: $(STAMP)
 	$(PY) data/regenerate.py
+
+notebooks: $(STAMP)
+	$(PY) -m nbconvert --to notebook --execute --inplace notebooks/*.ipynb
+
+# The documentation site, into site/ (every warning an error).
+docs: $(STAMP)
+	$(VENV)/bin/mkdocs build --strict -d site
 
 benchmarks: $(STAMP)
 	$(PY) benchmarks/solver_reference.py
@@ -59,4 +70,4 @@ benchmarks: $(STAMP)
 	$(PY) benchmarks/lle.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(OUT) site .cache .pytest_cache .ruff_cache

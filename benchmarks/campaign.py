@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 
 import workbench
 from workbench.campaign import store_paths
@@ -240,4 +241,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

@@ -29,6 +29,7 @@ import warnings
 
 import nolds
 import numpy as np
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 
 import workbench
 from workbench.analysis import lle_from_equations, lyapunov_spectrum, wolf_lle
@@ -144,4 +145,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

@@ -14,6 +14,7 @@ import importlib
 from pathlib import Path
 
 import numpy as np
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 
 import workbench
 from workbench.models import get_model
@@ -64,4 +65,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

@@ -52,6 +52,7 @@ import types
 from pathlib import Path
 
 import numpy as np
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 from numba import njit
 
 import workbench
@@ -487,4 +488,5 @@ def stiff_remedy() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

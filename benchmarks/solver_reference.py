@@ -7,6 +7,8 @@ Run: ``python benchmarks/solver_reference.py``.
 
 from __future__ import annotations
 
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+
 import workbench
 
 
@@ -41,4 +43,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 
 import workbench
 from workbench import accuracy, recommend
@@ -132,4 +133,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

@@ -3,14 +3,15 @@
 State (u, z): u' = cos t (u = sin t), z' = r - a z with the decay rate a = a0 (1 + u^2) (s-1)
 depending on the non-stiff state only and r = a phi(t) + phi'(t), phi(t) = cos(2 t), so that
 z = phi(t) exactly when z(0) = 1, whatever a0. p = (a0,). ARK548 protocol (see
-workbench.solver._kernel): the decay rate goes to work[0], h gamma comes in work[1].
+workbench.solver._templates.integration_loop): the decay rate goes to work[0], h gamma comes
+in work[1].
 """
 
 import math
 
 from numba import njit
 
-from workbench.solver._hooks_template import apply_event, event_values  # noqa: F401 (no events)
+from workbench.solver._templates.placeholder_hooks import apply_event, event_values  # noqa: F401 (no events)
 
 
 @njit(cache=True)

@@ -12,7 +12,7 @@ Analytic Jacobians for all three (the nine-bar exercises the finite-difference o
 
 from numba import njit
 
-from workbench.solver._hooks_template import apply_event, event_values  # noqa: F401 (no events)
+from workbench.solver._templates.placeholder_hooks import apply_event, event_values  # noqa: F401 (no events)
 
 
 @njit(cache=True)

@@ -1,10 +1,19 @@
-"""The numba cache: workbench's compiled functions go to its digest-keyed directory, every other
-library's stay where numba puts them, and the process environment is not touched."""
+"""The numba cache: workbench's compiled functions go to directories keyed by the digest of the
+code they are built from, every other library's stay where numba puts them, and the process
+environment is not touched. An edit of a docstring, of the analysis layer or of another model
+recompiles nothing; an edit of a model's code recompiles that model (issue 28)."""
 
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
+
+import pytest
+
+import workbench
+from workbench._sources import closure, file_digest
 
 OTHER = """
 from numba import njit
@@ -18,13 +27,14 @@ SCRIPT = """
 import os
 import numpy as np
 import workbench
-from workbench._cache import package_digest
-from workbench.solver._hooks_template import rhs
+from workbench._cache import module_digest
+from workbench.solver._templates.placeholder_hooks import rhs
 import other_lib
 
 assert other_lib.plus_one(1) == 2
 rhs(0.0, np.ones(2), np.zeros(0), np.zeros(0, np.int64), np.zeros(0), np.zeros(1), np.empty(2))
-print(os.environ.get("NUMBA_CACHE_DIR"), package_digest())
+hooks = "workbench.solver._templates.placeholder_hooks"
+print(os.environ.get("NUMBA_CACHE_DIR"), module_digest(hooks))
 """
 
 
@@ -42,6 +52,115 @@ def test_only_workbench_functions_use_its_cache(tmp_path):
     ).stdout.split()
     assert out[0] == "None"  # NUMBA_CACHE_DIR was not set for the process
     ours = sorted(p.name for p in (tmp_path / "wb" / "numba" / out[1]).rglob("*.nbi"))
-    assert ours and all(name.startswith("_hooks_template.rhs-") for name in ours)
+    assert ours and all(name.startswith("placeholder_hooks.rhs-") for name in ours)
     theirs = sorted(p.name for p in (tmp_path / "__pycache__").glob("*.nbi"))
     assert theirs and all(name.startswith("other_lib.plus_one-") for name in theirs)
+
+
+def test_a_digest_covers_code_not_docstrings_comments_or_layout(tmp_path):
+    code = 'def f(x):\n    """Twice x (m)."""\n    return 2 * x  # doubled\n'
+    same = '"""A module."""\n\n\ndef f(x):\n    """Twice x, in m."""\n\n    return 2*x\n'
+    other = 'def f(x):\n    """Twice x (m)."""\n    return 3 * x\n'
+    digests = []
+    for i, text in enumerate((code, same, other)):
+        (tmp_path / f"m{i}.py").write_text(text)
+        digests.append(file_digest(tmp_path / f"m{i}.py"))
+    assert digests[0] == digests[1] != digests[2]
+
+
+def test_a_models_code_closure_holds_what_it_is_built_from_and_nothing_else():
+    duffing, ninebar = (
+        closure("workbench.models.duffing"),
+        closure("workbench.models.ninebar._model"),
+    )
+    assert {"workbench.models._base", "workbench.solver._problem"} <= duffing
+    assert {"workbench.models.ninebar._dynamics", "workbench.models.friction"} <= ninebar
+    for layer in ("analysis", "plot", "study", "campaign", "scene", "run", "cli"):
+        assert not any(m.startswith(f"workbench.{layer}") for m in duffing | ninebar), layer
+    assert not any(m.startswith("workbench.models.ninebar") for m in duffing)
+    assert "workbench.models.duffing" not in ninebar
+    # a kernel's templates are read as text: the results' digest names them
+    kernel = closure("workbench.solver._templates.integration_loop")
+    assert {"workbench.solver._numerics", "workbench.solver._templates.explicit_steps"} <= kernel
+
+
+EDIT = """
+import sys
+import workbench
+from workbench.run import prepare
+from workbench.solver._compile import kernel_for
+
+hooks = prepare({"model": {"name": "duffing"}, "run": {"cycles": 1}}).problem.hooks
+print(bool(kernel_for(hooks).advance._cache._cache_file._load_index()))
+if sys.argv[1] == "run":
+    workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 1}})
+"""
+
+
+@pytest.mark.slow
+def test_only_an_edit_of_the_code_a_kernel_is_built_from_recompiles_it(tmp_path):
+    """A copy of the package: compile Duffing's kernel, then edit a docstring of the model, the
+    analysis layer and another model (the kernel stays cached), then Duffing's code (it is
+    not). Measured on the copy, whose cache is its own."""
+    package = Path(workbench.__file__).parent
+    shutil.copytree(package, tmp_path / "workbench", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env.update(WORKBENCH_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(tmp_path))
+
+    def cached(action: str = "check") -> bool:
+        out = subprocess.run(
+            [sys.executable, "-c", EDIT, action],
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        return out.stdout.split()[0] == "True"
+
+    def edit(relative: str, old: str | None = None, new: str = "") -> None:
+        """Replace ``old`` by ``new`` once, or append a line of code."""
+        path = tmp_path / "workbench" / relative
+        text = path.read_text()
+        assert old is None or old in text, (relative, old)
+        path.write_text(text + "\nX_EDITED = 1\n" if old is None else text.replace(old, new, 1))
+
+    assert not cached("run")  # compiled by this call
+    assert cached()
+    edit("models/duffing.py", '"""', '"""An edited docstring. ')
+    edit("analysis/_zero_one.py")
+    edit("models/lorenz.py")
+    assert cached()
+    edit("models/duffing.py")
+    assert not cached()
+
+
+@pytest.mark.parametrize("hooks", ["workbench.models.bouncing_ball", "workbench.models.duffing"])
+def test_generated_code_imports_no_template(hooks):
+    """Every tagged import of a template points at the model or a generated module in the
+    generated code, however a formatter wrapped it (a wrapped import of the placeholder hooks
+    once left the tangent system and the copies without the model's events)."""
+    import ast
+
+    from workbench.solver._compile import _kernel_parts, copies_for, jacobian_for, tangent_for
+
+    tangent = tangent_for(hooks)
+    modules = [
+        *_kernel_parts(hooks).values(),
+        jacobian_for(hooks),
+        tangent,
+        copies_for(hooks),
+        *_kernel_parts(tangent.__name__).values(),
+    ]
+    for module in modules:
+        tree = ast.parse(Path(module.__file__).read_text())
+        imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+        assert not any(m.startswith("workbench.solver._templates") for m in imported), (
+            module.__name__,
+            sorted(imported),
+        )
+    assert hooks in {
+        n.module
+        for n in ast.walk(ast.parse(Path(tangent.__file__).read_text()))
+        if isinstance(n, ast.ImportFrom)
+    }

@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -130,8 +131,8 @@ def test_plot_of_a_campaign_archive(tmp_path, capsys):
 
 
 def test_the_first_compile_is_announced_and_only_then():
-    from workbench._console import announce_compile
     from workbench.campaign._warm import kernel_cached
+    from workbench.cli._console import announce_compile
 
     scene = workbench.load_scene({"model": {"name": "duffing"}, "run": {"cycles": 1}})
     workbench.simulate(scene)
@@ -140,7 +141,7 @@ def test_the_first_compile_is_announced_and_only_then():
     assert kernel_cached(scene.replace(solver={"method": "scipy:RK45"})) is None
     code = (
         "import workbench\n"
-        "from workbench._console import announce_compile\n"
+        "from workbench.cli._console import announce_compile\n"
         "from workbench.campaign._warm import kernel_cached\n"
         "s = workbench.load_scene({'model': {'name': 'duffing'}})\n"
         "assert kernel_cached(s) is False\n"
@@ -167,7 +168,7 @@ def test_the_run_summary_line_shows_the_self_check(tmp_path, capsys):
 
 
 def test_verify_tables_have_a_header_each_and_none_is_empty(capsys):
-    from workbench.verification._cli import _print_tables
+    from workbench.cli._verify import _print_tables
 
     runs = ["workbench", "exudyn h=1e-06"]
     ds = xr.Dataset(
@@ -183,3 +184,14 @@ def test_verify_tables_have_a_header_each_and_none_is_empty(capsys):
     out = capsys.readouterr().out
     assert "largest difference from the workbench" in out and "exudyn h=1e-06" in out
     assert "first contact" not in out and "peak_force" not in out and "Empty" not in out
+
+
+def test_the_generated_kernel_of_a_model_is_printed(capsys):
+    assert main(["kernel", "duffing", "--part", "jacobian", "--path"]) == 0
+    path = Path(capsys.readouterr().out.strip())
+    assert path.is_file() and path.name.startswith("jacobian_workbench_models_duffing_")
+    assert main(["kernel", "duffing", "--part", "jacobian"]) == 0
+    out = capsys.readouterr().out
+    assert "from workbench.models.duffing import" in out and out.endswith(path.read_text())
+    assert main(["kernel", "no_such_model"]) == 2
+    assert "MODEL: got 'no_such_model'; allowed: a scene file or one of" in capsys.readouterr().err

@@ -59,7 +59,7 @@ def test_records_straddling_an_event_are_continuous():
 def test_crossing_sides_partition_at_zero():
     """g <= 0 is "before" and g > 0 "beyond": a state located exactly on g = 0 (a contact end)
     must not hide the next rising crossing (a contact that starts again at once)."""
-    from workbench.solver._kernel import _crossed
+    from workbench.solver._templates.integration_loop import _crossed
 
     assert _crossed(1, 0.0, 1e-9)  # from exactly zero upwards: an onset
     assert not _crossed(1, 0.0, 0.0)

@@ -210,6 +210,40 @@ def test_corrupt_truncated_and_deleted_blocks_are_named_and_recomputed(tmp_path)
     assert again.attrs["campaign_block_sha256"].split() == [sha256_file(p) for p in files]
 
 
+def test_blocks_of_other_code_are_named_and_recomputed_never_mixed(tmp_path):
+    """A resume under changed code (issue 23: 2 of 8 points of the old code were mixed in
+    silently) recomputes the blocks that other code computed, says so, and the archive lists
+    the one code digest it holds."""
+    store = tmp_path / "c.nc"
+    first = workbench.run_campaign(QUICK, store, workers=1, chunk=1)
+    code = first.attrs["code_digests"]
+    assert (
+        len(code) == 16
+        and workbench.open_run(sorted(store_paths(store)["blocks"].glob("block-*.nc"))[0]).attrs[
+            "code_digest"
+        ]
+        == code
+    )
+    manifest_path = store_paths(store)["manifest"]
+    manifest = json.loads(manifest_path.read_text())
+    manifest["code_digests"]["1"] = "0123456789abcdef"  # block 1 from other code
+    del manifest["code_digests"]["3"]  # block 3 from a store that did not record it
+    manifest_path.write_text(json.dumps(manifest))
+    with pytest.warns(CampaignWarning) as record:
+        again = workbench.run_campaign(QUICK, store)
+    messages = [str(w.message) for w in record]
+    assert any(
+        m.startswith(
+            "2 of 4 blocks were computed by other code (code digest "
+            "'0123456789abcdef' (1), 'unrecorded' (1); this code: " + repr(code)
+        )
+        for m in messages
+    ), messages
+    assert (again.attrs["computed_blocks"], again.attrs["reused_blocks"]) == (2, 2)
+    assert again.attrs["code_digests"] == code
+    xr.testing.assert_identical(numbers(again), numbers(first))
+
+
 def test_a_second_writer_is_refused_and_a_stale_lock_taken_over(tmp_path):
     scene = scene_file(tmp_path, QUICK)
     store = tmp_path / "c.nc"
@@ -255,7 +289,7 @@ def test_restart_cannot_replace_a_store_in_use(tmp_path):
 def test_a_campaign_whose_points_all_fail_exits_non_zero_with_the_count(tmp_path, capsys):
     scene = scene_file(tmp_path, {**QUICK, "solver": {"max_steps": 10}})
     code = main(["campaign", str(scene), "-o", str(tmp_path / "c.nc"), "--workers", "1", "-q"])
-    assert code == 3  # max_steps (workbench/_exit_codes.py)
+    assert code == 3  # max_steps (workbench/cli/_exit_codes.py)
     err = capsys.readouterr().err
     assert "workbench campaign: 4 of 4 points failed (4 max_steps); exit code 3" in err
 

@@ -14,8 +14,8 @@ import xarray as xr
 import workbench
 from workbench import SolverError, Status
 from workbench.campaign import CampaignWarning
-from workbench.campaign._cli import campaign_exit_code
 from workbench.cli import main
+from workbench.cli._campaign import campaign_exit_code
 
 BASE = {
     "model": {"name": "failing"},

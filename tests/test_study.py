@@ -2,6 +2,7 @@
 claims, figures and a dataset with units, and the report shows ensemble statistics."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -185,6 +186,46 @@ def test_contradicted_claim_carries_its_reason_with_measured_evidence():
     assert "cf_0.1 at A: in contact 85 % of the time, 99th-percentile force 332 N" in out["reason"]
 
 
+def test_claim_with_a_why_says_it_whatever_the_verdict():
+    """A claim's ``why`` is shown with the friction law's measured numbers for a reproduced
+    verdict too, and after the ensemble spread of a not-resolved one."""
+    law = {
+        "mu_max": [25.0, 30.0, 41.0, 50.0],
+        "mu_median": [0.08] * 4,
+        "above": [0.02] * 4,
+        "beyond": [0.008] * 4,
+    }
+    measures = {
+        "units": {"contact_force": "N"},
+        "peak_record": {
+            "paper": {"contact_force": _peaks(6000.0, 100.0, 8, 1)},
+            "coulomb": {"contact_force": _peaks(3000.0, 100.0, 8, 2)},
+        },
+        "friction_law": {"paper": law},
+    }
+    claim = {
+        "text": "t",
+        "var": "contact_force",
+        "larger": "paper",
+        "smaller": "coulomb",
+        "evidence": "friction_law",
+        "why": "friction spikes.",
+    }
+    out = evaluate_claim(claim, measures)
+    assert out["verdict"] == "reproduced"
+    assert out["reason"] == (
+        "friction spikes. Measured: paper: |F_t|/F_n 0.08 in contact (median), up to 35.5, 20 ms "
+        "per cycle above mu_s and 8 ms beyond 2 mu_s + s2 |v_t| (medians over the realisations)."
+    )
+    measures["peak_record"]["coulomb"]["contact_force"] = _peaks(6000.0, 100.0, 8, 3)
+    out = evaluate_claim(claim, measures)
+    assert out["verdict"] == "not resolved"
+    assert (
+        out["reason"].startswith("ensemble spread:")
+        and "friction spikes. Measured:" in out["reason"]
+    )
+
+
 def _exponents(lle, stderr, trusted):
     return {
         "method": ["two trajectories", "Wolf, 100 per cycle"],
@@ -343,8 +384,9 @@ def test_friction_sweep_summary_report_and_figure(tmp_path):
 # -- a quick study end to end -------------------------------------------------------------------
 def test_quick_study_run_and_report(tmp_path):
     ds = run_study("friction_models", out=tmp_path, quick=True, workers=2)
-    assert ds.sizes["realisation"] == 4 and list(ds.member.values) == ["coulomb", "lugre"]
-    assert ds.attrs["runs"] == 8
+    members = ["coulomb", "lugre", "lugre_paper_damping"]
+    assert ds.sizes["realisation"] == 4 and list(ds.member.values) == members
+    assert ds.attrs["runs"] == 12
     for name, var in {**ds.data_vars, **ds.coords}.items():
         assert "units" in var.attrs, name
     # ideal slider peak speed at 2.5 pi is 1.596 m/s (spec); clearances change it little
@@ -355,6 +397,13 @@ def test_quick_study_run_and_report(tmp_path):
     assert set(ds.claim_verdict.values) <= set(VERDICTS)
     not_reproduced = ds.claim_verdict.values != "reproduced"
     assert all(r for r in ds.claim_reason.values[not_reproduced])  # no bare verdict
+    # the LuGre claims say why under each damping, with the friction law's numbers
+    assert all("Measured: lugre" in r for r in ds.claim_reason.values[:4])
+    # the passive default stays within the LuGre envelope, the paper's damping leaves it
+    beyond = ds.friction_law_beyond
+    assert beyond.attrs["units"] == "s" and float(beyond.sel(member="lugre").max()) == 0.0
+    assert float(beyond.sel(member="lugre_paper_damping").min()) > 0.0
+    assert float(ds.friction_law_mu_max.sel(member="coulomb").max()) <= 0.05 + 1e-12
     on_disk = json.loads((tmp_path / "friction_models" / "summary.json").read_text())
     assert len(on_disk["figures"]) == 5
     for f in on_disk["figures"]:
@@ -364,6 +413,10 @@ def test_quick_study_run_and_report(tmp_path):
     report = write_report(tmp_path, tmp_path / "REPORT.md").read_text()
     assert "Figs. 4-9" in report and "| coulomb | slider_velocity | -1.938 | 1.59" in report
     assert "Ensemble: 4 realisation(s) per case" in report
+    assert "| lugre_paper_damping | " in report and "beyond the envelope [ms per cycle]" in report
+    # bars inside a cell (|F_t|, |peak|) are escaped: every claim row has its four cells
+    rows = [r for r in report.splitlines() if r.startswith("| LuGre ")]
+    assert len(rows) == 6 and all(len(re.findall(r"(?<!\\)\|", r)) == 5 for r in rows)
     assert "Not run yet" in report  # the other studies
     stored = xr.open_dataset(tmp_path / "friction_models" / "summary.nc")
     assert stored.peak_contact_force.attrs["units"] == "N"

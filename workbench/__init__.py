@@ -19,6 +19,8 @@ from workbench._cache import register_cache_locator
 
 register_cache_locator()  # before any workbench module defines a cached compiled function
 
+from workbench._errors import ModelWarning  # noqa: E402
+from workbench._version import FORMAT_VERSION, __version__  # noqa: E402
 from workbench.archive import open_run, save_run  # noqa: E402
 from workbench.campaign import CampaignError, run_campaign  # noqa: E402
 from workbench.precision import Recommendation, accuracy, recommend  # noqa: E402
@@ -26,10 +28,10 @@ from workbench.run import prepare, simulate  # noqa: E402
 from workbench.scene import Scene, SceneError, load_scene, scene_from_toml  # noqa: E402
 from workbench.solver import SolverError, Status  # noqa: E402
 
-__version__ = "0.1.0"
-
 __all__ = [
+    "FORMAT_VERSION",
     "CampaignError",
+    "ModelWarning",
     "Recommendation",
     "Scene",
     "SceneError",

@@ -1,12 +1,12 @@
 """The errors scenes and models raise: :class:`SceneError`, and the solver's
 :class:`~workbench.solver.SolverError` (re-exported: models raise it for a state outside their
-domain)."""
+domain); and :class:`ModelWarning`, for a run that ended well but left its model's physics."""
 
 from __future__ import annotations
 
 from workbench.solver import SolverError
 
-__all__ = ["SceneError", "SolverError"]
+__all__ = ["ModelWarning", "SceneError", "SolverError"]
 
 
 class SceneError(ValueError):
@@ -21,3 +21,9 @@ class SceneError(ValueError):
     def __init__(self, key: str, message: str) -> None:
         self.key = key
         super().__init__(f"{key}: {message}" if key else message)
+
+
+class ModelWarning(UserWarning):
+    """A run completed, but its model says a law left the range where it is physical (e.g. a
+    LuGre friction coefficient beyond its envelope, :mod:`workbench.models._friction_report`);
+    the message says where and the likely cause."""

@@ -2,8 +2,9 @@
 of a layer before it (``tests/test_layers.py`` checks every import, at module level or inside a
 function, and that the imports form no cycle).
 
-A module belongs to the layer of the longest prefix below that names it; every ``_cli`` module
-and the package's own ``__init__`` (the public facade) belong to ``cli``.
+A module belongs to the layer of the longest prefix below that names it. The package's own
+``__init__`` (the public facade, ``import workbench``) sits above every feature and below the
+command line (``workbench.cli``), which nothing imports.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 __all__ = ["LAYERS", "layer_of"]
 
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("base", ("workbench._cache", "workbench._layers")),
+    ("base", ("workbench._cache", "workbench._layers", "workbench._sources", "workbench._version")),
     ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators
     ("models", ("workbench.models", "workbench._errors")),  # build Problems
     ("scene", ("workbench.scene",)),  # validated against the models
@@ -24,14 +25,14 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("continuation", ("workbench.continuation",)),  # continued sweeps, periodic orbits
     ("verification", ("workbench.verification",)),  # workbench.verify
     ("study", ("workbench.study",)),
-    ("cli", ("workbench.cli", "workbench._exit_codes", "workbench._console")),
+    ("cli", ("workbench.cli", "workbench.cli._exit_codes", "workbench.cli._console")),
 )
 
 
 def layer_of(module: str) -> int:
     """Index in :data:`LAYERS` of a workbench module (dotted name)."""
-    if module == "workbench" or module.endswith("._cli"):
-        return len(LAYERS) - 1
+    if module == "workbench":
+        return len(LAYERS) - 2
     best, rank = -1, None
     for i, (_, prefixes) in enumerate(LAYERS):
         for prefix in prefixes:

@@ -1,7 +1,9 @@
 """Analysis of runs: phase portraits, Poincaré sections, delay and embedding selection, largest
 Lyapunov exponents (Wolf et al. 1985; Rosenstein et al. 1993 via nolds; from the equations,
 Benettin et al. 1980: two trajectories, and the spectrum from the variational equations with
-saltation at events), the 0-1 test for chaos and bifurcation diagrams.
+saltation at events), the 0-1 test for chaos and bifurcation diagrams; a series with nothing to
+analyse (:func:`no_dynamics`) and one that cannot be told from linear noise
+(:func:`surrogate_test`) are said so.
 
 Every estimator accepts numpy arrays and xarray DataArrays (a ``time`` coordinate gives dt) and
 returns an ``xarray.Dataset`` with units: the chosen value and the evidence behind it.
@@ -14,12 +16,14 @@ returns an ``xarray.Dataset`` with units: the chosen value and the evidence behi
 
 from workbench.analysis._benettin import lle_from_equations
 from workbench.analysis._bifurcation import bifurcation_diagram
+from workbench.analysis._degenerate import no_dynamics
 from workbench.analysis._delay import delay_acf, delay_ami
 from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
 from workbench.analysis._lyapunov import lyapunov_spectrum
 from workbench.analysis._rosenstein import rosenstein_lle
 from workbench.analysis._sections import crossing_section, phase_portrait, poincare_section
 from workbench.analysis._stability import floquet, floquet_sweep, jacobian_spectrum
+from workbench.analysis._surrogate import surrogate_test
 from workbench.analysis._wolf import wolf_lle
 from workbench.analysis._zero_one import zero_one_test
 
@@ -36,9 +40,11 @@ __all__ = [
     "jacobian_spectrum",
     "lle_from_equations",
     "lyapunov_spectrum",
+    "no_dynamics",
     "phase_portrait",
     "poincare_section",
     "rosenstein_lle",
+    "surrogate_test",
     "wolf_lle",
     "zero_one_test",
 ]

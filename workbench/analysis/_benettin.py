@@ -13,7 +13,6 @@ amplification of an impact's timing error, a noise floor far above any useful se
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -21,7 +20,13 @@ import xarray as xr
 
 from workbench.analysis._lyapunov import Window, batch_error, measurement_window
 from workbench.scene import SceneSource
-from workbench.solver import copies_problem, split_copies, state_scale, tangent_problem
+from workbench.solver import (
+    copies_problem,
+    split_copies,
+    state_scale,
+    tangent_problem,
+    tangent_state,
+)
 
 __all__ = ["lle_from_equations"]
 
@@ -31,8 +36,6 @@ _PILOT_SEPARATIONS = 10.0 ** np.arange(-11, -3)
 GROWTH = math.log(10.0)
 #: records per measured window (running estimate, batch means)
 _RECORDS = 400
-#: integration segments when the fiducial carries a tangent vector, renormalised between them
-_SEGMENTS = 40
 #: relative agreement that counts as converged
 TOLERANCE = 0.05
 #: tightest tolerance the automatic tightening goes to
@@ -73,35 +76,25 @@ def follow_copies(
     system = copies_problem(
         base, Y, np.tile(base.aux0, (k, 1)), separations=separations, growth=growth, measured=n
     )
-    y, aux = system.y0.copy(), system.aux0.copy()
     t_rec = pb.t0 + np.linspace(0.0, length, _RECORDS + 1)
     total = np.zeros((t_rec.size, k - 1))
     tangent = np.zeros(t_rec.size)
-    log_tangent = 0.0  # log growth of the tangent vector removed by its renormalisations
-    stats = {"steps": 0, "rejected_steps": 0, "rhs_evaluations": 0, "events": 0}
+    res = prep.solve(system, t_rec[1:], rtol)
+    keys = ("steps", "rejected_steps", "rhs_evaluations", "events")
+    stats = {key: res.stats[key] for key in keys}
     counts = np.zeros(k - 1)
-    segments = np.array_split(np.arange(1, t_rec.size), _SEGMENTS if variational else 1)
-    for seg in segments:
-        t0 = t_rec[seg[0] - 1]
-        res = prep.solve(dataclasses.replace(system, y0=y, aux0=aux, t0=t0), t_rec[seg], rtol)
-        for key in stats:
-            stats[key] += res.stats[key]
-        for j, r in enumerate(seg):
-            Yr, _, logs, counts = split_copies(res.Y[j], res.AUX[j], k)
-            d = np.linalg.norm((Yr[1:, :n] - Yr[0, :n]) / scale, axis=1)
-            if not np.all(d > 0) or not np.all(np.isfinite(d)):
-                raise FloatingPointError(
-                    f"a copy coincides with the fiducial trajectory or left it at t = "
-                    f"{t_rec[r]:g} s (scaled distances {d!r}); choose other separations"
-                )
-            total[r] = logs + np.log(d / separations)
-            if variational:
-                tangent[r] = log_tangent + math.log(np.linalg.norm(Yr[0, n : 2 * n] / scale))
-        y, aux = res.Y[-1].copy(), res.AUX[-1].copy()
-        if variational:  # renormalise the tangent vector (and its discrete-state part)
-            norm = float(np.linalg.norm(y[n : 2 * n] / scale))
-            y[n : 2 * n + na] /= norm
-            log_tangent += math.log(norm)
+    for r in range(1, t_rec.size):
+        Yr, _, logs, counts = split_copies(res.Y[r - 1], res.AUX[r - 1], k)
+        d = np.linalg.norm((Yr[1:, :n] - Yr[0, :n]) / scale, axis=1)
+        if not np.all(d > 0) or not np.all(np.isfinite(d)):
+            raise FloatingPointError(
+                f"a copy coincides with the fiducial trajectory or left it at t = "
+                f"{t_rec[r]:g} s (scaled distances {d!r}); choose other separations"
+            )
+        total[r] = logs + np.log(d / separations)
+        if variational:  # the tangent vector is its direction times e^(log size)
+            _, U, log_size, _ = tangent_state(Yr[0], n, na, 1)
+            tangent[r] = log_size[0] + math.log(np.linalg.norm(U[:n, 0] / scale))
     return {
         "times": t_rec,
         "total": total,

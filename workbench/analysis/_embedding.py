@@ -7,6 +7,7 @@ import numpy as np
 import xarray as xr
 from scipy.spatial import cKDTree
 
+from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._series import as_series, require_samples
 
 __all__ = ["embed", "embedding_fnn", "embedding_cao", "nearest_neighbours"]
@@ -88,6 +89,9 @@ def _check_embedding_args(s, delay: int, max_dim: int, what: str) -> None:
     if int(max_dim) < 1:
         raise ValueError(f"max_dim={max_dim!r}; allowed: a whole number >= 1")
     require_samples(s, max_dim * delay + 20, f"{what} with delay={delay}, max_dim={max_dim}")
+    problem = series_without_dynamics(s)
+    if problem:  # exact copies of a few points: neighbours would be searched for minutes
+        raise ValueError(problem)
 
 
 def _added_coordinate(

@@ -21,8 +21,8 @@ from workbench.solver import (
     integrate,
     jacobian_for,
     state_scale,
-    tangent_columns,
     tangent_problem,
+    tangent_state,
 )
 
 __all__ = ["lyapunov_spectrum"]
@@ -188,9 +188,10 @@ def tangent_run(
         tr = np.trace(Js, axis1=1, axis2=2)
         trace_integral += float(np.trapezoid(tr, res.t))
         memory = memory or bool(np.any(Jas != 0.0))
-        y, V, log_det = tangent_columns(res.Y[-1], n, na, m)
+        y, U, log_size, log_det = tangent_state(res.Y[-1], n, na, m)
         y, aux = y.copy(), res.AUX[-1].copy()
-        V, g = _qr(V.copy(), scale, n)
+        V, g = _qr(U.copy(), scale, n)
+        g = g + log_size  # the vectors are U e^log_size: R_kk of V is R_kk of U times e^l_k
         times.append(t1)
         growth.append(g)
         t = t1
@@ -279,7 +280,7 @@ def lyapunov_spectrum(
     Examples
     --------
     >>> r = lyapunov_spectrum({"model": {"name": "lorenz"},
-    ...                        "run": {"duration": 100.0, "transient": 10.0}}, check=False)
+    ...                        "run": {"duration": 400.0, "transient": 10.0}}, check=False)
     >>> [round(float(v), 1) for v in r.exponent]
     [0.9, 0.0, -14.6]
     """

@@ -9,10 +9,11 @@ import warnings
 import numpy as np
 import xarray as xr
 
+from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._delay import delay_ami
 from workbench.analysis._embedding import embedding_fnn
 from workbench.analysis._series import as_series
-from workbench.analysis._wolf import mean_period
+from workbench.analysis._wolf_embedding import mean_period
 
 __all__ = ["rosenstein_lle"]
 
@@ -53,6 +54,9 @@ def rosenstein_lle(
     import nolds
 
     s = as_series(x, dt)
+    problem = series_without_dynamics(s)
+    if problem:
+        raise ValueError(problem)
     v = s.values[:max_points]
     delay = int(delay_ami(v).delay) if delay is None else delay
     dim = int(embedding_fnn(v, delay=delay).dim) if dim is None else dim

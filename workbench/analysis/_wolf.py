@@ -1,7 +1,16 @@
 """Largest Lyapunov exponent from a scalar time series: the fixed-evolution-time program of
 Wolf, Swift, Swinney & Vastano (1985), Physica D 16, 285, with a KD-tree neighbour search, for
 maps (and stroboscopic sections) and for sampled flows, which it tells apart from the series;
-for a flow, separations are measured between orbits (the flow direction projected out)."""
+for a flow, separations are measured between orbits (the flow direction projected out).
+
+:func:`wolf_lle` runs three stages, each a function of its own module, the way ChaosTools
+separates its high-level calls from the low-level ones on an embedded data set:
+
+1. choose the embedding (:func:`~workbench.analysis._wolf_embedding.choose_embedding` and
+   :func:`~workbench.analysis._wolf_embedding.choose_scales`),
+2. evolve (:func:`~workbench.analysis._wolf_follow.follow`, Wolf et al.'s FET program),
+3. judge (:func:`~workbench.analysis._wolf_judge.judge`: the reliability flag and its reasons).
+"""
 
 from __future__ import annotations
 
@@ -9,253 +18,27 @@ import math
 
 import numpy as np
 import xarray as xr
-from scipy.spatial import cKDTree
 
-from workbench.analysis._delay import delay_ami
-from workbench.analysis._embedding import embed, embedding_cao, embedding_fnn
+from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._series import Series, as_series, require_samples
+from workbench.analysis._surrogate import SURROGATES
+from workbench.analysis._wolf_embedding import (
+    FLOW_MIN_SMOOTHNESS,
+    FLOW_SMOOTHNESS,
+    Embedding,
+    Scales,
+    choose_embedding,
+    choose_scales,
+    mean_period,
+    smoothness,
+)
+from workbench.analysis._wolf_follow import Followed, follow
+from workbench.analysis._wolf_judge import Verdict, correlation_dimension, judge
 
 __all__ = ["wolf_lle", "mean_period", "smoothness", "correlation_dimension"]
 
-#: a series is a resolved sampled flow when the lag-1 autocorrelation of its successive
-#: differences (:func:`smoothness`) is at least this: a sinusoid sampled at n points per cycle
-#: gives cos(2 pi / n), so 0.9 means at least ~14 samples per dominant cycle and no kinks at
-#: the sample scale (unresolved impacts lower it). Development set: Lorenz x 0.97-0.998 at dt
-#: 0.005-0.02 s, 0.94 at 0.03, 0.85 at 0.05, 0.51 at 0.1, -0.05 at 0.2; Rossler x 0.98-0.996
-#: at 0.05-0.1, 0.88 at 0.3, 0.68 at 0.6; the clearance coordinates of the nine-bar mechanism
-#: (Sec. 5.1 run) -0.42..0.21 at 100 samples per crank period, 0.25-0.58 at 1 000, 0.95-0.98
-#: at 10 000; maps and noise <= 0 (Henon -0.70, white noise -0.50).
-FLOW_SMOOTHNESS = 0.9
-#: below 0.9 but at least this (about 6 or more samples per cycle), a coarsely sampled flow:
-#: the flow program still applies (Lorenz x at dt = 0.05-0.1 s: -3 % .. +7 %; as a map with
-#: delay 1: +19 .. +46 %) but the estimate is flagged; below it the series is taken for a map
-FLOW_MIN_SMOOTHNESS = 0.5
-#: largest exponent per sample (lambda dt) at which a sampled flow's separations are resolved:
-#: beyond it a separation grows by more than ~10 % between samples
-MAX_LAMBDA_DT = 0.1
-#: fewest samples per mean period (power-weighted mean frequency) of a sampled flow
-MIN_SAMPLES_PER_PERIOD = 10
 #: fewest samples for any estimate at all
 MIN_SAMPLES = 100
-#: fewest points for an attractor of (correlation) dimension D: 10**D (Eckmann & Ruelle 1992,
-#: Physica D 56, 185: a neighbourhood a tenth of the attractor's size must hold points; Wolf
-#: et al. 1985, Sec. 7: "10^D to 30^D points"). D is measured on the embedded points at the
-#: scales the neighbours are taken from (the embedding dimension would overstate it: Ikeda
-#: x needs dim 4 for an attractor of dimension 1.7)
-POINTS_BASE = 10
-#: fewest mean periods a sampled flow must span: its neighbours come from other passes
-MIN_PERIODS = 20
-#: the sampled-flow scale: this fraction of the median distance to the 50th nearest point
-#: (development set: Lorenz and Rossler x, 30 series of 10 000 points; 0.5 and 1.0 scattered
-#: more), and the map scale: the median distance to the 20th nearest point (Henon)
-FLOW_SCALE_FRACTION, FLOW_SCALE_POINTS, MAP_SCALE_POINTS = 0.7, 50, 20
-#: the widened neighbour search (2-4 x scale_max) looks at this many nearest points at most: a
-#: ball 4 x wider holds 4^D times as many points, most of the data in many dimensions (noise)
-WIDE_CANDIDATES = 512
-#: reference points of the false-neighbour statistics (FNN, Cao) behind the dimension: a
-#: fraction to about +-1.3 % (binomial error)
-EVIDENCE_POINTS = 1500
-
-
-def mean_period(v: np.ndarray) -> float:
-    """Mean period (samples) from the power-weighted mean frequency of the spectrum.
-
-    Examples
-    --------
-    >>> round(mean_period(np.sin(2 * np.pi * np.arange(1000) / 50)))
-    50
-    """
-    v = np.asarray(v, dtype=float)
-    p = np.abs(np.fft.rfft(v - v.mean())) ** 2
-    f = np.fft.rfftfreq(v.size)
-    total = float(np.sum(p[1:]))
-    fbar = float(np.sum(f[1:] * p[1:]) / total) if total > 0 else 0.0
-    return 1.0 / fbar if fbar > 0 else float(v.size)
-
-
-def smoothness(v: np.ndarray) -> float:
-    """Lag-1 autocorrelation of the successive differences of a series: near 1 for a finely
-    sampled flow (cos(2 pi / n) for a sinusoid at n samples per cycle), at or below 0 for a map
-    or noise (-0.5 for white noise). NaN for a constant series.
-
-    Examples
-    --------
-    >>> t = np.arange(2000)
-    >>> round(smoothness(np.sin(2 * np.pi * t / 20)), 2)   # cos(2 pi / 20) = 0.951
-    0.95
-    >>> smoothness(np.random.default_rng(0).standard_normal(20000)) < -0.45
-    True
-    """
-    d = np.diff(np.asarray(v, dtype=float))
-    d = d - d.mean()
-    den = float(np.dot(d, d))
-    return float(np.dot(d[1:], d[:-1]) / den) if den > 0 else math.nan
-
-
-def _angle(u: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Angles (rad, 0..pi/2) between the lines along the rows of u and along w: the orientation
-    counts, not the sense (Wolf et al. 1985, program FET: ``cth = abs(dot / (dnew * df))``)."""
-    nu = np.linalg.norm(u, axis=1)
-    nw = np.linalg.norm(w)
-    c = np.abs(u @ w) / np.maximum(nu * nw, 1e-300)
-    return np.arccos(np.clip(c, 0.0, 1.0))
-
-
-def correlation_dimension(
-    Y: np.ndarray, tree: cKDTree, theiler: int, r_hi: float, ratio: float = 4.0
-) -> float:
-    """Local slope of the correlation sum C(r) between ``r_hi / ratio`` and ``r_hi``
-    (Grassberger & Procaccia 1983, Physica D 9, 189), over up to 500 reference points and with
-    the pairs within ``theiler`` samples in time left out (Theiler 1986, Phys. Rev. A 34,
-    2427). NaN if either count is zero."""
-    n = Y.shape[0]
-    ref = np.unique(np.linspace(0, n - 1, min(n, 500)).astype(np.int64))
-    offsets = np.arange(-theiler, theiler + 1)
-    near = ref[:, None] + offsets
-    inside = (near >= 0) & (near < n)
-    gap = np.linalg.norm(Y[np.clip(near, 0, n - 1)] - Y[ref][:, None, :], axis=2)
-    counts = []
-    for r in (r_hi / ratio, r_hi):
-        total = np.asarray(tree.query_ball_point(Y[ref], r, return_length=True)).sum()
-        counts.append(float(total - np.sum(inside & (gap <= r))))
-    if min(counts) <= 0:
-        return math.nan
-    return math.log(counts[1] / counts[0]) / math.log(ratio)
-
-
-class _Follower:
-    """The fiducial trajectory and its neighbour (Wolf et al. 1985, FET), on embedded points."""
-
-    def __init__(self, Y, *, flow, evolve, scale_min, scale_max, max_angle, theiler):
-        self.Y, self.flow, self.evolve = Y, flow, evolve
-        self.scale_min, self.scale_max, self.max_angle = scale_min, scale_max, max_angle
-        self.theiler = theiler
-        self.tree = cKDTree(Y)
-        n = Y.shape[0]
-        # a flow's neighbours need a sample on either side to be slid along their orbit
-        self.lo, self.hi = (1, n - 2) if flow else (0, n - 1)
-        if flow:
-            t = np.empty_like(Y)
-            t[1:-1] = Y[2:] - Y[:-2]
-            t[0], t[-1] = Y[1] - Y[0], Y[-1] - Y[-2]
-            t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
-            self.tangent = t
-
-    def separation(self, i: int, c: np.ndarray) -> np.ndarray:
-        """Rows Y[c] - Y[i], less their component along the flow at Y[i] for a flow."""
-        sep = self.Y[c] - self.Y[i]
-        if self.flow:
-            t = self.tangent[i]
-            sep -= np.multiply.outer(sep @ t, t)
-        return sep
-
-    def separation1(self, i: int, j: int) -> np.ndarray:
-        """Y[j] - Y[i], less its component along the flow at Y[i] for a flow."""
-        sep = self.Y[j] - self.Y[i]
-        if self.flow:
-            t = self.tangent[i]
-            sep -= float(np.dot(sep, t)) * t
-        return sep
-
-    def closest_approach(self, i: int, j: int) -> int:
-        """Slide j along its own samples to its closest approach to Y[i] (flows)."""
-        if not self.flow:
-            return j
-        Y, yi = self.Y, self.Y[i]
-        dj = float(np.dot(Y[j] - yi, Y[j] - yi))
-        for step in (1, -1):
-            while self.lo <= j + step <= self.hi and abs(j + step - i) > self.theiler:
-                e = Y[j + step] - yi
-                dn = float(np.dot(e, e))
-                if dn >= dj:
-                    break
-                j, dj = j + step, dn
-        return j
-
-    def _candidates(self, i: int, radius: float, wide: bool) -> tuple[np.ndarray, ...]:
-        """Candidate neighbours of Y[i] within ``radius``: indices, separations, their lengths
-        and the full distances. More than theiler samples away in time, ``evolve`` samples
-        ahead in the data, for a flow one per passing strand (its closest approach), none with
-        a separation below scale_min. ``wide``: the nearest WIDE_CANDIDATES points only (a
-        wide ball in many dimensions holds most of the data)."""
-        Y, lo, hi = self.Y, self.lo, self.hi
-        if wide:
-            full, cand = self.tree.query(
-                Y[i], k=min(WIDE_CANDIDATES, Y.shape[0]), distance_upper_bound=radius
-            )
-            cand = np.asarray(cand[np.isfinite(full)], dtype=np.int64)
-        else:
-            cand = np.asarray(self.tree.query_ball_point(Y[i], radius), dtype=np.int64)
-        cand = cand[(np.abs(cand - i) > self.theiler) & (cand >= lo)]
-        cand = cand[cand + self.evolve <= hi]
-        full2 = np.sum((Y[cand] - Y[i]) ** 2, axis=1)
-        if self.flow and cand.size:
-            before = np.sum((Y[cand - 1] - Y[i]) ** 2, axis=1)
-            after = np.sum((Y[cand + 1] - Y[i]) ** 2, axis=1)
-            keep = (full2 <= before) & (full2 <= after)
-            cand, full2 = cand[keep], full2[keep]
-        sep = self.separation(i, cand)
-        d = np.linalg.norm(sep, axis=1)
-        ok = d >= self.scale_min
-        return cand[ok], sep[ok], d[ok], np.sqrt(full2[ok])
-
-    def replace(self, i: int, direction: np.ndarray | None) -> tuple[int, float]:
-        """A neighbour of Y[i] within scale_max (more than theiler samples away in time) whose
-        separation lies within max_angle of ``direction``: for a flow the nearest such, for a
-        map the one at the smallest angle (FET); the search widens the scale (2 x, 4 x), then
-        the angle (2 x, 4 x). (-1, nan) if none. The ball is searched at scale_max and, if that
-        fails, once at 4 x scale_max for all the wider stages."""
-        stages = [(1.0, 1.0), (2.0, 1.0), (4.0, 1.0), (4.0, 2.0), (4.0, 4.0)]
-        for first, last in ((0, 1), (1, len(stages))):
-            radius = stages[last - 1][0] * self.scale_max
-            cand, sep, d, full = self._candidates(i, radius, wide=first > 0)
-            if not cand.size:
-                continue
-            if direction is None:  # the first neighbour: the nearest point
-                k = int(np.argmin(d))
-                return int(cand[k]), float(d[k])
-            ang = _angle(sep, direction)
-            for widen, turn in stages[first:last]:
-                amax = min(turn * self.max_angle, math.pi / 2)
-                ok = np.flatnonzero((full <= widen * self.scale_max) & (ang <= amax))
-                if ok.size:
-                    k = int(ok[np.argmin(d[ok] if self.flow else ang[ok])])
-                    return int(cand[k]), float(d[k])
-        return -1, math.nan
-
-    def run(self) -> tuple[np.ndarray, int, int]:
-        """Log growth of each evolution step, replacements, steps that kept their neighbour."""
-        ev, hi = self.evolve, self.hi
-        i = self.lo
-        j, d0 = self.replace(i, None)
-        while j < 0 and i + ev < hi:
-            i += 1
-            j, d0 = self.replace(i, None)
-        logs: list[float] = []
-        replacements = kept = 0
-        while j >= 0 and i + ev <= hi:
-            if j + ev > hi:  # the neighbour runs out of data before the fiducial point
-                j, d0 = self.replace(i, self.separation1(i, j))
-                if j < 0:
-                    break
-            i += ev
-            j_old = self.closest_approach(i, j + ev)
-            if j_old + ev > hi:
-                j_old = j + ev
-            sep1 = self.separation1(i, j_old)
-            d1 = math.sqrt(float(np.dot(sep1, sep1)))
-            logs.append(math.log(d1 / d0) if d1 > 0 and d0 > 0 else 0.0)
-            if self.scale_min <= d1 <= self.scale_max:
-                j, d0 = j_old, d1  # the evolved neighbour is still a good one: keep it
-                continue
-            k, dk = self.replace(i, sep1)
-            if k >= 0 and k != j_old:
-                j, d0 = k, dk
-                replacements += 1
-            else:
-                j, d0 = j_old, d1
-                kept += 1
-        return np.asarray(logs), replacements, kept
 
 
 def _check_choice(name: str, value, lowest: int) -> int | None:
@@ -266,41 +49,6 @@ def _check_choice(name: str, value, lowest: int) -> int | None:
             f"{name}={value!r}; allowed: a whole number >= {lowest}, or None (automatic)"
         )
     return int(value)
-
-
-def _sampling_messages(s: Series, *, flow, chosen_flow, smooth, per_sample, spp) -> list[str]:
-    """Why the sampling does not resolve what is measured (empty if it does)."""
-    step = f"dt = {s.dt:g} s" if s.time_units == "s" else "a step of one sample"
-    msgs = []
-    if not flow:
-        if s.sampling == "time" and chosen_flow:
-            msgs.append(
-                f"the series has a time step ({step}) but does not look like a sampled flow "
-                f"(smoothness {smooth:.2f} < {FLOW_MIN_SMOOTHNESS}: fewer than ~6 samples per "
-                f"dominant cycle; {spp:.1f} samples per mean period), so it was taken for a map: "
-                f"if it samples a flow, {step} is far too long for its exponent to be measured; "
-                "record it more finely. If it is a map or a stroboscopic section, pass "
-                "flow=False (or the section as poincare_section returns it) and the exponent "
-                "per sample stands"
-            )
-        return msgs
-    if smooth < FLOW_SMOOTHNESS:
-        msgs.append(
-            f"smoothness {smooth:.2f} < {FLOW_SMOOTHNESS} at {step}: the samples do not resolve "
-            "the orbit (fewer than ~14 samples per dominant cycle, or fast events such as "
-            "impacts between samples); record the flow more finely"
-        )
-    if spp < MIN_SAMPLES_PER_PERIOD:
-        msgs.append(
-            f"{spp:.1f} samples per mean period (< {MIN_SAMPLES_PER_PERIOD}) at {step}: the "
-            "orbit is not resolved"
-        )
-    if per_sample > MAX_LAMBDA_DT:
-        msgs.append(
-            f"lambda dt = {per_sample:.3g} per sample (> {MAX_LAMBDA_DT}) at {step}: the "
-            "samples are too coarse for the exponent they measure"
-        )
-    return msgs
 
 
 def wolf_lle(
@@ -316,6 +64,7 @@ def wolf_lle(
     theiler: int | None = None,
     period: float | None = None,
     flow: bool | None = None,
+    surrogates: int = SURROGATES,
 ) -> xr.Dataset:
     """Largest Lyapunov exponent of a scalar series of a map or a sampled flow by the method of
     Wolf, Swift, Swinney & Vastano (1985), Physica D 16, 285 (their fixed-evolution-time
@@ -364,9 +113,19 @@ def wolf_lle(
     events between samples), its lambda dt above 0.1 per sample or it has fewer than 10
     samples per mean period, or spans fewer than 20 mean periods; the series has fewer than
     10**D points, D the correlation dimension (Grassberger & Procaccia 1983) of the embedded
-    points at the neighbours' scales (Eckmann & Ruelle 1992; Wolf et al. 1985, Sec. 7); or
+    points at the neighbours' scales (Eckmann & Ruelle 1992; Wolf et al. 1985, Sec. 7);
     Cao's E2 is within 0.1 of 1 at every dimension (noise: a positive exponent is then no
-    evidence of chaos).
+    evidence of chaos); or the exponent is positive and the series is predicted no better than
+    its IAAFT surrogates (:func:`~workbench.analysis.surrogate_test`: Theiler et al. 1992;
+    Kennel & Isabelle 1992), i.e. nothing tells it from linear correlated noise. A series with
+    no dynamics at all (constant, constant to rounding, parked at one value, a few repeated
+    values: :func:`~workbench.analysis.no_dynamics`) raises ValueError with that verdict,
+    at once.
+
+    **Stages.** The estimate runs in three stages, each a function of its own module (the way
+    ChaosTools separates its high-level calls from the low-level ones on an embedded data
+    set): choose the embedding (``workbench.analysis._wolf_embedding``), evolve
+    (``_wolf_follow``: the FET program on the embedded points) and judge (``_wolf_judge``).
 
     Parameters
     ----------
@@ -387,6 +146,9 @@ def wolf_lle(
         Forcing period (s) for ``lle_per_period`` (default: the series' ``forcing_period``).
     flow : bool, optional
         Force a sampled flow (True) or a map (False) instead of detecting it.
+    surrogates : int
+        IAAFT surrogates of the noise test of a positive estimate (19: a one-sided rank test
+        at 5 %; 0: no test).
 
     Returns
     -------
@@ -400,20 +162,25 @@ def wolf_lle(
         ``delay``, ``evolve``, ``theiler``, ``scale_min``, ``scale_max`` (units of x),
         ``max_angle`` (rad); and ``replacements``, ``kept`` (steps that kept their neighbour
         for want of a replacement), ``steps``, ``points`` (embedded points), the
-        ``correlation_dimension`` D and ``min_points`` (10**D).
+        ``correlation_dimension`` D and ``min_points`` (10**D); the surrogate test's
+        ``prediction_error``, ``surrogate_error`` over ``surrogate`` and
+        ``surrogate_stochastic`` (1: not told from linear noise, 0: deterministic, -1: not
+        tested).
 
     Raises
     ------
     ValueError
-        For fewer than 100 samples, a series too short for the chosen embedding, or a
-        setting out of its range (the message names it and what is allowed).
+        For fewer than 100 samples, a series with no dynamics (the verdict of
+        :func:`~workbench.analysis.no_dynamics`), a series too short for the chosen embedding,
+        or a setting out of its range (the message names it and what is allowed).
 
     References
     ----------
     Wolf, Swift, Swinney & Vastano (1985), Physica D 16, 285. Fraser & Swinney (1986), Phys.
     Rev. A 33, 1134. Kennel, Brown & Abarbanel (1992), Phys. Rev. A 45, 3403. Cao (1997),
     Physica D 110, 43. Eckmann & Ruelle (1992), Physica D 56, 185. Theiler (1986), Phys. Rev.
-    A 34, 2427 (the Theiler window).
+    A 34, 2427 (the Theiler window). Theiler, Eubank, Longtin, Galdrikian & Farmer (1992),
+    Physica D 58, 77 (surrogate data). Kennel & Isabelle (1992), Phys. Rev. A 46, 3111.
 
     Examples
     --------
@@ -451,103 +218,63 @@ def wolf_lle(
             raise ValueError(f"{name}={value!r}; allowed: a finite separation >= 0 (units of x)")
     if period is not None and not period > 0:
         raise ValueError(f"period={period!r}; allowed: a positive forcing period (s)")
-    if np.ptp(v) == 0:
-        raise ValueError(f"x ({s.name!r}) is constant: no separations to follow")
-    chosen = []
-    smooth = smoothness(v)
-    spp = mean_period(v)
-    chosen_flow = flow is None
-    if flow is None:
-        flow = s.sampling != "strobe" and smooth >= FLOW_MIN_SMOOTHNESS
-        chosen.append("flow")
-    flow = bool(flow)
-    ami = delay_ami(v, max_lag=max(2, min(v.size // 10, 2000)))
-    if delay is None:
-        delay = int(ami.delay) if flow else 1
-        chosen.append("delay")
-    fits = max(1, (v.size - 20) // delay - 2)  # dimensions whose embedding the series can hold
-    fnn = embedding_fnn(v, delay=delay, max_dim=min(10, fits), points=EVIDENCE_POINTS)
-    if dim is None:
-        dim = int(fnn.dim)
-        chosen.append("dim")
-    cao_max = min(max(dim + 2, 4), fits)
-    cao = embedding_cao(v, delay=delay, max_dim=cao_max, points=EVIDENCE_POINTS)
-    # Cao's E2 stays near 1 at every dimension for a stochastic series (Cao 1997): such a
-    # series gets a positive "LLE" from any estimator, which is no evidence of chaos
-    stochastic = bool(np.all(np.abs(cao.E2.values[: min(4, cao_max)] - 1.0) < 0.1))
-    if theiler is None:
-        theiler = max(1, int(round(spp)))
-        chosen.append("theiler")
-    if evolve is None:
-        evolve = max(1, int(round(delay / 4))) if flow else 1
-        chosen.append("evolve")
-    Y = np.ascontiguousarray(embed(v, dim, delay))
-    n = Y.shape[0]
-    if n < 4 * theiler + 4 * evolve + 4:
+    if surrogates != 0 and (int(surrogates) != surrogates or surrogates < SURROGATES):
         raise ValueError(
-            f"x ({s.name!r}) has {v.size} samples, too few for dim={dim}, delay={delay}, "
-            f"theiler={theiler}, evolve={evolve}: it needs at least "
-            f"{4 * theiler + 4 * evolve + 4 + (dim - 1) * delay}; record a longer series"
+            f"surrogates={surrogates!r}; allowed: 0 (no noise test) or a whole number >= 19"
         )
-    if scale_max is None:
-        tree = cKDTree(Y)
-        k = FLOW_SCALE_POINTS if flow else MAP_SCALE_POINTS
-        probe = np.linspace(0, n - 1, min(n, 500)).astype(np.int64)
-        dk, _ = tree.query(Y[probe], k=min(k + 1, n))
-        scale_max = float(np.median(dk[:, -1])) * (FLOW_SCALE_FRACTION if flow else 1.0)
-        chosen.append("scale_max")
-    if scale_min is None:
-        scale_min = 1e-3 * scale_max
-        chosen.append("scale_min")
-    if not 0 <= scale_min < scale_max:
-        raise ValueError(
-            f"scale_min={scale_min!r} and scale_max={scale_max!r}: need 0 <= scale_min < scale_max"
-        )
-    follower = _Follower(
-        Y,
-        flow=flow,
-        evolve=evolve,
-        scale_min=scale_min,
-        scale_max=scale_max,
+    problem = series_without_dynamics(s)
+    if problem:
+        raise ValueError(problem)
+    # 1. choose the embedding and the scales
+    emb = choose_embedding(s, flow=flow, delay=delay, dim=dim, theiler=theiler, evolve=evolve)
+    scales = choose_scales(emb, scale_min=scale_min, scale_max=scale_max)
+    # 2. evolve
+    followed = follow(
+        emb.points,
+        flow=emb.flow,
+        evolve=emb.evolve,
+        scale_min=scales.scale_min,
+        scale_max=scales.scale_max,
         max_angle=max_angle,
-        theiler=theiler,
+        theiler=emb.theiler,
     )
-    logs, replacements, kept = follower.run()
-    if logs.size == 0:
+    if followed.logs.size == 0:
         raise ValueError(
             f"no neighbour pair could be followed in x ({s.name!r}, {v.size} samples): the "
             "series is too short or too sparse for the chosen scales"
         )
-    elapsed_samples = evolve * np.arange(1, logs.size + 1)
-    running_per_sample = np.cumsum(logs) / elapsed_samples
+    elapsed_samples = emb.evolve * np.arange(1, followed.logs.size + 1)
+    running_per_sample = np.cumsum(followed.logs) / elapsed_samples
+    per_sample = float(running_per_sample[-1])
+    # 3. judge
+    verdict = judge(s, emb, scales, followed.tree, per_sample, surrogates=int(surrogates))
+    return _result(
+        s, emb, scales, followed, verdict, running_per_sample, elapsed_samples, max_angle, period
+    )
+
+
+def _result(
+    s: Series,
+    emb: Embedding,
+    scales: Scales,
+    followed: Followed,
+    verdict: Verdict,
+    running_per_sample: np.ndarray,
+    elapsed_samples: np.ndarray,
+    max_angle: float,
+    period: float | None,
+) -> xr.Dataset:
+    """The Dataset of :func:`wolf_lle`: the estimate, the verdict and the evidence."""
     per_sample = float(running_per_sample[-1])
     lle = per_sample / s.dt
-
-    msgs = _sampling_messages(
-        s, flow=flow, chosen_flow=chosen_flow, smooth=smooth, per_sample=per_sample, spp=spp
-    )
-    d2 = correlation_dimension(Y, follower.tree, theiler, scale_max)
-    min_points = int(math.ceil(POINTS_BASE ** (d2 if np.isfinite(d2) else dim)))
-    if n < min_points:
-        msgs.append(
-            f"{n} embedded points are fewer than 10^D = {min_points} for the correlation "
-            f"dimension D = {d2:.2f} at the scales of the neighbours (Eckmann & Ruelle 1992; "
-            "Wolf et al. 1985: 10^D to 30^D points): record a longer series"
-        )
-    periods = v.size / spp
-    if flow and periods < MIN_PERIODS:
-        msgs.append(
-            f"the series spans {periods:.1f} mean periods (< {MIN_PERIODS}): too few passes "
-            "for neighbours from other parts of the orbit; record a longer series"
-        )
-    if stochastic:
-        msgs.append(
-            "Cao's E2 is within 0.1 of 1 at every dimension: the series looks stochastic, and "
-            "a positive exponent is then no evidence of chaos"
-        )
-    reliable = not msgs
-    message = "; ".join(msgs) if msgs else "no warning"
-
+    flow, cao, fnn, ami = emb.flow, emb.cao, emb.fnn, emb.ami
+    reliable, message = verdict.reliable, verdict.message
+    stochastic, smooth, spp = emb.stochastic, emb.smoothness, emb.samples_per_period
+    dim, delay, evolve, theiler = emb.dim, emb.delay, emb.evolve, emb.theiler
+    scale_min, scale_max = scales.scale_min, scales.scale_max
+    replacements, kept, logs = followed.replacements, followed.kept, followed.logs
+    n = emb.points.shape[0]
+    d2, min_points, chosen = verdict.correlation_dimension, verdict.min_points, emb.chosen
     timed = s.time_units == "s"
     t_units = "s-1" if timed else "1"
     per = "" if timed else (" per iteration" if not flow else " per sample")
@@ -577,6 +304,7 @@ def wolf_lle(
                     "flag_values": np.array([0, 1], dtype=np.int8),
                     "flag_meanings": "flagged reliable",
                     "message": message,
+                    "reasons": "\n".join(verdict.reasons),
                 },
             ),
             "smoothness": (
@@ -638,6 +366,7 @@ def wolf_lle(
                 {"units": "1", "long_name": "correlation dimension at the neighbours' scales"},
             ),
             "min_points": ((), min_points, {"units": "1", "long_name": "10^D points"}),
+            **_surrogate_variables(verdict.surrogate),
         },
         coords={
             "elapsed": (
@@ -647,6 +376,11 @@ def wolf_lle(
             ),
             "lag": ("lag", ami.lag.values, {"units": "1", "long_name": "lag (samples)"}),
             "dimension": ("dimension", dims, {"units": "1", "long_name": "embedding dimension"}),
+            "surrogate": (
+                "surrogate",
+                np.arange(0 if verdict.surrogate is None else verdict.surrogate.sizes["surrogate"]),
+                {"units": "1", "long_name": "IAAFT surrogate"},
+            ),
         },
         attrs={
             "method": "Wolf et al. (1985), fixed evolution time",
@@ -663,3 +397,35 @@ def wolf_lle(
             {"units": "1", "long_name": "largest Lyapunov exponent per forcing period"},
         )
     return out
+
+
+def _surrogate_variables(test: xr.Dataset | None) -> dict:
+    """The surrogate test's variables in :func:`wolf_lle`'s Dataset (NaN, empty and -1 when
+    the test did not run: a non-positive estimate, or ``surrogates=0``)."""
+    if test is None:
+        error, curve, flag = math.nan, np.empty(0), -1
+    else:
+        error, curve = float(test.error), test.surrogate_error.values
+        flag = int(test.stochastic)
+    return {
+        "prediction_error": (
+            (),
+            error,
+            {"units": "1", "long_name": "normalised nonlinear prediction error of the series"},
+        ),
+        "surrogate_error": (
+            "surrogate",
+            curve,
+            {"units": "1", "long_name": "normalised nonlinear prediction error of a surrogate"},
+        ),
+        "surrogate_stochastic": (
+            (),
+            np.int8(flag),
+            {
+                "units": "1",
+                "long_name": "not told from linear correlated noise by IAAFT surrogates",
+                "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+                "flag_meanings": "not_tested deterministic stochastic",
+            },
+        ),
+    }

@@ -1,7 +1,9 @@
 """netCDF archives of runs and campaigns: atomic writing (a temporary file, then a rename),
 exact reading, output paths checked before any work, and the integrity of stores (one writer at
-a time, checksummed files)."""
+a time, checksummed files), and the archive format (``format_version`` on every archive; older
+formats upgraded or refused with a message)."""
 
+from workbench.archive._format import stamp_format, upgrade_archive
 from workbench.archive._integrity import (
     ArchiveError,
     StoreLocked,
@@ -28,6 +30,8 @@ __all__ = [
     "read_manifest",
     "save_run",
     "sha256_file",
+    "stamp_format",
     "store_lock",
+    "upgrade_archive",
     "write_text_atomic",
 ]

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench.archive._format import stamp_format, upgrade_archive
 from workbench.archive._integrity import ArchiveError
 
 __all__ = ["atomic_path", "open_run", "save_run", "write_text_atomic"]
@@ -68,9 +69,13 @@ def save_run(
     for a small file, whose cost is mostly HDF5's per-variable overhead (the campaign's block
     files; measured in the README, "Campaigns"); the files read back identical.
 
+    The file carries the global attribute ``format_version`` (:data:`workbench.FORMAT_VERSION`),
+    added if ``ds`` lacks it.
+
     Returns the path written.
     """
     path = Path(path)
+    ds = stamp_format(ds)
     encoding = {}
     if classic:
         with atomic_path(path) as tmp:
@@ -88,12 +93,17 @@ def save_run(
 def open_run(path: str | os.PathLike) -> xr.Dataset:
     """Read a stored run (or campaign) fully into memory and close the file.
 
+    An archive of an older format (its ``format_version``, :mod:`workbench._version`) is
+    upgraded in memory where the change is unambiguous (``upgraded_from_format`` says so).
+
     Raises
     ------
     FileNotFoundError
         There is no file at ``path``.
     ArchiveError
-        The file is not a readable netCDF file (truncated, corrupt, or something else).
+        The file is not a readable netCDF file (truncated, corrupt, or something else), or an
+        archive of a newer format, or of an older one that cannot be upgraded (the message
+        says what to do).
     """
     path = Path(path)
     if not path.exists():
@@ -102,9 +112,10 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         raise ArchiveError(f"{str(path)!r} is a directory, not a netCDF file")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            return ds.load()
+            ds = ds.load()
     except (OSError, ValueError, RuntimeError, KeyError, IndexError) as exc:
         raise ArchiveError(
             f"{str(path)!r} is not a readable netCDF file (truncated or corrupt?): "
             f"{type(exc).__name__}: {exc}"
         ) from None
+    return upgrade_archive(ds, str(path))

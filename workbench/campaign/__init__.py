@@ -16,7 +16,8 @@ runs blocks of points as tasks (on a local process pool by default, on any
 ``dask.distributed.Client`` when given) and returns one :class:`xarray.Dataset` with the
 parameter dims first, then ``time`` and the model's dims.
 
-Modules: ``_run`` (the orchestration), ``_store`` (the sweep grid and the store on disk),
+Modules: ``_run`` (the orchestration), ``_grid`` (the sweep's points, the campaign's identity
+and code digest), ``_store`` (the store on disk), ``_errors``,
 ``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
 (one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_preload`` (the fork server),
 ``_lifeline`` (processes that die with the campaign).
@@ -28,8 +29,8 @@ Store layout
     sweep.nc                 the assembled campaign (netCDF-4), written last, atomically
     sweep.nc.blocks/
         lock                 held (flock) by the one process writing the store: pid, host
-        manifest.json        scene TOML, grid, chunk size, campaign id, package digest, and
-                             the SHA-256 of every committed block
+        manifest.json        scene TOML, grid, chunk size, campaign id, code digest, and
+                             the SHA-256 and code digest of every committed block
         block-00000.nc       points 0 .. chunk-1 (flat C-order index over the grid)
         block-00001.nc       points chunk .. 2 chunk-1
         ...
@@ -96,17 +97,11 @@ from workbench.campaign._block import (
     invalid_outcome,
     run_outcome,
 )
+from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
+from workbench.campaign._grid import SweepGrid, campaign_id, code_of, expand_sweep, parameter_attrs
 from workbench.campaign._run import run_campaign, store_paths
-from workbench.campaign._store import (
-    CampaignError,
-    CampaignWarning,
-    Store,
-    SweepGrid,
-    campaign_id,
-    expand_sweep,
-    parameter_attrs,
-)
+from workbench.campaign._store import Store
 
 __all__ = [
     "CampaignError",
@@ -117,6 +112,7 @@ __all__ = [
     "available_workers",
     "block_dataset",
     "campaign_id",
+    "code_of",
     "execute",
     "expand_sweep",
     "failed",

@@ -17,13 +17,8 @@ from workbench.campaign._block import (
     failed,
     stat_attrs,
 )
-from workbench.campaign._store import (
-    Store,
-    SweepGrid,
-    forcing_period,
-    format_point,
-    parameter_attrs,
-)
+from workbench.campaign._grid import SweepGrid, forcing_period, format_point, parameter_attrs
+from workbench.campaign._store import Store
 from workbench.models import get_model
 from workbench.run import provenance, record_times
 from workbench.scene import Scene

@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import save_run, sha256_file
+from workbench.campaign._grid import code_of, modules_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
@@ -161,7 +162,8 @@ def _point(scene: Scene, params: dict[str, float], per_point=None) -> dict:
 def run_block(task: BlockTask) -> dict:
     """Run the points of one block and write them to ``task.path`` (atomically).
 
-    Returns a summary: the SHA-256 of the file written, block index, number of points, failures
+    Returns a summary: the SHA-256 of the file written, the digest of the code that computed it
+    (``code_digest``, also an attribute of the file), block index, number of points, failures
     ``[(flat, message)]``, wall time of the block and the sum of the solvers' wall times (s),
     worker process id, and ``dataset``: the block as written (None when larger than
     RETURN_LIMIT bytes; then read the file).
@@ -175,7 +177,9 @@ def run_block(task: BlockTask) -> dict:
     ]
     ds = block_dataset(scene, task.flat, runs)
     ds.attrs.update(campaign_id=task.campaign_id, block=task.block)
+    code = code_of(scene, *modules_of(task.per_point))
     ds.attrs.update(
+        code_digest=code,
         worker_pid=os.getpid(),
         worker_task_number=_TASKS_IN_PROCESS,
         block_wall_time=time.perf_counter() - wall0,
@@ -183,6 +187,7 @@ def run_block(task: BlockTask) -> dict:
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
     return {
         "sha256": sha256_file(task.path),
+        "code_digest": code,
         "dataset": ds if ds.nbytes <= RETURN_LIMIT else None,
         "block": task.block,
         "points": len(task.flat),

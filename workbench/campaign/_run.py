@@ -17,17 +17,18 @@ import xarray as xr
 from workbench.archive import open_run, save_run
 from workbench.campaign._assemble import assemble
 from workbench.campaign._block import BlockTask, failed
+from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
-from workbench.campaign._schedule import longest_first
-from workbench.campaign._store import (
-    CampaignError,
-    CampaignWarning,
-    Store,
+from workbench.campaign._grid import (
     SweepGrid,
     campaign_id,
+    code_of,
     expand_sweep,
     format_point,
+    modules_of,
 )
+from workbench.campaign._schedule import longest_first
+from workbench.campaign._store import Store
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["run_campaign", "store_paths"]
@@ -208,7 +209,9 @@ def _run_locked(
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
         cid = campaign_id(scene, chunk, per_point)
-        manifest = st.write_manifest(scene, grid, chunk, cid)
+        manifest = st.write_manifest(
+            scene, grid, chunk, cid, code_of(scene, *modules_of(per_point))
+        )
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
         cid = manifest["campaign_id"]
@@ -220,7 +223,8 @@ def _run_locked(
             )
     st.remove_temporaries()
     blocks = grid.blocks(chunk)
-    done = st.verified_blocks(manifest, blocks)
+    code = code_of(scene, *modules_of(per_point))
+    done = st.verified_blocks(manifest, blocks, code)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -245,7 +249,7 @@ def _run_locked(
         bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
 
         def commit(result: dict) -> None:
-            st.commit(manifest, result["block"], result["sha256"])
+            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
             if bar is not None:
                 bar.update(result["points"])
 
@@ -281,6 +285,9 @@ def _run_locked(
                 manifest["checksums"][str(i)] for i in range(len(blocks))
             ),
             "campaign_per_point": _name(per_point),
+            "code_digests": " ".join(
+                sorted({manifest["code_digests"][str(i)] for i in range(len(blocks))})
+            ),
         },
         in_memory,
     )

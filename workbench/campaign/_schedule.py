@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from workbench.campaign._block import BlockTask
-from workbench.campaign._store import SweepGrid, forcing_period
+from workbench.campaign._grid import SweepGrid, forcing_period
 from workbench.scene import Scene
 
 __all__ = ["longest_first", "simulated_span"]

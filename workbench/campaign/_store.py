@@ -1,4 +1,4 @@
-"""The grid of a campaign and its store on disk: manifest, block files, scene comparison.
+"""The store of a campaign on disk: manifest, block files, lock, scene comparison.
 
 Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
 
@@ -12,27 +12,25 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
         block-00001.nc        ...
 
 A block is *committed* when its checksum is in the manifest; on resume a block is reused only
-if its file's SHA-256 matches, otherwise it is named and recomputed.
+if its file's SHA-256 matches, otherwise it is named and recomputed. The manifest also records,
+per block, the digest of the code that computed it (:func:`workbench.campaign._grid.code_of`;
+the block file carries it as the attribute ``code_digest``): a block computed by other code (a
+model's default edited, a ``git pull``) is named and recomputed on resume, so an archive never
+mixes results of two versions of the code. Its attribute ``code_digests`` lists the digests
+it holds.
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
-import math
 import os
 import re
 import warnings
-from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-
-from workbench._cache import package_digest
 from workbench.archive import (
-    StoreWarning,
     check_output_file,
     file_problem,
     mapping_diff,
@@ -40,108 +38,17 @@ from workbench.archive import (
     store_lock,
     write_text_atomic,
 )
-from workbench.models import get_model
-from workbench.run import REALISATION_ATTRS
-from workbench.scene import RUN_SWEEP_KEYS, Scene, SceneError, scene_from_toml
+from workbench.campaign._errors import CampaignError, CampaignWarning
+from workbench.campaign._grid import SweepGrid, code_of
+from workbench.scene import Scene, SceneError, scene_from_toml
 
-__all__ = ["CampaignError", "CampaignWarning", "Store", "SweepGrid", "expand_sweep"]
+__all__ = ["FORMAT", "Store"]
 
 FORMAT = "workbench-campaign 2"  # 2: block checksums, lock
 _BLOCK_RE = re.compile(r"^block-(\d{5,})\.nc$")
 _TMP_RE = re.compile(r"^\.(block-\d{5,}\.nc|manifest\.json)\..*\.tmp$")
 
 
-class CampaignError(ValueError):
-    """A campaign cannot run as asked (e.g. its store holds a different campaign); the message
-    says what differs and how to proceed."""
-
-
-class CampaignWarning(StoreWarning):
-    """Something about a campaign deserves attention (failed points, a changed package)."""
-
-
-@dataclass(frozen=True)
-class SweepGrid:
-    """The points of a campaign: the outer product of the swept values, in C order (not to be
-    confused with a run's record times, :func:`workbench.run.record_times`).
-
-    Attributes
-    ----------
-    dims : tuple[str, ...]
-        Swept parameter names, in the scene's ``[sweep]`` order (the dataset's leading dims).
-    values : tuple[tuple[float, ...], ...]
-        The values of each dim (SI units of the parameter).
-    """
-
-    dims: tuple[str, ...]
-    values: tuple[tuple[float, ...], ...]
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(len(v) for v in self.values)
-
-    @property
-    def size(self) -> int:
-        return math.prod(self.shape)
-
-    def point(self, flat: int) -> dict[str, float]:
-        """Parameter values of the point with flat (C-order) index ``flat``."""
-        idx = np.unravel_index(flat, self.shape)
-        return {
-            d: self.values[k][int(i)] for k, (d, i) in enumerate(zip(self.dims, idx, strict=True))
-        }
-
-    def blocks(self, chunk: int) -> list[range]:
-        """Flat point indices of each block of ``chunk`` points (the last may be shorter)."""
-        return [range(s, min(s + chunk, self.size)) for s in range(0, self.size, chunk)]
-
-    def as_dict(self) -> dict[str, list[float]]:
-        return {d: list(v) for d, v in zip(self.dims, self.values, strict=True)}
-
-
-def expand_sweep(scene: Scene) -> SweepGrid:
-    """The grid of a scene's ``[sweep]`` (CampaignError if it has none)."""
-    if not scene.sweep:
-        raise CampaignError(
-            "a campaign needs a [sweep] table naming at least one parameter, e.g. "
-            "[sweep] gamma = {start = 0.2, stop = 0.5, num = 40}; this scene has none "
-            "(run a single scene with workbench.simulate)"
-        )
-    dims = tuple(scene.sweep)
-    return SweepGrid(dims, tuple(tuple(float(x) for x in scene.sweep[d]) for d in dims))
-
-
-def forcing_period(scene: Scene, grid: SweepGrid, flat: int) -> float | None:
-    """Forcing period (s) of the grid point ``flat`` (None for an autonomous model)."""
-    params = dict(scene.resolved_parameters)
-    params.update(grid.point(flat))
-    return get_model(scene.model).forcing_period(params)
-
-
-def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a model parameter (from its declaration), or of a swept
-    ``[run]`` key (``realisation``)."""
-    if name in RUN_SWEEP_KEYS:
-        return dict(REALISATION_ATTRS)
-    p = get_model(scene.model).parameter(name)
-    return {"units": p.units, "long_name": p.long_name}
-
-
-def format_point(point: Mapping[str, float]) -> str:
-    return ", ".join(f"{k}={v:.6g}" for k, v in point.items())
-
-
-def campaign_id(scene: Scene, chunk: int, per_point=None) -> str:
-    """Digest of what fixes the content of every block: the scene, the chunk size and the
-    function that measures each point (its qualified name; None: none)."""
-    h = hashlib.sha256(scene.to_toml().encode())
-    h.update(f"\nchunk={chunk}".encode())
-    if per_point is not None:
-        h.update(f"\nper_point={per_point.__module__}.{per_point.__qualname__}".encode())
-    return h.hexdigest()[:16]
-
-
-# -- the store -------------------------------------------------------------------------------------
 class Store:
     """Paths and bookkeeping of one campaign store (see the module docstring)."""
 
@@ -174,7 +81,11 @@ class Store:
             return None
         return read_manifest(self.manifest_path, FORMAT, "the campaign", CampaignError)
 
-    def write_manifest(self, scene: Scene, grid: SweepGrid, chunk: int, cid: str) -> dict:
+    def write_manifest(
+        self, scene: Scene, grid: SweepGrid, chunk: int, cid: str, code: str | None = None
+    ) -> dict:
+        """Start the manifest of a campaign; ``code``: the digest of the code that computes
+        its blocks (default :func:`workbench.campaign._grid.code_of` of the scene)."""
         data = {
             "format": FORMAT,
             "campaign_id": cid,
@@ -184,8 +95,9 @@ class Store:
             "chunk": chunk,
             "points": grid.size,
             "blocks": len(grid.blocks(chunk)),
-            "package_digest": package_digest(),
+            "code_digest": code_of(scene) if code is None else code,
             "checksums": {},
+            "code_digests": {},
         }
         return self.save_manifest(data)
 
@@ -226,16 +138,6 @@ class Store:
                 f"chunk=None (or {stored}) to resume, or restart=True (CLI --restart) to start "
                 "afresh with the new size."
             )
-        if manifest.get("package_digest") != package_digest():
-            warnings.warn(
-                CampaignWarning(
-                    "the workbench package changed since this campaign started (source digest "
-                    f"{manifest.get('package_digest')!r} -> {package_digest()!r}); blocks "
-                    "computed before and after the change are combined. Pass restart=True for a "
-                    "campaign computed by one version throughout."
-                ),
-                stacklevel=3,
-            )
         return stored
 
     def clear(self) -> None:
@@ -263,34 +165,55 @@ class Store:
             removed.append(p)
         return removed
 
-    def verified_blocks(self, manifest: dict, blocks: list[range]) -> set[int]:
+    def verified_blocks(self, manifest: dict, blocks: list[range], code: str) -> set[int]:
         """Indices of the committed blocks whose file is intact (its SHA-256 is the one in the
-        manifest). Every other block is named in a CampaignWarning (missing, corrupt, or
-        written but never committed) and will be recomputed; the manifest drops their
-        checksums."""
+        manifest) and that the code of digest ``code`` computed. Every other block is named in a
+        CampaignWarning (missing, corrupt, written but never committed, or computed by other
+        code) and will be recomputed; the manifest drops their checksums."""
         sums: dict[str, str] = manifest.setdefault("checksums", {})
-        done, dropped = set(), False
+        codes: dict[str, str] = manifest.setdefault("code_digests", {})
+        done, dropped, other = set(), False, {}
         for i in range(len(blocks)):
             path = self.block_path(i)
             problem = file_problem(path, sums.get(str(i)))
-            if problem is None:
+            if problem is None and str(i) in sums and codes.get(str(i)) != code:
+                other.setdefault(codes.get(str(i), "unrecorded"), []).append(i)
+                problem = "stale"
+            elif problem is None:
                 if str(i) in sums:
                     done.add(i)
                 continue
-            warnings.warn(
-                CampaignWarning(f"block {i} ({path.name}) {problem}; recomputing"), stacklevel=3
-            )
+            else:
+                warnings.warn(
+                    CampaignWarning(f"block {i} ({path.name}) {problem}; recomputing"),
+                    stacklevel=3,
+                )
             if sums.pop(str(i), None) is not None:
                 dropped = True
+            codes.pop(str(i), None)
             with contextlib.suppress(OSError):
                 path.unlink()
+        if other:
+            n = sum(len(v) for v in other.values())
+            was = ", ".join(f"{d!r} ({len(v)})" for d, v in other.items())
+            warnings.warn(
+                CampaignWarning(
+                    f"{n} of {len(blocks)} blocks were computed by other code (code digest "
+                    f"{was}; this code: {code!r}: the package, a model or the solver changed "
+                    "since they ran); recomputing them, so that the archive holds the results "
+                    "of one version of the code"
+                ),
+                stacklevel=3,
+            )
         if dropped:
             self.save_manifest(manifest)
         return done
 
-    def commit(self, manifest: dict, block: int, sha256: str) -> None:
-        """Record a finished block's checksum in the manifest (the block is then committed)."""
+    def commit(self, manifest: dict, block: int, sha256: str, code: str) -> None:
+        """Record a finished block's checksum and the digest of the code that computed it in
+        the manifest (the block is then committed)."""
         manifest.setdefault("checksums", {})[str(block)] = sha256
+        manifest.setdefault("code_digests", {})[str(block)] = code
         self.save_manifest(manifest)
 
     @contextlib.contextmanager

@@ -20,12 +20,12 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import save_run, sha256_file
-from workbench.campaign import block_dataset, failed, invalid_outcome, run_outcome
+from workbench.campaign import block_dataset, code_of, failed, invalid_outcome, run_outcome
 from workbench.run import derive, integrate, prepare, to_dataset
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
 
-__all__ = ["SEED_ATTRS", "SegmentTask", "continue_point", "run_segment"]
+__all__ = ["SEED_ATTRS", "SegmentTask", "continue_point", "run_segment", "segment_code"]
 
 #: how a point of a continued sweep started (int8 ``seed``, CF flags)
 CONTINUED, BRUTE_FORCE, CHAINED_START, RESTARTED = 0, 1, 2, 3
@@ -127,6 +127,12 @@ def continue_point(
     return outcome, final
 
 
+def segment_code(scene: Scene) -> str:
+    """Digest of the code that computes a segment's block (the campaign's
+    :func:`workbench.campaign.code_of` with this module)."""
+    return code_of(scene, __name__)
+
+
 def run_segment(task: SegmentTask) -> dict:
     """Run a segment (in a worker) and write its block file (atomically); the summary has the
     fields of :func:`workbench.campaign._block.run_block`'s."""
@@ -150,7 +156,9 @@ def run_segment(task: SegmentTask) -> dict:
     if task.own_from:
         ds = ds.merge(_seam_points(scene, task.flat[: task.own_from], runs[: task.own_from]))
     ran = next((r for r in runs if r.get("states") is not None), None)
+    code = segment_code(scene)
     ds.attrs.update(
+        code_digest=code,
         campaign_id=task.campaign_id,
         block=task.block,
         state_names=" ".join(q.name for q in ran["states"]) if ran else "",
@@ -161,6 +169,7 @@ def run_segment(task: SegmentTask) -> dict:
     save_run(ds, task.path, classic=True)
     return {
         "sha256": sha256_file(task.path),
+        "code_digest": code,
         "dataset": ds,
         "block": task.block,
         "points": len(task.flat),

@@ -21,7 +21,7 @@ from workbench.campaign import (
 )
 from workbench.continuation._plan import BRUTE, CHAINED, Plan, SegmentSpec
 from workbench.continuation._seams import attractor_distance, cloud, line_scale
-from workbench.continuation._segment import SEED_ATTRS, SegmentTask, run_segment
+from workbench.continuation._segment import SEED_ATTRS, SegmentTask, run_segment, segment_code
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["continued_sweep"]
@@ -118,16 +118,17 @@ def continued_sweep(
 def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) -> xr.Dataset:
     manifest = st.read_manifest()
     cid = campaign_id(scene, plan.segments)
+    code = segment_code(scene)
     if manifest is None:
         if st.archive.is_file():
             ds = open_run(st.archive)
             st.check_scene(ds.attrs.get("scene", ""), scene, repr(str(st.archive)))
             return ds
-        manifest = st.write_manifest(scene, plan.grid, plan.segments, cid)
+        manifest = st.write_manifest(scene, plan.grid, plan.segments, cid, code)
     else:
         st.check_manifest(manifest, scene, plan.segments)
     st.remove_temporaries()
-    done = st.verified_blocks(manifest, [range(0)] * plan.n_blocks)
+    done = st.verified_blocks(manifest, [range(0)] * plan.n_blocks, code)
     n_workers = available_workers(client, workers)
     blocks: dict[int, xr.Dataset] = {}
     stats = {"computed": 0, "reused": 0, "rounds": 0, "compute": 0.0, "cpu": 0.0}
@@ -145,7 +146,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
         t0 = time.perf_counter()
 
         def commit(result: dict) -> None:
-            st.commit(manifest, result["block"], result["sha256"])
+            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
             blocks[result["block"]] = result["dataset"]
             stats["cpu"] += result["dataset"].attrs["block_cpu_time"]
             if bar is not None:
@@ -185,6 +186,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
         campaign_block_sha256=" ".join(
             manifest["checksums"][str(b)] for b in sorted(final.values())
         ),
+        code_digests=" ".join(sorted({manifest["code_digests"][str(b)] for b in final.values()})),
     )
     save_run(ds, st.archive)
     return open_run(st.archive)

@@ -125,6 +125,20 @@ class Model:
         out.update({q.name: q for q in self.outputs(effects)})
         return out
 
+    def recorded_always(self, effects: Mapping[str, Any]) -> tuple[str, ...]:
+        """Output variables every run with these effects records, whatever the scene lists
+        (diagnostics of a law that can leave its physics); none by default."""
+        return ()
+
+    def diagnose(self, ds, params: Mapping[str, float]) -> list[str]:
+        """Warnings about a run's dataset ``ds`` (one sentence each; none by default)."""
+        return []
+
+    def summary(self, ds, params: Mapping[str, float]) -> str:
+        """What the run's summary line adds for this model ('' by default; else starting with
+        '; ')."""
+        return ""
+
     def forcing_period(self, params: Mapping[str, float]) -> float | None:
         """Period of the external forcing, s; None for an autonomous system."""
         return None

@@ -25,6 +25,14 @@ from workbench.models._clearance import (
     friction_block,
     joint_outputs,
 )
+from workbench.models._friction_report import (
+    DIAGNOSTICS,
+    TIME_SCALE,
+    diagnostic_outputs,
+    diagnostic_states,
+    friction_summary,
+    friction_warnings,
+)
 from workbench.models._layout import Layout
 from workbench.models._mechanism_layouts import JOINT_RECORD
 
@@ -71,6 +79,16 @@ class Mechanism(Model):
 
     def forcing_period(self, params):
         return 2.0 * math.pi / params["omega"]
+
+    def recorded_always(self, effects):
+        lugre = effects["friction"] == "lugre" and bool(effects["clearance"])
+        return DIAGNOSTICS if lugre else ()
+
+    def diagnose(self, ds, params):
+        return friction_warnings(ds, params)
+
+    def summary(self, ds, params):
+        return friction_summary(ds, params)
 
     def clearances(self, params) -> dict[str, float]:
         """Clearance of each joint, m."""
@@ -144,8 +162,9 @@ def mechanism_outputs(effects: Mapping[str, Any], slider: str) -> tuple[Quantity
 
 def state_scales(states, clearance: float, omega: float) -> np.ndarray:
     """Characteristic size of each state for the solver's atol: the clearance c (m) for
-    lengths, c omega (m s-1) for rates, 1 J for the energy quadratures."""
-    size = {"m": clearance, "m s-1": clearance * omega}
+    lengths, c omega (m s-1) for rates, 1 J for the energy quadratures, TIME_SCALE (s) for
+    the friction-law quadratures (:mod:`workbench.models._friction_report`)."""
+    size = {"m": clearance, "m s-1": clearance * omega, "s": TIME_SCALE}
     return np.array([size.get(q.units, 1.0) for q in states])
 
 
@@ -231,21 +250,28 @@ def mechanism_problem(
     -------
     Problem
         State: the clearance vectors, their rates, the LuGre bristles (see
-        :func:`clearance_states`) and the energy quadratures when ``driver_work`` or
-        ``dissipated_energy`` is requested.
+        :func:`clearance_states`), the friction-law quadratures of
+        :mod:`workbench.models._friction_report` when LuGre's ``time_above_static_friction``
+        or ``time_beyond_friction_law`` is requested, and the energy quadratures when
+        ``driver_work`` or ``dissipated_energy`` is.
     """
     present = [j for j in joints if j in effects["clearance"]]
     lugre = effects["friction"] == "lugre"
     energy = bool(present) and ("driver_work" in requested or "dissipated_energy" in requested)
+    timed = lugre and any(q.name in requested for q in diagnostic_outputs())
     states = list(clearance_states(present, effects["friction"]))
     y0 = [float(initial.get(q.name, 0.0)) for q in states]
+    if timed:
+        states += diagnostic_states(present)
+        y0 += [0.0, 0.0] * len(present)
     if energy:
         states += ENERGY_STATES
         y0 += [0.0, 0.0]
     nf = 2 * len(present)
     n = len(joints)
-    has, slot, z = [0] * n, [-1] * n, [-1] * n
+    has, slot, z, mu = [0] * n, [-1] * n, [-1] * n, [-1] * n
     free = [-1] * (2 * n)
+    n_z = len(present) if lugre else 0
     for i, name in enumerate(present):
         j = joints.index(name)
         has[j] = 1
@@ -253,14 +279,17 @@ def mechanism_problem(
         free[2 * i : 2 * i + 2] = [n_driven + 2 * j, n_driven + 2 * j + 1]
         if lugre:
             z[j] = 2 * nf + i
+        if timed:
+            mu[j] = 2 * nf + n_z + 2 * i
     ip = IP.pack(
         {
             "has": has,
             "slot": slot,
             "z": z,
+            "mu": mu,
             "friction": FRICTION_CODES[effects["friction"]],
             "energy": int(energy),
-            "w": 2 * nf + (len(present) if lugre else 0) if energy else -1,
+            "w": 2 * nf + n_z + (2 * len(present) if timed else 0) if energy else -1,
             "nf": nf,
             "free": free,
         },
@@ -319,9 +348,14 @@ def mechanism_derive(
         for name, field in _JOINT_OUTPUTS.items():
             out[name] = per_joint(field)
         out["penetration"] = np.maximum(per_joint("delta"), 0.0)
+        out["friction_coefficient"] = np.abs(per_joint("mu"))
         iz = problem.ip[IP.block("z")]
         if iz.max() >= 0:
             out["lugre_z"] = np.stack([Y[:, iz[j]] for j in cols], axis=1)
+        im = problem.ip[IP.block("mu")]
+        if im.max() >= 0:
+            for k, q in enumerate(diagnostic_outputs()):
+                out[q.name] = np.stack([Y[:, im[j] + k] - Y[0, im[j] + k] for j in cols], axis=1)
         iw = problem.ip[IP.w]
         if iw >= 0:
             out["driver_work"] = Y[:, iw] - Y[0, iw]

@@ -31,6 +31,7 @@ FRICTION = layout(
         ("sigma2", 1),
         ("v_s", 1),  # Stribeck velocity, m s-1
         ("gamma", 1),  # Stribeck exponent
+        ("v_d", 1),  # velocity of the bristle damping's decay, m s-1 (0: constant sigma1)
     ],
 )
 
@@ -62,6 +63,9 @@ JOINT_RECORD = layout(
         ("ddot", 1),  # penetration rate, m s-1
         ("fn", 1),  # normal force, N
         ("ft", 1),  # friction force on the journal along t, N
+        ("mu", 1),  # friction coefficient of the law, -ft / fn (0 out of contact)
+        ("above", 1),  # 1 where |mu| > mu_s (LuGre), else 0
+        ("beyond", 1),  # 1 where |mu| > the law's envelope 2 mu_s + sigma2 |vt| (LuGre), else 0
         ("vt", 1),  # sliding velocity, m s-1
         ("zdot", 1),  # bristle rate, m s-1
         ("pdiss", 1),  # dissipated power, W
@@ -76,16 +80,19 @@ def index_fields(n_joints: int) -> list[tuple[str, int]]:
 
     ``has + j``: 1 if joint j has a clearance; ``slot + j``: index in y of joint j's clearance
     x (its y follows, the rates nf later), -1 if none; ``z + j``: index in y of joint j's
-    bristle deflection, -1 if none; ``friction``: FRICTION_*; ``energy``: 1 if the energy
-    quadratures are integrated; ``w``: index in y of the driver-work quadrature (the dissipated
-    energy follows), -1 if none; ``nf``: number of free coordinates; ``free + i``: index in q
-    of free coordinate i (-1 beyond nf). The free coordinates of joint j are the
-    q[nd + 2 j], q[nd + 2 j + 1] after the nd driven ones.
+    bristle deflection, -1 if none; ``mu + j``: index in y of joint j's quadrature of the time
+    its LuGre friction coefficient exceeds mu_s (the time beyond the law's envelope follows),
+    -1 if none; ``friction``: FRICTION_*; ``energy``: 1 if the energy quadratures are
+    integrated; ``w``: index in y of the driver-work quadrature (the dissipated energy
+    follows), -1 if none; ``nf``: number of free coordinates; ``free + i``: index in q of free
+    coordinate i (-1 beyond nf). The free coordinates of joint j are the q[nd + 2 j],
+    q[nd + 2 j + 1] after the nd driven ones.
     """
     return [
         ("has", n_joints),
         ("slot", n_joints),
         ("z", n_joints),
+        ("mu", n_joints),
         ("friction", 1),
         ("energy", 1),
         ("w", 1),

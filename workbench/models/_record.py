@@ -22,6 +22,7 @@ from workbench.models._mechanism_layouts import (
 from workbench.models._reduced import (
     body_product,
     dissipated_power,
+    friction_excess,
     friction_parameters,
     joint_forces,
     joint_parameters,
@@ -154,18 +155,18 @@ def clearance_joint(
     (rows of J and pos), with their generalised forces added to Q (the forces act at the
     material contact points, so friction also exerts moments on both bodies).
 
-    Returns (e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay) as :func:`joint_forces`.
+    Returns (e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay) as :func:`joint_forces`.
     """
     vj = body_velocity(vel, pos, bj)
     vb = body_velocity(vel, pos, bb)
-    e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy = joint_forces(
+    e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy = joint_forces(
         x, y, vx, vy, onset, bcx, bcy, vj, vb, joint_parameters(p, jb),
         friction_parameters(p, fb), friction, z, hg,
     )  # fmt: skip
     if delta > 0.0 and e > 0.0:
         generalised_force(Q, J, pos, bj, jx, jy, fx, fy)
         generalised_force(Q, J, pos, bb, bx, by, -fx, -fy)
-    return e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay
+    return e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay
 
 
 @njit(cache=True, inline="always")
@@ -264,7 +265,7 @@ def evaluate_mechanism(
         ix = nd + 2 * j
         iz = ip[IP.z + j]
         z = y[iz] if iz >= 0 else 0.0
-        e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay = clearance_joint(
+        e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay = clearance_joint(
             Q, J, pos, vel, journal[j], bearing[j], pts[bearing_point[j], 0],
             pts[bearing_point[j], 1], q[ix], q[ix + 1], qd[ix], qd[ix + 1], aux[j], p, jb,
             P.friction, friction, z, work[W.hg],
@@ -283,6 +284,10 @@ def evaluate_mechanism(
         work[wb + JOINT_RECORD.ddot] = ddot
         work[wb + JOINT_RECORD.fn] = fn
         work[wb + JOINT_RECORD.ft] = ft
+        work[wb + JOINT_RECORD.mu] = mu
+        above, beyond = friction_excess(mu, vt, friction_parameters(p, P.friction))
+        work[wb + JOINT_RECORD.above] = above
+        work[wb + JOINT_RECORD.beyond] = beyond
         work[wb + JOINT_RECORD.vt] = vt
         work[wb + JOINT_RECORD.zdot] = zdot
         work[wb + JOINT_RECORD.pdiss] = pd
@@ -333,6 +338,12 @@ def rates_from_record(y, ip, aux, work, dydt, IP, W, n_joints):
         if iz >= 0:
             # bristles exist only in contact: frozen out of contact (reset at each onset)
             dydt[iz] = work[W.joint + j * JOINT_RECORD.size + JOINT_RECORD.zdot]
+    for j in range(n_joints):
+        im = ip[IP.mu + j]
+        if im >= 0:
+            rec = W.joint + j * JOINT_RECORD.size
+            dydt[im] = work[rec + JOINT_RECORD.above]
+            dydt[im + 1] = work[rec + JOINT_RECORD.beyond]
     iw = ip[IP.w]
     if iw >= 0:
         dydt[iw] = work[W.pdrive]

@@ -44,7 +44,13 @@ from workbench.models._mechanism_layouts import (
 from workbench.models.contact import (
     lankarani_nikravesh,
 )
-from workbench.models.friction import coulomb_modified, lugre_decay, lugre_force
+from workbench.models.friction import (
+    coulomb_modified,
+    lugre_coefficient,
+    lugre_damping,
+    lugre_decay,
+    lugre_envelope,
+)
 
 
 # ================================================================================================
@@ -87,6 +93,7 @@ def friction_parameters(p, fb):
         p[fb + FRICTION.cf], p[fb + FRICTION.v0], p[fb + FRICTION.v1], p[fb + FRICTION.mu_k],
         p[fb + FRICTION.mu_s], p[fb + FRICTION.sigma0], p[fb + FRICTION.sigma1],
         p[fb + FRICTION.sigma2], p[fb + FRICTION.v_s], p[fb + FRICTION.gamma],
+        p[fb + FRICTION.v_d],
     )  # fmt: skip
 
 
@@ -115,15 +122,17 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
         LuGre bristle deflection (m); in an implicit ARK548 stage its known part B.
     hg : float
         h gamma (s) of an implicit ARK548 stage, else 0: z is then replaced by the solution of
-        z = B + hg (vt - a z) (see :mod:`workbench.solver._kernel`).
+        z = B + hg (vt - a z) (see :mod:`workbench.solver._templates.integration_loop`).
 
     Returns
     -------
     tuple
-        (e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy):
+        (e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy):
         eccentricity and penetration (m), penetration rate (m s-1), normal force and its damping
-        part (N), friction force on the journal along t = (-ny, nx) (N), sliding velocity
-        (m s-1), the bristle deflection used (m), its rate (m s-1) and decay rate a in
+        part (N), friction force on the journal along t = (-ny, nx) (N), the friction
+        coefficient of the law mu (1; 0 without friction or contact; -ft / fn, with LuGre's
+        bristle deflection taken on its invariant set, see :func:`lugre_diagnostic`), sliding
+        velocity (m s-1), the bristle deflection used (m), its rate (m s-1) and decay rate a in
         zdot = vt - a z (s-1; both 0 out of contact, where the bristles are frozen), the
         material contact points of journal and bearing (m), and the force on the journal (N;
         the bearing gets the opposite). Out of contact the forces and points are 0.
@@ -131,7 +140,7 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
     e = math.sqrt(x * x + y * y)
     delta = e - jp[JOINT.c]
     if delta <= 0.0 or e == 0.0:
-        return e, delta, 0.0, 0.0, 0.0, 0.0, 0.0, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return e, delta, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     nx = x / e
     ny = y / e
     ddot = nx * vx + ny * vy
@@ -156,10 +165,12 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
     ty = nx
     vt = (vjx - vbx) * tx + (vjy - vby) * ty
     ft = 0.0
+    mu = 0.0
     zdot = 0.0
     decay = 0.0
     if friction == FRICTION_COULOMB:
         ft = coulomb_modified(vt, fn, fp[FRICTION.cf], fp[FRICTION.v0], fp[FRICTION.v1])
+        mu = -ft / fn if fn > 0.0 else 0.0
     elif friction == FRICTION_LUGRE and fn > 0.0:
         s0 = fp[FRICTION.sigma0]
         decay = lugre_decay(
@@ -167,11 +178,41 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
         )
         z = (z + hg * vt) / (1.0 + hg * decay)  # exact for hg = 0
         zdot = vt - decay * z  # the bristle equation, Eq. (9)
-        ft = lugre_force(vt, z, zdot, fn, s0, fp[FRICTION.sigma1], fp[FRICTION.sigma2])
+        s1 = lugre_damping(vt, fp[FRICTION.sigma1], fp[FRICTION.v_d])
+        ft = -lugre_coefficient(vt, z, zdot, s0, s1, fp[FRICTION.sigma2]) * fn
+        mu = lugre_diagnostic(vt, z, decay, s0, s1, fp)
     # force on the journal: the normal force pushes it back towards the bearing centre
     fx = -fn * nx + ft * tx
     fy = -fn * ny + ft * ty
-    return e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy
+    return e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy
+
+
+@njit(cache=True, inline="always")
+def lugre_diagnostic(vt, z, decay, s0, s1, fp):
+    """The LuGre friction coefficient (1) the diagnostics report: the law's, with the bristle
+    deflection z (m) on its invariant set |z| <= max(mu_s, mu_k) / s0 (Canudas de Wit et al.
+    1995, Property 1: the exact solution never leaves it). Where the integration is accurate
+    it is -F_t / F_n; a z beyond the set is the integrator's error, not the law's (a stage of
+    an explicit step, or the dense output of the stiff bristle state between two steps of
+    DOP853 at its stability bound, measured up to 20 times the set), and is not the friction
+    law leaving its physics. ``decay`` is the relaxation rate a (s-1), s0 (m-1) and the damping
+    in effect s1 (s m-1) as in :func:`workbench.models.friction.lugre_coefficient`."""
+    zmax = max(fp[FRICTION.mu_s], fp[FRICTION.mu_k]) / s0
+    zc = min(max(z, -zmax), zmax)
+    return lugre_coefficient(vt, zc, vt - decay * zc, s0, s1, fp[FRICTION.sigma2])
+
+
+@njit(cache=True, inline="always")
+def friction_excess(mu, vt, fp):
+    """The rates of a joint's friction-law quadratures (:mod:`workbench.models._friction_report`):
+    (1, _) where the friction coefficient |mu| exceeds the static mu_s, (_, 1) where it exceeds
+    the law's envelope 2 mu_s + s2 |vt| (:func:`workbench.models.friction.lugre_envelope`; vt
+    the sliding velocity, m s-1), else 0 (mu is 0 out of contact)."""
+    m = abs(mu)
+    mu_s = fp[FRICTION.mu_s]
+    above = 1.0 if m > mu_s else 0.0
+    beyond = 1.0 if m > lugre_envelope(vt, mu_s, fp[FRICTION.sigma2]) else 0.0
+    return above, beyond
 
 
 @njit(cache=True, inline="always")
@@ -210,17 +251,17 @@ def lean_joint(x, yy, vx, vy, onset, z, friction, jp, fp, hg, rates, cen, journa
     from the velocity pass and the centroids, with scalars and tuples only (so that the lean
     right-hand sides keep everything in registers).
 
-    Returns (delta, ddot, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm, barm)
-    with the moments (N m) of the journal force about the journal body's centroid and of the
-    bearing's (the opposite) force about the bearing body's centroid.
+    Returns (delta, ddot, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm,
+    barm) with the moments (N m) of the journal force about the journal body's centroid and of
+    the bearing's (the opposite) force about the bearing body's centroid.
     """
-    e, delta, ddot, fn, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy = joint_forces(
+    e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy = joint_forces(
         x, yy, vx, vy, onset, bc[0], bc[1], body_motion(rates, cen, journal),
         body_motion(rates, cen, bearing), jp, fp, friction, z, hg,
     )  # fmt: skip
     arm = moment_arm(jx, jy, cen[2 * journal], cen[2 * journal + 1], fx, fy)
     barm = moment_arm(bx, by, cen[2 * bearing], cen[2 * bearing + 1], -fx, -fy)
-    return delta, ddot, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm, barm
+    return delta, ddot, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm, barm
 
 
 @njit(cache=True, inline="always")

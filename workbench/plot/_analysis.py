@@ -48,9 +48,16 @@ def poincare_figure(value: xr.DataArray, rate: xr.DataArray) -> plt.Figure:
     return fig
 
 
-def embedding_figure(ami: xr.Dataset, fnn: xr.Dataset, cao: xr.Dataset | None = None):
+def embedding_figure(
+    ami: xr.Dataset, fnn: xr.Dataset | None = None, cao: xr.Dataset | None = None
+) -> plt.Figure:
     """The evidence behind the embedding: AMI over lag (chosen delay marked), the fraction of
-    false nearest neighbours and Cao's E1, E2 over the dimension (chosen dimension marked)."""
+    false nearest neighbours and Cao's E1, E2 over the dimension (chosen dimension marked).
+
+    ``ami`` may instead be the Dataset of :func:`workbench.analysis.wolf_lle` alone: the
+    figure then shows the estimate's own evidence and the delay and dimension it used."""
+    if fnn is None:
+        ami, fnn, cao = _wolf_evidence(ami)
     n = 3 if cao is not None else 2
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8))
     axes[0].plot(ami.lag, ami.ami)
@@ -77,23 +84,64 @@ def embedding_figure(ami: xr.Dataset, fnn: xr.Dataset, cao: xr.Dataset | None = 
     return fig
 
 
-def lle_figure(wolf: xr.Dataset, reference: float | None = None, label: str = "") -> plt.Figure:
-    """Running Wolf estimate of the LLE over the time followed, with a reference line (e.g. the
-    LLE from the equations) when given."""
+def _wolf_evidence(wolf: xr.Dataset) -> tuple[xr.Dataset, xr.Dataset, xr.Dataset]:
+    """The AMI, FNN and Cao Datasets (as :func:`embedding_figure` reads them) of a
+    :func:`workbench.analysis.wolf_lle` result, marked at the delay and dimension it used."""
+    ami = xr.Dataset({"ami": wolf.ami, "delay": wolf.delay})
+    fnn = xr.Dataset({"fnn_fraction": wolf.fnn_fraction, "dim": wolf.dim})
+    cao = xr.Dataset({"E1": wolf.cao_E1, "E2": wolf.cao_E2, "dim": wolf.cao_dim})
+    return ami, fnn, cao
+
+
+def lle_figure(
+    wolf: xr.Dataset,
+    rosenstein: float | None = None,
+    label: str = "",
+    *,
+    equations: float | None = None,
+) -> plt.Figure:
+    """Running Wolf estimate of the LLE over the time followed, with its reliability flag and
+    reasons, and lines for the Rosenstein estimate (nolds) and the LLE from the equations when
+    given (each named for what it is, in the units of the Wolf estimate)."""
+    import textwrap
+
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(wolf.elapsed, wolf.running, lw=0.8, label=f"Wolf: {float(wolf.lle):.4g}")
-    if reference is not None:
-        ax.axhline(reference, color="k", ls="--", lw=0.8, label=f"reference: {reference:.4g}")
+    reliable = bool(int(wolf.reliable))
+    flag = "reliable" if reliable else "FLAGGED"
+    ax.plot(
+        wolf.elapsed,
+        wolf.running,
+        lw=0.8,
+        label=f"Wolf et al. 1985: {float(wolf.lle):.4g} ({flag})",
+    )
+    if rosenstein is not None:
+        ax.axhline(
+            rosenstein, color="k", ls="--", lw=0.8, label=f"Rosenstein (nolds): {rosenstein:.4g}"
+        )
+    if equations is not None:
+        ax.axhline(
+            equations, color="C3", ls=":", lw=1.0, label=f"from the equations: {equations:.4g}"
+        )
     ax.set_xlabel(axis_label(wolf.elapsed))
     ax.set_ylabel(axis_label(wolf.running))
     ax.set_title(
-        f"largest Lyapunov exponent {label} (Wolf et al. 1985; dim {int(wolf.dim)}, delay "
+        f"largest Lyapunov exponent {label}\n(Wolf et al. 1985; dim {int(wolf.dim)}, delay "
         f"{int(wolf.delay)}, {int(wolf.replacements)} replacements)",
         fontsize=8,
     )
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
+    if not reliable:  # the reasons under the axes, one paragraph each
+        attrs = wolf.reliable.attrs
+        reasons = attrs.get("reasons", attrs.get("message", "")).splitlines()
+        text = "\n".join(textwrap.fill(f"- {r}", 120) for r in ["flagged:"] + reasons)
+        lines = text.count("\n") + 1
+        height = 4 + 0.1 * lines  # inches: 6-point lines
+        fig.set_figheight(height)
+        fig.text(0.01, 0.01, text, fontsize=6, va="bottom", ha="left", color="C3")
+        fig.tight_layout(rect=(0, (0.1 * lines + 0.1) / height, 1, 1))
+    else:
+        fig.tight_layout()
     return fig
 
 

@@ -5,15 +5,18 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import platform
-from functools import lru_cache
+from functools import cache, lru_cache
 from importlib.metadata import version
 
 import numpy as np
 import xarray as xr
 
+from workbench._sources import code_digest
+from workbench._version import FORMAT_VERSION, __version__
+from workbench.models import get_model
 from workbench.run._prepare import Prepared
 from workbench.scene import Scene
-from workbench.solver import RunResult, SolverError, Status
+from workbench.solver import TEMPLATE_MODULES, RunResult, SolverError, Status
 
 __all__ = ["TIME_ATTRS", "derive", "provenance", "run_status", "status_attrs", "to_dataset"]
 
@@ -129,7 +132,20 @@ def provenance(scene: Scene, *, by: str = "workbench.simulate") -> dict:
         "source": source,
         "scene": scene.to_toml(),
         "package_versions": versions,
+        "code_digest": results_digest(scene.model),
+        "format_version": np.int32(FORMAT_VERSION),
     }
+
+
+@cache
+def results_digest(model: str, *modules: str) -> str:
+    """16-hex digest of the code that computes a run of ``model``: the run layer, the model's
+    module, the compiled kernels' templates and everything they import, and ``modules`` (e.g.
+    the campaign's block task), with the versions of Python, numba and NumPy
+    (:func:`workbench._sources.code_digest`; docstrings and comments do not count). Equal
+    digests: the same scene gives the same numbers."""
+    model_module = type(get_model(model)).__module__
+    return code_digest("workbench.run", model_module, *TEMPLATE_MODULES, *modules)
 
 
 @lru_cache(maxsize=1)
@@ -138,13 +154,16 @@ def _versions() -> tuple[str, str]:
     milliseconds, more than a short run)."""
     found = []
     for pkg in _PACKAGES:
+        if pkg == "workbench":
+            found.append(f"workbench={__version__}")
+            continue
         try:
             found.append(f"{pkg}={version(pkg)}")
         except Exception:
             found.append(f"{pkg}=unknown")
-    try:
-        own = version("workbench")
-    except Exception:
-        own = "dev"
-    source = f"workbench {own} ({platform.python_implementation()} {platform.python_version()})"
+    # the package's own version from its code: an editable install's metadata keeps the
+    # version it was installed with
+    source = (
+        f"workbench {__version__} ({platform.python_implementation()} {platform.python_version()})"
+    )
     return "; ".join(found), source

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
 import xarray as xr
 
+from workbench._errors import ModelWarning
 from workbench.run._compare import divergence_time, separation, short_scene
 from workbench.run._dataset import derive, to_dataset
 from workbench.run._prepare import Prepared, prepare
@@ -91,6 +93,12 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
     SceneError, ValueError
         For an invalid scene, or a scene with a sweep.
 
+    Warns
+    -----
+    ModelWarning
+        Where the model finds that a law left its physics (e.g. a LuGre friction coefficient
+        beyond its envelope; :meth:`workbench.models.Model.diagnose`).
+
     Examples
     --------
     >>> import workbench
@@ -104,6 +112,8 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
     if throw:
         result.raise_for_status()
     ds = to_dataset(prepared, result, derived)
+    for message in prepared.model.diagnose(ds, prepared.scene.resolved_parameters):
+        warnings.warn(ModelWarning(message), stacklevel=2)
     if prepared.scene.solver["check"] and not result.status.failed:
         ds.attrs.update({f"solver_{k}": v for k, v in check_error(prepared.scene).items()})
     return ds

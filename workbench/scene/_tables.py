@@ -232,6 +232,8 @@ def validate_record(given: dict, model, effects, forced: bool, run: dict) -> dic
             )
     if len(set(variables)) != len(variables):
         raise SceneError("record.variables", f"lists a variable twice: {variables!r}")
+    # what every run with these effects records (e.g. LuGre's friction-law diagnostics)
+    variables = [*variables, *(v for v in model.recorded_always(effects) if v not in variables)]
     rec["variables"] = tuple(variables)
     return rec
 

@@ -6,15 +6,16 @@ tolerance scales, stiff states) goes in, a :class:`RunResult` with a :class:`Sta
 It imports neither scenes nor models; :mod:`workbench.run` turns a scene into a Problem.
 Derived systems of a problem are problems too: its tangent (variational) system with
 saltation at events (:func:`tangent_problem`), copies integrated side by side in one step
-sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled Jacobian.
+sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled Jacobian and
+:func:`generated_source` the code generated for a model from the templates.
 """
 
-from workbench.solver._compile import jacobian_for
+from workbench.solver._compile import TEMPLATE_MODULES, generated_source, jacobian_for
 from workbench.solver._copies import copies_problem, split_copies
 from workbench.solver._integrate import COMPILED_METHODS, METHODS, integrate
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, SolverError, Status
-from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem
+from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem, tangent_state
 
 __all__ = [
     "COMPILED_METHODS",
@@ -24,11 +25,14 @@ __all__ = [
     "RunResult",
     "SolverError",
     "Status",
+    "TEMPLATE_MODULES",
     "copies_problem",
+    "generated_source",
     "integrate",
     "jacobian_for",
     "split_copies",
     "state_scale",
     "tangent_columns",
     "tangent_problem",
+    "tangent_state",
 ]

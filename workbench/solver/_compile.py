@@ -1,21 +1,32 @@
-"""Specialise compiled templates for one model.
+"""Generate and import the compiled code of one model from the templates.
 
 Numba cannot cache a compiled function that receives other compiled functions as arguments or
-closes over them (its cache then recompiles every process, seconds each time). Instead a template
-(the integration loop :mod:`workbench.solver._kernel` with the steps it takes,
-:mod:`workbench.solver._steps_template` and :mod:`workbench.solver._implicit_template`, the
-Jacobian :mod:`workbench.solver._jacobian_template`, the tangent system
-:mod:`workbench.solver._tangent_template`, side-by-side copies
-:mod:`workbench.solver._copies_template`) is written once per model into the cache directory
-with its hook imports pointing at the model's module, and imported from there as a module of the
-package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an ordinary module
-whose functions call global compiled functions,
-which numba caches on disk. Every process after the first (a CLI call, a dask worker) loads
-machine code instead of compiling.
+closes over them (its cache then recompiles every process, seconds each time). Instead each
+template of :mod:`workbench.solver._templates` (real, importable, lintable Python) is written
+once per model into the cache directory with its tagged import lines (``# @@HOOKS@@``, ...)
+pointing at the model's module and at the other generated modules, and imported from there as a
+module of the package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an
+ordinary module whose functions call global compiled functions, which numba caches on disk.
+Every process after the first (a CLI call, a dask worker) loads machine code instead of
+compiling. What is generated, for hooks module ``H`` (a model's ``rhs``, ``event_values``,
+``apply_event`` and optional ``jacobian``):
+
+========================  =================================  ==================================
+function                  template                           generates
+========================  =================================  ==================================
+:func:`kernel_for`        ``integration_loop``               the loop (``advance``), with
+                          ``explicit_steps``, ``radau_step``  the steps of every method
+:func:`jacobian_for`      ``jacobian``                       H's Jacobian (analytic or FD)
+:func:`tangent_for`       ``tangent_hooks``                  hooks of H's variational system
+:func:`copies_for`        ``copies_hooks``                   hooks of copies of H side by side
+========================  =================================  ==================================
+
+:func:`generated_source` prints what was written for a model.
 """
 
 from __future__ import annotations
 
+import ast
 import importlib
 import os
 import re
@@ -26,21 +37,25 @@ from pathlib import Path
 from types import ModuleType
 
 from workbench._cache import KERNEL_PACKAGE, kernel_directory
+from workbench._sources import source_digest
 
-_HERE = Path(__file__).parent
-# read at import, like the package digest that keys the cache, so that both describe one source
+_TEMPLATES = Path(__file__).parent / "_templates"
+# read at import: the generated modules are these texts (their digest keys their names)
 _SOURCES = {
-    name: (_HERE / f"{name}.py").read_text()
+    name: (_TEMPLATES / f"{name}.py").read_text()
     for name in (
-        "_kernel",
-        "_steps_template",
-        "_implicit_template",
-        "_jacobian_template",
-        "_tangent_template",
-        "_copies_template",
+        "integration_loop",
+        "explicit_steps",
+        "radau_step",
+        "jacobian",
+        "tangent_hooks",
+        "copies_hooks",
     )
 }
-_PLACEHOLDER = "workbench.solver._hooks_template"
+_PLACEHOLDER = "workbench.solver._templates.placeholder_hooks"
+# the modules whose text the generated kernels are made of (read, not imported: code digests of
+# results name them, see workbench.run.results_digest)
+TEMPLATE_MODULES = tuple(f"{__package__}._templates.{name}" for name in _SOURCES)
 
 
 def _directory() -> Path:
@@ -55,19 +70,44 @@ def _directory() -> Path:
 
 
 def _substitute(source: str, marker: str, module: str) -> str:
-    """Point the import lines tagged ``# @@<marker>@@`` at ``module`` (the names they import
-    stay)."""
-    pattern = re.compile(rf"^from \S+ import (.*)  # @@{marker}@@$", re.M)
-    source, n = pattern.subn(rf"from {module} import \1  # generated", source)
-    if n == 0:  # pragma: no cover - guards an edit of a template
-        raise RuntimeError(f"marker @@{marker}@@ not found in a template")
-    return source
+    """Point every import statement tagged ``# @@<marker>@@`` (on any of its lines: a formatter
+    may wrap it) at ``module``; the names it imports stay. Every tag must belong to an import
+    statement, and the tag becomes ``# generated``."""
+    tag = f"# @@{marker}@@"
+    lines = source.splitlines(keepends=True)
+    tagged = {i for i, line in enumerate(lines) if line.rstrip().endswith(tag)}
+    rewritten = set()
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        span = set(range(node.lineno - 1, node.end_lineno))
+        if span & tagged:
+            first = node.lineno - 1
+            lines[first] = re.sub(r"^from \S+ import", f"from {module} import", lines[first])
+            rewritten |= span & tagged
+    if not tagged or rewritten != tagged:  # pragma: no cover - guards an edit of a template
+        raise RuntimeError(
+            f"marker @@{marker}@@ not found on an import statement of a template "
+            f"(lines {sorted(i + 1 for i in tagged - rewritten) or 'none'})"
+        )
+    for i in tagged:
+        lines[i] = lines[i].replace(tag, "# generated")
+    return "".join(lines)
+
+
+def _label(hooks: str) -> str:
+    """The readable part of a generated module's name: a model's module name, or the label of
+    a generated hooks module (its digest dropped)."""
+    if hooks.startswith(KERNEL_PACKAGE + "."):
+        return hooks[len(KERNEL_PACKAGE) + 1 :].rsplit("_", 1)[0]
+    return re.sub(r"\W", "_", hooks)
 
 
 def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=None) -> ModuleType:
     """Write ``template`` with its tagged import lines pointed at ``modules`` (marker -> module)
     and its tagged flags set (``flags``: name -> bool) as module
-    ``workbench_kernels.<prefix>_<hooks>``, and import it."""
+    ``workbench_kernels.<prefix>_<label>_<digest>`` (the digest of its code and of everything it
+    imports, :func:`workbench._sources.source_digest`), and import it."""
     source = _SOURCES[template]
     for marker, module in modules.items():
         source = _substitute(source, marker, module)
@@ -77,7 +117,8 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
         if n != 1:  # pragma: no cover
             raise RuntimeError(f"flag {flag} not found exactly once in {template}")
     directory = _directory()
-    name = f"{prefix}_" + re.sub(r"\W", "_", hooks)
+    label = f"{prefix}_{_label(hooks)}"
+    name = f"{label}_{source_digest(source, f'{KERNEL_PACKAGE}.{label}')}"
     path = directory / f"{name}.py"
     if not path.exists() or path.read_text() != source:
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
@@ -86,7 +127,6 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
     return importlib.import_module(f"{KERNEL_PACKAGE}.{name}")
 
 
-@cache
 def kernel_for(hooks: str) -> ModuleType:
     """The compiled integration loop whose hooks come from module ``hooks``.
 
@@ -95,16 +135,24 @@ def kernel_for(hooks: str) -> ModuleType:
     hooks : str
         Importable module name defining ``rhs``, ``event_values`` and ``apply_event``.
     """
-    steps = _specialise("_steps_template", "steps", hooks, {"HOOKS": hooks}).__name__
+    return _kernel_parts(hooks)["kernel"]
+
+
+@cache
+def _kernel_parts(hooks: str) -> dict[str, ModuleType]:
+    """The generated modules of the integration loop of ``hooks``: its explicit steps
+    (``steps``), Radau IIA's step (``implicit``) and the loop itself (``kernel``)."""
+    steps = _specialise("explicit_steps", "steps", hooks, {"HOOKS": hooks})
     jacobian = jacobian_for(hooks).__name__
     implicit = _specialise(
-        "_implicit_template",
+        "radau_step",
         "implicit",
         hooks,
-        {"HOOKS": hooks, "JACOBIAN": jacobian, "STEPS": steps},
-    ).__name__
-    modules = {"HOOKS": hooks, "STEPS": steps, "IMPLICIT": implicit}
-    return _specialise("_kernel", "kernel", hooks, modules)
+        {"HOOKS": hooks, "JACOBIAN": jacobian, "STEPS": steps.__name__},
+    )
+    modules = {"HOOKS": hooks, "STEPS": steps.__name__, "IMPLICIT": implicit.__name__}
+    kernel = _specialise("integration_loop", "kernel", hooks, modules)
+    return {"steps": steps, "implicit": implicit, "kernel": kernel}
 
 
 @cache
@@ -113,12 +161,12 @@ def jacobian_for(hooks: str) -> ModuleType:
     are in module ``hooks``: the module's own analytic ``jacobian`` if it defines one, else
     central finite differences of its compiled ``rhs`` (``fd_jacobian``, always available, so
     that an analytic Jacobian can be checked against it). See
-    :mod:`workbench.solver._jacobian_template`.
+    :mod:`workbench.solver._templates.jacobian`.
     """
     analytic = _defines_jacobian(importlib.import_module(hooks))
     modules = {"HOOKS": hooks, "JACOBIAN": hooks if analytic else _PLACEHOLDER}
     flags = {"HAS_ANALYTIC": analytic}
-    return _specialise("_jacobian_template", "jacobian", hooks, modules, flags)
+    return _specialise("jacobian", "jacobian", hooks, modules, flags)
 
 
 def _defines_jacobian(module: ModuleType) -> bool:
@@ -132,14 +180,34 @@ def _defines_jacobian(module: ModuleType) -> bool:
 @cache
 def tangent_for(hooks: str) -> ModuleType:
     """Hooks of the tangent (variational) system of the model whose hooks are in ``hooks``, with
-    saltation at events; see :mod:`workbench.solver._tangent_template`. Integrate it with
+    saltation at events; see :mod:`workbench.solver._templates.tangent_hooks`. Integrate it with
     ``kernel_for(tangent_for(hooks).__name__)``."""
     modules = {"HOOKS": hooks, "MODEL_JACOBIAN": jacobian_for(hooks).__name__}
-    return _specialise("_tangent_template", "tangent", hooks, modules)
+    return _specialise("tangent_hooks", "tangent", hooks, modules)
 
 
 @cache
 def copies_for(hooks: str) -> ModuleType:
     """Hooks of several copies of the model whose hooks are in ``hooks``, integrated side by
-    side with one step-size sequence; see :mod:`workbench.solver._copies_template`."""
-    return _specialise("_copies_template", "copies", hooks, {"HOOKS": hooks})
+    side with one step-size sequence; see :mod:`workbench.solver._templates.copies_hooks`."""
+    return _specialise("copies_hooks", "copies", hooks, {"HOOKS": hooks})
+
+
+def generated_source(hooks: str, what: str = "kernel") -> tuple[Path, str]:
+    """The path and text of the module generated for hooks module ``hooks``: ``what`` =
+    ``"kernel"`` (the integration loop), ``"steps"`` (its explicit steps), ``"implicit"``
+    (Radau IIA's step), ``"jacobian"`` or ``"tangent"`` (the variational system's hooks).
+    Generates it if needed (compiles nothing).
+
+    >>> path, text = generated_source("workbench.models.duffing", "jacobian")
+    >>> "from workbench.models.duffing import" in text
+    True
+    """
+    if what in ("kernel", "steps", "implicit"):
+        module = _kernel_parts(hooks)[what]
+    elif what in ("jacobian", "tangent"):
+        module = (jacobian_for if what == "jacobian" else tangent_for)(hooks)
+    else:
+        raise ValueError(f"what: got {what!r}; allowed: kernel, steps, implicit, jacobian, tangent")
+    path = Path(module.__file__)
+    return path, path.read_text()

@@ -1,5 +1,5 @@
 """Several copies of a problem integrated side by side with one step-size sequence, as a problem
-the compiled loop integrates (see :mod:`workbench.solver._copies_template`)."""
+the compiled loop integrates (see :mod:`workbench.solver._templates.copies_hooks`)."""
 
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from workbench.solver import _scipy_backend
 from workbench.solver._compile import kernel_for
-from workbench.solver._loop import (
+from workbench.solver._loop_types import (
     ARK548,
     AUTO,
     CT_F_INSIDE,

@@ -1,7 +1,9 @@
 """The event hooks of a problem without events (the hook protocol of
-:mod:`workbench.solver._kernel`): no event functions, no state updates. A model module without
+:mod:`workbench.solver._templates.integration_loop`): no event functions, no state updates. A
+model module without
 events re-exports them beside its own ``rhs`` (the compiled loop imports all three from it), as
-do the kernel template's placeholder hooks (:mod:`workbench.solver._hooks_template`)."""
+do the kernel template's placeholder hooks
+(:mod:`workbench.solver._templates.placeholder_hooks`)."""
 
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 
 Everything here works on arrays only (stages, states, dense-output coefficients, event-function
 values) and calls no model hook, so numba compiles and caches it once; the per-model loop
-(:mod:`workbench.solver._kernel`) links the cached code. Algorithms: Dormand & Prince (1980)
+(:mod:`workbench.solver._templates.integration_loop`) links the cached code. Algorithms: Dormand
+& Prince (1980)
 DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853 (Hairer, Nørsett & Wanner 1993,
 Sec. II.10) and its stiffness detection (Hairer & Wanner 1996, Sec. IV.2); the ARK5(4)8L[2]SA
 of Kennedy & Carpenter (2003) with quartic Hermite dense output; the error norms of Hairer
@@ -14,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.solver._loop import ARK548, DOP853, DOPRI5
+from workbench.solver._loop_types import ARK548, DOP853, DOPRI5
 from workbench.solver._tableaux import (
     ARK_E,
     ARK_GAMMA,

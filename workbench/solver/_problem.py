@@ -3,7 +3,7 @@ return code of its hooks that is not a failure (:data:`EVENT_INSIDE_STEP`).
 
 The solver knows nothing of scenes or models beyond this: a model builds a Problem whose
 ``hooks`` module defines the compiled ``rhs``, ``event_values`` and ``apply_event`` (their
-signatures are in :mod:`workbench.solver._kernel`).
+signatures are in :mod:`workbench.solver._templates.integration_loop`).
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ class Problem:
         of every stiff state, the ``work`` slots where ``rhs`` writes ``a_k``, and the slot
         where the solver puts ``h gamma`` (s) for which ``rhs`` replaces ``y[k]`` by
         ``(y[k] + h gamma r_k) / (1 + h gamma a_k)`` (0 outside implicit stages); see
-        :mod:`workbench.solver._kernel`.
+        :mod:`workbench.solver._templates.integration_loop`.
     data : dict
         Model-private values needed later by the model's ``derive`` (the solver ignores them).
     """

@@ -24,7 +24,7 @@ import math
 from numba import njit
 
 from workbench.solver._linalg import lu_factor, lu_solve
-from workbench.solver._loop import (
+from workbench.solver._loop_types import (
     DOP853,
     IS_LU,
     IS_RHS,

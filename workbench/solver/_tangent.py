@@ -1,7 +1,8 @@
 """The tangent (variational) system of a problem, as a problem the compiled loop integrates.
 
-See :mod:`workbench.solver._tangent_template` for the equations (variational equations between
-events, the saltation matrix at events) and the layout of the arrays built here.
+See :mod:`workbench.solver._templates.tangent_hooks` for the equations (variational equations
+between events, the saltation matrix at events, each tangent vector as a direction of unit size
+and its log size) and the layout of the arrays built here.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import numpy as np
 from workbench.solver._compile import tangent_for
 from workbench.solver._problem import Problem
 
-__all__ = ["tangent_problem", "tangent_columns", "state_scale", "N_META"]
+__all__ = ["tangent_problem", "tangent_columns", "tangent_state", "state_scale", "N_META"]
 
 N_META = 7
 
@@ -40,6 +41,8 @@ def tangent_problem(
 ) -> Problem:
     """The problem's state extended by the tangent vectors ``V`` (shape ``(n + na, m)``: state
     then discrete-state components, in their units) and the accumulated ``log |det S_yy|``.
+    Each vector is carried as a direction of unit scaled size and its log size (read them with
+    :func:`tangent_state`, or the vectors with :func:`tangent_columns`).
 
     Parameters
     ----------
@@ -62,34 +65,52 @@ def tangent_problem(
     m = V.shape[1]
     hooks = tangent_for(problem.hooks).__name__
     scale = state_scale(problem)
+    # each column as a direction of unit scaled size (state part) and its log size
+    size = np.linalg.norm(V[:n] / scale[:, None], axis=0)
+    size = np.where((size > 0) & np.isfinite(size), size, 1.0)
+    U, log_size = V / size[None, :], np.log(size)
     states = tuple(problem.states) + tuple(
-        _State(f"_tangent_{c}_{i}", "1", "tangent vector component")
+        _State(f"_tangent_{c}_{i}", "1", "tangent direction component")
         for c in range(m)
         for i in range(n + na)
     )
     states += (_State("_log_det_saltation", "1", "sum of log |det S_yy| at events"),)
+    states += tuple(_State(f"_log_size_{c}", "1", "log size of tangent vector") for c in range(m))
     vscale = np.concatenate([scale, np.ones(na)])
-    atol_scale = np.concatenate([scale, np.tile(vscale, m), [1.0]])
+    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(1 + m)])
     meta = [n, na, m, problem.event_direction.size, problem.p.size, problem.ip.size]
     meta.append(problem.work_size)
     return Problem(
         hooks=hooks,
         states=states,
-        y0=np.concatenate([problem.y0, V.T.ravel(), [log_det]]),
+        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size]),
         p=np.concatenate([problem.p, scale, [time_scale]]),
         ip=np.concatenate([problem.ip, np.array(meta, dtype=np.int64)]),
         aux0=problem.aux0,
         event_direction=problem.event_direction,
         atol_scale=atol_scale,
         t0=problem.t0,
-        work_size=problem.work_size + 3 * n + n * na + n * n,
+        work_size=problem.work_size + 3 * n + n * na + n * n + 2 * problem.event_direction.size,
         failure=problem.failure,
     )
 
 
+def tangent_state(
+    Y: np.ndarray, n: int, na: int, m: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Split a tangent-system state into the model state ``y``, the tangent directions ``U``
+    (``(n + na, m)``, of about unit scaled size), their log sizes ``l`` (``(m,)``; the tangent
+    vectors are ``U * exp(l)``, which can overflow after a long run) and the accumulated log
+    volume change at events."""
+    y = Y[:n]
+    k = n + m * (n + na)
+    U = Y[n:k].reshape(m, n + na).T
+    return y, U, Y[k + 1 : k + 1 + m].copy(), float(Y[k])
+
+
 def tangent_columns(Y: np.ndarray, n: int, na: int, m: int) -> tuple[np.ndarray, np.ndarray, float]:
     """Split a tangent-system state into the model state ``y``, the tangent vectors ``V``
-    (``(n + na, m)``) and the accumulated log volume change at events."""
-    y = Y[:n]
-    V = Y[n : n + m * (n + na)].reshape(m, n + na).T
-    return y, V, float(Y[n + m * (n + na)])
+    (``(n + na, m)``) and the accumulated log volume change at events (see
+    :func:`tangent_state` for the directions and log sizes, which never overflow)."""
+    y, U, log_size, log_det = tangent_state(Y, n, na, m)
+    return y, U * np.exp(log_size)[None, :], log_det

@@ -29,7 +29,11 @@ empty for a reproduced claim; otherwise it says why, with numbers: for "not reso
 ensemble spread that swamps the difference; for "contradicted" the claim's ``reason`` from
 ``study.toml`` with the measured numbers of its ``evidence`` kind (``contact``: contact fraction
 and 99th-percentile contact force of the two cases; ``strobe_contact``: share of stroboscopic
-samples in contact over the two parameter ranges).
+samples in contact over the two parameter ranges; ``friction_law``: the largest friction
+coefficient |F_t| / F_n at the records and the time per crank cycle above mu_s and beyond the
+LuGre law's envelope, :mod:`workbench.models._friction_report`). A claim with a ``why`` (the
+physics behind the outcome, e.g. which friction law the case runs) shows it with the measured
+numbers of its evidence kind whatever the verdict, after the spread of a "not resolved" one.
 """
 
 from __future__ import annotations
@@ -72,8 +76,12 @@ def evaluate_claim(claim: dict, measures: dict) -> dict:
     else:
         out = _two_cases(claim, measures, stat)
     out["text"] = claim["text"]
-    if out["verdict"] == "contradicted":
-        out["reason"] = _contradiction_reason(claim, measures)
+    if claim.get("why"):
+        own = out["reason"] if out["verdict"] == "not resolved" else ""
+        why = _with_evidence(claim["why"], claim, measures)
+        out["reason"] = f"{own}. {why}" if own else why
+    elif out["verdict"] == "contradicted":
+        out["reason"] = _with_evidence(claim.get("reason", _UNRESOLVED_CAUSE), claim, measures)
     return out
 
 
@@ -214,16 +222,37 @@ def _in_range(values: list, samples: list, bounds: list[float]) -> np.ndarray:
     return np.concatenate(rows) if rows else np.zeros(0)
 
 
-def _contradiction_reason(claim: dict, measures: dict) -> str:
-    """The claim's stated cause with the measured numbers of its evidence kind."""
-    cause = claim.get("reason", _UNRESOLVED_CAUSE)
+def _with_evidence(cause: str, claim: dict, measures: dict) -> str:
+    """A stated cause with the measured numbers of the claim's evidence kind."""
     kind = claim.get("evidence")
     numbers = ""
     if kind == "contact":
         numbers = _contact_evidence(claim, measures)
     elif kind == "strobe_contact":
         numbers = _strobe_contact_evidence(claim, measures)
-    return f"{cause}. Measured: {numbers}" if numbers else cause
+    elif kind == "friction_law":
+        numbers = _friction_law_evidence(claim, measures)
+    return f"{cause.rstrip('.')}. Measured: {numbers}" if numbers else cause
+
+
+def _friction_law_evidence(claim: dict, measures: dict) -> str:
+    law = measures.get("friction_law", {})
+    parts = []
+    for member in (claim["larger"], claim["smaller"]):
+        m = law.get(member)
+        if not m:
+            continue
+        text = (
+            f"{member}: |F_t|/F_n {_fmt(describe(m['mu_median'])['median'])} in contact (median), "
+            f"up to {_fmt(describe(m['mu_max'])['median'])}"
+        )
+        if np.isfinite(np.asarray(m["above"], float)).any():
+            text += (
+                f", {_fmt(1e3 * describe(m['above'])['median'])} ms per cycle above mu_s and "
+                f"{_fmt(1e3 * describe(m['beyond'])['median'])} ms beyond 2 mu_s + s2 |v_t|"
+            )
+        parts.append(text)
+    return "; ".join(parts) + " (medians over the realisations)." if parts else ""
 
 
 def _contact_evidence(claim: dict, measures: dict) -> str:

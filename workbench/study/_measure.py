@@ -27,6 +27,7 @@ __all__ = [
     "contact_fraction",
     "force_percentiles",
     "energy_per_cycle",
+    "friction_law",
     "PERCENTILES",
 ]
 
@@ -147,3 +148,41 @@ def energy_per_cycle(ds: xr.Dataset, var: str) -> xr.DataArray:
     return out.drop_vars("time", errors="ignore").assign_attrs(
         units="J", long_name=f"{da.attrs.get('long_name', var)}: change per crank cycle"
     )
+
+
+def friction_law(ds: xr.Dataset, scene: Scene) -> dict[str, list[float]]:
+    """Per realisation of a member (dim ``realisation``): ``mu_max``, the largest friction
+    coefficient |F_t| / F_n at the records over the joints (1; from ``friction_coefficient``,
+    else from the friction and contact forces), ``mu_median``, its median over the records in
+    contact (1), and for LuGre runs ``above`` and ``beyond``,
+    the time per crank cycle (s, summed over the joints) with the coefficient above mu_s and
+    beyond the law's envelope 2 mu_s + s2 |v_t| (the quadratures of
+    :mod:`workbench.models._friction_report`, NaN without them). Empty without friction."""
+    if "friction_coefficient" in ds:
+        mu = ds["friction_coefficient"]
+    elif "friction_force" in ds and "contact_force" in ds:
+        fn = ds["contact_force"]
+        mu = abs(ds["friction_force"]).where(fn > 0, 0.0) / fn.where(fn > 0, 1.0)
+    else:
+        return {}
+    touching = ds["contact_force"] > 0 if "contact_force" in ds else mu > 0
+    out = {
+        "mu_max": [float(x) for x in mu.max(["time", "joint"]).values],
+        "mu_median": [
+            float(np.nanmedian(np.where(c, m, np.nan))) if c.any() else float("nan")
+            for m, c in zip(
+                mu.transpose("realisation", ...).values,
+                touching.transpose("realisation", ...).values,
+                strict=True,
+            )
+        ],
+    }
+    cycles = scene.run.get("cycles", 0)
+    times = {"above": "time_above_static_friction", "beyond": "time_beyond_friction_law"}
+    for key, var in times.items():
+        if var in ds and cycles:
+            total = ds[var].max("time").sum("joint", min_count=1) / cycles
+            out[key] = [float(x) for x in total.values]
+        else:
+            out[key] = [float("nan")] * ds.sizes["realisation"]
+    return out

@@ -19,6 +19,7 @@ from workbench.study._measure import (
     contact_fraction,
     energy_per_cycle,
     force_percentiles,
+    friction_law,
     member_run,
     peak,
     seconds_per_cycle,
@@ -44,6 +45,7 @@ def measures(study: Study, runs: dict, members: dict, scenes: dict) -> dict:
         "strobe_spread": {},
         "seconds_per_cycle": {},
         "contact": {},
+        "friction_law": {},
     }
     entries = study.claims + study.paper_values
     for name, ds in members.items():
@@ -67,6 +69,9 @@ def measures(study: Study, runs: dict, members: dict, scenes: dict) -> dict:
                 samples = strobe(ds, da)
                 spread = samples.std("strobe", skipna=True) / clearance_of(scene, where["joint"])
                 m["strobe_spread"].setdefault(name, {})[key] = [float(x) for x in spread.values]
+        law = friction_law(ds, scene)
+        if law:
+            m["friction_law"][name] = law
         if "contact_force" in ds:
             frac = contact_fraction(ds["contact_force"])
             p99 = force_percentiles(ds["contact_force"], (99.0,)).squeeze("percentile")

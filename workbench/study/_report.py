@@ -206,11 +206,12 @@ def _study_section(s: dict) -> list[str]:
         lines += ["| paper's conclusion | verdict | evidence | reason |", "|---|---|---|---|"]
         for c in s["claims"]:
             lines.append(
-                f"| {c['text']} | {_VERDICT_STYLE[c['verdict']]} | {c['evidence']} | "
-                f"{c.get('reason') or '–'} |"
+                f"| {_cell(c['text'])} | {_VERDICT_STYLE[c['verdict']]} | "
+                f"{_cell(c['evidence'])} | {_cell(c.get('reason') or '–')} |"
             )
         lines.append("")
     m = s.get("measures", {})
+    lines += _friction_law_table(m)
     if m.get("wolf_lle"):
         lines += _chaos_table(m)
     for case, sweep in m.get("sweep_contact", {}).items():
@@ -222,6 +223,45 @@ def _study_section(s: dict) -> list[str]:
     if s["figures"]:
         lines += ["Figures: " + ", ".join(f"`{p}`" for p in s["figures"]), ""]
     return lines
+
+
+def _cell(text: str) -> str:
+    """Text for a Markdown table cell: its bars escaped (|F_t|, |peak|), which would
+    otherwise split the row."""
+    return str(text).replace("|", "\\|")
+
+
+def _friction_law_table(m: dict) -> list[str]:
+    """The friction law's range per case (studies with a LuGre case): the largest |F_t| / F_n
+    at the records, the time above mu_s and beyond the LuGre envelope per crank cycle, and the
+    99th-percentile contact force."""
+    from workbench.study._stats import describe
+
+    law = m.get("friction_law", {})
+    if not any(math.isfinite(x) for v in law.values() for x in v.get("above", []) if x is not None):
+        return []
+    lines = [
+        "The friction law's range, median (IQR) over the realisations: the friction coefficient "
+        "|F_t| / F_n at the records, its median in contact and its largest, and per crank cycle "
+        "the time (summed over the "
+        "joints, integrated with the motion) with it above mu_s and beyond the LuGre law's "
+        "envelope 2 mu_s + sigma2 |v_t| (`workbench/models/_friction_report.py`); a passive "
+        "law stays within the envelope, Coulomb within c_f.",
+        "",
+        "| case | \\|F_t\\|/F_n in contact: median | largest | above mu_s [ms per cycle] | "
+        "beyond the envelope [ms per cycle] | 99th-percentile contact force [N] |",
+        "|---|---|---|---|---|---|",
+    ]
+    for case, v in law.items():
+        ms = {k: [1e3 * x for x in v.get(k, []) if x is not None] for k in ("above", "beyond")}
+        contact = m.get("contact", {}).get(case, {})
+        force = ", ".join(f"{j} {_fmt(describe(c['p99'])['median'])}" for j, c in contact.items())
+        lines.append(
+            f"| {case} | {_stats(describe(v.get('mu_median', [])))} | "
+            f"{_stats(describe(v['mu_max']))} | {_stats(describe(ms['above']))} | "
+            f"{_stats(describe(ms['beyond']))} | {force or '–'} |"
+        )
+    return lines + [""]
 
 
 def _chaos_table(m: dict) -> list[str]:

@@ -18,8 +18,9 @@ run as a campaign) and ``study.toml`` with
   ``statistic`` = ``peak`` (default; the value of largest magnitude) or ``wolf_lle``, ``value``);
 - ``[[claim]]``: a qualitative conclusion of the paper in a checkable form (see
   :mod:`workbench.study._claims`), with an optional ``reason`` (the cause shown, with its
-  evidence, when the claim is not reproduced) and ``evidence`` (``contact`` or
-  ``strobe_contact``: which measured numbers support the reason);
+  evidence, when the claim is not reproduced), ``why`` (the physics behind the outcome, shown
+  with its evidence whatever the verdict) and ``evidence`` (``contact``, ``strobe_contact`` or
+  ``friction_law``: which measured numbers support the reason);
 - ``[flutter]``: the friction-coefficient study's flutter analysis (``parameter``, ``cases``,
   ``method``): the Jacobian's eigenvalues at continuous contact against the parameter;
 - ``[route]``: beyond the paper, how the motion of a bifurcation study becomes chaotic: its sweep
@@ -59,7 +60,7 @@ FIGURE_KINDS = (
     "contact_vs_friction",
     "energy_balance",
 )
-EVIDENCE_KINDS = ("contact", "strobe_contact")
+EVIDENCE_KINDS = ("contact", "strobe_contact", "friction_law")
 #: keys of a study's ``[route]`` table (see :mod:`workbench.study._route`)
 ROUTE_KEYS = (
     "case",

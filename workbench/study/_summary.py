@@ -80,6 +80,25 @@ def summary_dataset(
         lambda k: "s",
         "integration wall time per simulated crank cycle",
     )
+    law = measures.get("friction_law", {})
+    for key, units, long_name in (
+        ("mu_max", "1", "largest friction coefficient |F_t| / F_n at the records"),
+        ("mu_median", "1", "median friction coefficient |F_t| / F_n at the records in contact"),
+        ("above", "s", "time per crank cycle with |F_t| / F_n above mu_s (LuGre)"),
+        ("beyond", "s", "time per crank cycle with |F_t| / F_n beyond 2 mu_s + s2 |v_t| (LuGre)"),
+    ):
+        if not law:
+            break
+        arr = np.full((len(names), n_real), np.nan)
+        for i, name in enumerate(names):
+            values = law.get(name, {}).get(key)
+            if values is not None:
+                arr[i, : len(values)] = values
+        data[f"friction_law_{key}"] = (
+            ("member", "realisation"),
+            arr,
+            {"units": units, "long_name": long_name},
+        )
     for row in paper_rows:
         if row["statistic"] != "peak":
             continue
@@ -175,6 +194,6 @@ def summary_dataset(
 
 
 def _param_attrs(scene: Scene, name: str) -> dict:
-    from workbench.campaign._store import parameter_attrs
+    from workbench.campaign._grid import parameter_attrs
 
     return parameter_attrs(scene, name)

@@ -26,8 +26,9 @@ Two evaluations share these formulas (:mod:`workbench.models._reduced`,
   6 x 6 system, torques, slider motion, energies, per-joint forces. It is also the reference
   that :func:`rhs` is tested against (:func:`rhs_reference` is the right-hand side it gives).
 
-State y = [q_f (m), qd_f (m s-1), z per clearance joint (m, LuGre only), driver work (J) and
-dissipated energy (J) when requested]. Discrete state aux = [onset normal velocity per joint
+State y = [q_f (m), qd_f (m s-1), z per clearance joint (m, LuGre only), per clearance joint
+the times above mu_s and beyond the law's envelope (s, LuGre, when requested), driver work (J)
+and dissipated energy (J) when requested]. Discrete state aux = [onset normal velocity per joint
 (m s-1; 0 = not in contact)], set by the contact-onset event of each joint.
 """
 
@@ -58,6 +59,7 @@ from workbench.models._reduced import (
     column_force,
     dissipated_power,
     driver_power,
+    friction_excess,
     friction_parameters,
     joint_parameters,
     lean_joint,
@@ -229,7 +231,8 @@ def _column(p, state, k):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def rhs(t, y, p, ip, aux, work, dydt):
-    """dy/dt at (t, y) (the solver's hook; protocol in :mod:`workbench.solver._kernel`).
+    """dy/dt at (t, y) (the solver's hook; protocol in
+    :mod:`workbench.solver._templates.integration_loop`).
 
     Equal to :func:`rhs_reference` to rounding, computing only what the integration reads. It
     allocates nothing and is compiled without reference counting (``_nrt=False``: numba's
@@ -270,14 +273,18 @@ def rhs(t, y, p, ip, aux, work, dydt):
     fp = friction_parameters(p, P.friction)
     # joint forces; only the journals' bodies move with the free coordinates (not the cranks)
     jpa = joint_parameters(p, P.joint)
-    da, dda, fda, fta, vta, za, zdota, decaya, jxa, jya, bxa, bya, fxa, fya, arma, _ = lean_joint(
-        x1, y1, vx1, vy1, aux[0], za, friction, jpa, fp, hg, rates, cen, LINK2, CRANK1,
-        point(state, PT_A),
+    da, dda, fda, fta, mua, vta, za, zdota, decaya, jxa, jya, bxa, bya, fxa, fya, arma, _ = (
+        lean_joint(
+            x1, y1, vx1, vy1, aux[0], za, friction, jpa, fp, hg, rates, cen, LINK2, CRANK1,
+            point(state, PT_A),
+        )
     )  # fmt: skip
     jpb = joint_parameters(p, P.joint + JOINT.size)
-    db, ddb, fdb, ftb, vtb, zb, zdotb, decayb, jxb, jyb, bxb, byb, fxb, fyb, armb, _ = lean_joint(
-        x2, y2, vx2, vy2, aux[1], zb, friction, jpb, fp, hg, rates, cen, LINK3, CRANK4,
-        point(state, PT_B),
+    db, ddb, fdb, ftb, mub, vtb, zb, zdotb, decayb, jxb, jyb, bxb, byb, fxb, fyb, armb, _ = (
+        lean_joint(
+            x2, y2, vx2, vy2, aux[1], zb, friction, jpb, fp, hg, rates, cen, LINK3, CRANK4,
+            point(state, PT_B),
+        )
     )  # fmt: skip
     if da > jpa[JOINT.dmax] or db > jpb[JOINT.dmax]:
         return CODE_PENETRATION
@@ -320,6 +327,12 @@ def rhs(t, y, p, ip, aux, work, dydt):
         y[izb] = zb
         dydt[izb] = zdotb
         work[W.joint + JOINT_RECORD.size + JOINT_RECORD.decay] = decayb
+    ima = ip[IP.mu]
+    if ima >= 0:
+        dydt[ima], dydt[ima + 1] = friction_excess(mua, vta, fp)
+    imb = ip[IP.mu + 1]
+    if imb >= 0:
+        dydt[imb], dydt[imb + 1] = friction_excess(mub, vtb, fp)
     iw = ip[IP.w]
     if iw >= 0:
         power = driver_power(

@@ -9,8 +9,9 @@ two evaluations share the formulas: the lean :func:`rhs` (the free columns only:
 not move with them, the rod and the slider do; both feel the contact force) and the record-time
 :func:`evaluate` with every output, the reference of the tests.
 
-State y = [x, y (m), vx, vy (m s-1), z (m, LuGre only), driver work and dissipated energy (J)
-when requested]; aux = [onset normal velocity (m s-1; 0 = not in contact)].
+State y = [x, y (m), vx, vy (m s-1), z (m, LuGre only), the times above mu_s and beyond the
+law's envelope (s, LuGre, when requested), driver work and dissipated energy (J) when
+requested]; aux = [onset normal velocity (m s-1; 0 = not in contact)].
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from workbench.models._reduced import (
     column_force,
     dissipated_power,
     driver_power,
+    friction_excess,
     friction_parameters,
     joint_parameters,
     lean_joint,
@@ -163,7 +165,8 @@ def _residual(p, c, acc, gx, gy, fx, fy, arm, barm):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def rhs(t, y, p, ip, aux, work, dydt):
-    """dy/dt at (t, y) (the solver's hook; protocol in :mod:`workbench.solver._kernel`).
+    """dy/dt at (t, y) (the solver's hook; protocol in
+    :mod:`workbench.solver._templates.integration_loop`).
 
     Equal to :func:`rhs_reference` to rounding, computing only what the integration reads;
     compiled as the nine-bar's :func:`workbench.models.ninebar._dynamics.rhs` (no reference
@@ -182,10 +185,10 @@ def rhs(t, y, p, ip, aux, work, dydt):
     gx = p[P.gx]
     gy = p[P.gy]
     jp = joint_parameters(p, P.joint)
-    delta, ddot, fdamp, ft, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm, barm = lean_joint(
-        x, yy, vx, vy, aux[0], y[max(iz, 0)], ip[IP.friction], jp,
-        friction_parameters(p, P.friction), work[W.hg], rates, cen, ROD, SLIDER,
-        point(state, PT_B),
+    fp = friction_parameters(p, P.friction)
+    delta, ddot, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm, barm = lean_joint(
+        x, yy, vx, vy, aux[0], y[max(iz, 0)], ip[IP.friction], jp, fp, work[W.hg], rates, cen,
+        ROD, SLIDER, point(state, PT_B),
     )  # fmt: skip
     if delta > jp[JOINT.dmax]:
         return CODE_PENETRATION
@@ -213,6 +216,9 @@ def rhs(t, y, p, ip, aux, work, dydt):
         y[iz] = z  # solved in an implicit stage (unchanged otherwise)
         dydt[iz] = zdot  # bristles exist only in contact: frozen outside (reset at onsets)
         work[W.joint + JOINT_RECORD.decay] = decay
+    im = ip[IP.mu]
+    if im >= 0:
+        dydt[im], dydt[im + 1] = friction_excess(mu, vt, fp)
     iw = ip[IP.w]
     if iw >= 0:
         power = driver_power(

@@ -1,0 +1,97 @@
+"""The documentation site (issue 26 item 1): ``mkdocs build --strict`` (every warning an
+error) into a temporary directory; every ```python block of its pages runs (each in a fresh
+namespace, in a temporary working directory that sees the repository's studies/, data/ and
+pyproject.toml; ``# requires: MODULE`` skips a block without MODULE, as in the README); and
+every ``workbench ...`` line of its ```sh blocks parses with the command line's own parser
+(the commands and options the pages show exist)."""
+
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+PAGES = sorted(p for p in DOCS.rglob("*.md") if not p.is_symlink())
+FENCE = re.compile(r"^```(\w+)\n(.*?)^```", re.S | re.M)
+BLOCKS = [
+    (page, code)
+    for page in PAGES
+    for lang, code in FENCE.findall(page.read_text())
+    if lang == "python"
+]
+COMMANDS = [
+    line
+    for page in PAGES + [ROOT / "README.md"]
+    for lang, code in FENCE.findall(page.read_text())
+    if lang == "sh"
+    for line in code.splitlines()
+    if line.startswith("workbench ")
+]
+
+
+def test_the_pages_have_blocks():
+    assert len(BLOCKS) >= 12 and len(COMMANDS) >= 10
+
+
+def test_site_builds_strict(tmp_path):
+    pytest.importorskip("mkdocs", reason="the 'docs' extra builds the site (make test has it)")
+    site = tmp_path / "site"
+    done = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(site)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    # the API reference from the docstrings, the notebooks with their outputs, the report
+    assert "wolf_lle" in (site / "reference/analysis/index.html").read_text()
+    notebook = (site / "notebooks/02_chaos_identification/index.html").read_text()
+    assert "reliable:" in notebook and "Wolf LLE" in notebook  # an output, not only code
+    assert "Mann-Whitney" in (site / "studies/report/index.html").read_text()
+    assert (site / "results/index.html").is_file() and (site / "changelog/index.html").is_file()
+
+
+def _id(block):
+    page, code = block
+    return f"{page.relative_to(DOCS)}:{BLOCKS.index(block)}"
+
+
+@pytest.mark.parametrize("block", BLOCKS, ids=[_id(b) for b in BLOCKS])
+def test_docs_block_runs(block, tmp_path, monkeypatch):
+    page, code = block
+    for module in re.findall(r"^# requires: (\w+)", code, re.M):
+        pytest.importorskip(module, reason=f"the block needs the optional {module!r}")
+    for name in ("studies", "data", "pyproject.toml"):
+        (tmp_path / name).symlink_to(ROOT / name)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, str(page), "exec"), {"__name__": "__docs__"})
+
+
+@pytest.mark.parametrize("line", COMMANDS)
+def test_docs_command_parses(line):
+    from workbench.cli import build_parser
+
+    args = shlex.split(line, comments=True)[1:]
+    if args == ["--version"]:
+        return
+    parsed = build_parser().parse_args(args)
+    assert parsed.command == args[0]
+
+
+def test_key_figures_are_the_reports():
+    """The figures the site commits beside the report (docs/hooks.py) are ones the report cites,
+    and each one committed is in that list (make studies copies them from its run)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_hooks", DOCS / "hooks.py")
+    hooks = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hooks)
+    cited = set(hooks._CITED.findall((ROOT / "studies" / "REPORT.md").read_text()))
+    assert set(hooks.KEY_FIGURES) <= cited
+    committed = {str(p.relative_to(hooks.FIGURES)) for p in hooks.FIGURES.rglob("*.png")}
+    assert committed <= set(hooks.KEY_FIGURES)

@@ -1,0 +1,103 @@
+"""One version, said everywhere, and a format version on every archive (issue 26 item 1):
+pyproject.toml, ``workbench.__version__``, ``workbench --version``, the archives' ``source`` and
+``format_version``; an archive of the older format (workbench 0.1.0) is upgraded or refused
+with a message that says what to do; a newer one is refused."""
+
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import workbench
+from workbench.archive import ArchiveError
+from workbench.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+FIXTURES = Path(__file__).parent / "fixtures"
+
+
+def test_one_version():
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert pyproject["project"]["version"] == workbench.__version__
+    assert re.fullmatch(r"\d+\.\d+\.\d+", workbench.__version__)
+    changelog = (ROOT / "CHANGELOG.md").read_text()
+    assert f"## {workbench.__version__}" in changelog  # every version says what it changed
+    assert f"format {workbench.FORMAT_VERSION}" in changelog
+
+
+def test_cli_version(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out.strip()
+    assert out == f"workbench {workbench.__version__} (archive format {workbench.FORMAT_VERSION})"
+
+
+def test_every_archive_carries_the_format(tmp_path):
+    ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 2}})
+    assert ds.attrs["format_version"] == workbench.FORMAT_VERSION
+    assert ds.attrs["source"].startswith(f"workbench {workbench.__version__} ")
+    path = workbench.save_run(ds, tmp_path / "run.nc")
+    assert workbench.open_run(path).identical(ds)
+    # a Dataset that workbench did not build (a figure's data, a summary) is stamped on write
+    other = xr.Dataset({"y": ("x", np.arange(3.0), {"units": "m"})})
+    back = workbench.open_run(workbench.save_run(other, tmp_path / "other.nc"))
+    assert back.attrs["format_version"] == workbench.FORMAT_VERSION
+    assert "format_version" not in other.attrs  # the caller's Dataset is left alone
+    classic = workbench.open_run(workbench.save_run(other, tmp_path / "c.nc", classic=True))
+    assert classic.attrs["format_version"] == workbench.FORMAT_VERSION
+
+
+def test_a_format1_run_is_upgraded():
+    """data/chaos_run.nc as workbench 0.1.0 wrote it (first 200 records): run_status 'done'."""
+    raw = xr.open_dataset(FIXTURES / "format1_run.nc")
+    assert "format_version" not in raw.attrs and raw.attrs["run_status"] == "done"
+    ds = workbench.open_run(FIXTURES / "format1_run.nc")
+    assert workbench.Status.from_label(ds.attrs["run_status"]) is workbench.Status.OK
+    assert ds.attrs["format_version"] == workbench.FORMAT_VERSION
+    assert ds.attrs["upgraded_from_format"] == 1
+    xr.testing.assert_identical(ds.clearance_x, raw.clearance_x.load())
+
+
+def test_a_format1_campaign_is_upgraded_to_todays_flags(tmp_path):
+    """data/bifurcation_speed.nc as workbench 0.1.0 wrote it (4 points): flags 'ok
+    solver_failed terminated_early invalid_parameters'. The upgraded flags are those a
+    campaign writes today, and each point keeps its meaning."""
+    from workbench.campaign._block import STATUS_ATTRS
+
+    ds = workbench.open_run(FIXTURES / "format1_campaign.nc")
+    assert ds.status.attrs["flag_meanings"] == STATUS_ATTRS["flag_meanings"]
+    np.testing.assert_array_equal(ds.status.attrs["flag_values"], STATUS_ATTRS["flag_values"])
+    assert (ds.status.values == 0).all()
+    # terminated_early -> terminated, invalid_parameters -> invalid_parameters, at other codes
+    raw = xr.open_dataset(FIXTURES / "format1_campaign.nc").load()
+    raw["status"].values[:] = [0, 2, 3, 0]
+    raw.to_netcdf(tmp_path / "old.nc")
+    up = workbench.open_run(tmp_path / "old.nc")
+    attrs = up.status.attrs
+    meanings = dict(zip(attrs["flag_values"], attrs["flag_meanings"].split(), strict=True))
+    assert [meanings[v] for v in up.status.values] == [
+        "ok",
+        "terminated",
+        "invalid_parameters",
+        "ok",
+    ]
+    # solver_failed has no single counterpart: refused, saying what to do
+    raw["status"].values[:] = [0, 1, 1, 0]
+    raw.to_netcdf(tmp_path / "failed.nc")
+    with pytest.raises(ArchiveError, match=r"format 1\).* 2 of its 'status' flags.*--restart"):
+        workbench.open_run(tmp_path / "failed.nc")
+
+
+def test_a_newer_format_is_refused_and_a_foreign_file_left_alone(tmp_path):
+    ds = xr.Dataset({"y": ("x", np.arange(3.0))})
+    ds.attrs["format_version"] = np.int32(workbench.FORMAT_VERSION + 1)
+    ds.to_netcdf(tmp_path / "new.nc")
+    with pytest.raises(ArchiveError, match="newer than this workbench .* upgrade workbench"):
+        workbench.open_run(tmp_path / "new.nc")
+    foreign = xr.Dataset({"y": ("x", np.arange(3.0))}, attrs={"source": "another tool"})
+    foreign.to_netcdf(tmp_path / "foreign.nc")
+    assert "format_version" not in workbench.open_run(tmp_path / "foreign.nc").attrs

@@ -1,0 +1,110 @@
+"""``workbench verify``: compare a scene with exudyn from the command line."""
+
+from __future__ import annotations
+
+import argparse
+
+from workbench.cli._console import float_list, output_and_figure, positive_float, save_with_figure
+from workbench.cli._exit_codes import UsageError
+
+
+def _frame(ds, names: list[str], drop_reference: bool = False):
+    """The variables ``names`` (dims run, and joint or series) side by side, one row per run,
+    columns ``name joint``; None when nothing in them is finite (no empty tables)."""
+    import numpy as np
+    import pandas as pd
+
+    parts = []
+    for name in names:
+        if name not in ds:
+            continue
+        da = ds[name]
+        if drop_reference:
+            da = da.sel(run=[r for r in da.run.values if r != "workbench"])
+        if da.size == 0 or not np.isfinite(da.values).any():
+            continue
+        frame = da.to_pandas()
+        if len(names) > 1:
+            frame.columns = [f"{name} {c}" for c in frame.columns]
+        parts.append(frame)
+    if not parts:
+        return None
+    table = pd.concat(parts, axis=1)
+    table.index.name = None
+    table.columns.name = None
+    return table
+
+
+def _print_tables(ds) -> None:
+    """One header line per table, saying what its numbers are."""
+    from workbench.verification import STATISTICS
+
+    tables = [
+        (
+            "largest difference from the workbench over the horizon, divided by the workbench's "
+            "largest magnitude [1], per series (exudyn at each step):",
+            _frame(ds, ["max_relative_error"], drop_reference=True),
+        ),
+        (
+            "first contact per joint: its time [s] and the peak normal force of that contact [N]:",
+            _frame(ds, ["first_impact_time", "first_impact_force"]),
+        ),
+        (
+            "over the horizon, per joint: "
+            + ", ".join(f"{name} = {long} [{units}]" for name, (units, long) in STATISTICS.items())
+            + ":",
+            _frame(ds, list(STATISTICS)),
+        ),
+    ]
+    for header, table in tables:
+        if table is None:
+            continue
+        print(f"\n{header}")
+        print(table.to_string(float_format="{:.6g}".format))
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from workbench.plot import verification_figure
+    from workbench.scene import load_scene
+    from workbench.verification import verify
+
+    scene = load_scene(args.scene)
+    out, figure = output_and_figure(args.output, args.overwrite)
+    try:
+        ds = verify(scene, horizon=args.horizon, steps=args.steps, record_dt=args.record_dt)
+    except (ValueError, RuntimeError, ImportError) as exc:
+        raise UsageError(str(exc)) from None
+    save_with_figure(ds, out, figure, "verification", verification_figure)
+    _print_tables(ds)
+    print(
+        "\nwall time [s]: "
+        + ", ".join(f"{r} {w:.3g}" for r, w in zip(ds.run.values, ds.wall_time.values, strict=True))
+    )
+    return 0
+
+
+def register_cli(sub) -> None:
+    p = sub.add_parser(
+        "verify",
+        help="compare a scene with the exudyn multibody engine (extra 'verify')",
+        description="Run a mechanism scene (ninebar, slider_crank) in the workbench and in "
+        "exudyn (fixed-step generalised-alpha at several steps) and compare torques, slider "
+        "kinematics, first impacts and chaos-robust statistics; write the comparison as netCDF "
+        "and an overlay figure beside it.",
+    )
+    p.add_argument("scene", help="scene file (TOML), model 'ninebar' or 'slider_crank'")
+    p.add_argument("-o", "--output", required=True, help="netCDF file (the figure goes beside it)")
+    p.add_argument(
+        "--horizon", type=positive_float, help="simulated time from t = 0, s (default 1 cycle)"
+    )
+    p.add_argument(
+        "--steps",
+        type=float_list,
+        default=[4e-6, 2e-6, 1e-6],
+        help="exudyn's fixed steps, s, comma-separated (default 4e-6,2e-6,1e-6)",
+    )
+    p.add_argument(
+        "--record-dt", type=positive_float, help="record interval, s (default: coarsest step)"
+    )
+    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    p.set_defaults(func=_cmd_verify)

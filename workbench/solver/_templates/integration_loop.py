@@ -1,0 +1,399 @@
+"""Compiled adaptive Runge–Kutta integration loop (a template, specialised per model).
+
+The whole loop runs in numba-compiled code: embedded-pair step-size control, dense output,
+records at exactly requested times, and event location by root finding on the dense output with
+the state update an event asks for. The model's compiled hooks are imported by name; the line
+marked ``@@HOOKS@@`` is rewritten by :mod:`workbench.solver._compile` to import them from the
+model's module, so that every model gets its own cacheable compiled loop and adding a model never
+touches this file. This module is the loop (start, initial step, the choice of method, records,
+events applied, pauses); the steps it takes are templates specialised beside it: the explicit
+pairs' and ARK548's step and the location of events in a step in
+:mod:`workbench.solver._templates.explicit_steps`, Radau IIA's step with the model's Jacobian in
+:mod:`workbench.solver._templates.radau_step`. Only what calls a hook lives in these; the
+hook-free numerics (tableaux, error norms, dense output, root-finding updates) are compiled once
+for all models in
+:mod:`workbench.solver._numerics`, and the loop's arguments are grouped in the named tuples of
+:mod:`workbench.solver._loop_types`.
+
+Hooks (all ``numba.njit``), in SI units of the model's state:
+
+``rhs(t, y, p, ip, aux, work, dydt) -> int``
+    Writes dy/dt; returns 0, or a positive model failure code (the step is then rejected and
+    retried smaller; if it persists the run fails with that code).
+``event_values(t, y, p, ip, aux, work, g) -> None``
+    Writes the event functions g_k; an event fires where g_k changes sign in its direction.
+``apply_event(k, t, y, p, ip, aux, work) -> int``
+    Applies the update of event k in place (state ``y`` and discrete state ``aux``); returns 1 to
+    stop the integration, else 0.
+
+``work`` is a scratch array of the model's ``Problem.work_size`` floats, allocated once per run,
+so that the hot right-hand side allocates nothing.
+
+Algorithms: Dormand & Prince (1980) DOPRI5 with Shampine's (1986) dense output; Hairer's DOP853
+(Hairer, Nørsett & Wanner 1993, Sec. II.10); the additive implicit–explicit ARK5(4)8L[2]SA of
+Kennedy & Carpenter (2003) with quartic Hermite dense output, for problems that declare *stiff
+states*: states k whose rate has the form ``dy_k/dt = r_k(y) - a_k(y) y_k`` with a decay rate
+``a_k >= 0`` (s-1), where ``r_k`` and ``a_k`` depend on the non-stiff states only (a LuGre
+bristle deflection: ``dz/dt = v - a(v) z``). ARK548 integrates the stiff states' whole rate
+with the ESDIRK table and the rest with the explicit one, so that the step is no longer bounded
+by ``|h a| < ~6`` as for the explicit pairs. (Treating only ``-a y_k`` implicitly would leave
+the forcing ``r_k ~ a y_k`` explicit, and the stages off the slow manifold y_k = r_k / a_k by
+O(h) in the stiff limit.) The implicit stage equation ``Y_k = B_k + h gamma (r_k - a_k Y_k)``
+is linear in ``Y_k`` with coefficients explicit in the stage, so the model's ``rhs`` solves it:
+one division, no Jacobian, no Newton iteration. Protocol: before an implicit stage the kernel
+writes ``h gamma`` (s) into ``work[implicit_slot]`` (0 for every other evaluation) and ``B_k``
+into ``y[k]``; ``rhs`` replaces ``y[k]`` by ``(B_k + h gamma r_k) / (1 + h gamma a_k)`` and
+writes ``a_k`` into ``work[stiff_slot[k]]`` on every call.
+
+Step-size control and initial step as in Hairer's
+codes and ``scipy.integrate`` (Hairer et al. 1993, Sec. II.4); event location by the Illinois
+variant of regula falsi (Dowell & Jarratt 1971) on the dense output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from workbench.solver._loop_types import (  # noqa: F401 (the loop's vocabulary, read by callers)
+    ARK548,
+    AUTO,
+    CT_F_INSIDE,
+    CT_H,
+    CT_NONFINITE,
+    CT_T,
+    DONE,
+    DOP853,
+    DOPRI5,
+    IS_JAC,
+    IS_LU,
+    IS_NEWTON,
+    IS_NEWTON_FAIL,
+    IS_REJECTED,
+    IS_RHS,
+    IS_STEPS,
+    MAX_STEPS,
+    MODEL_FAILURE,
+    N_CTRL,
+    N_STATS,
+    NON_FINITE,
+    PAUSED,
+    RADAU5,
+    RC_CURRENT,
+    RC_ERR_ACC,
+    RC_FACCON,
+    RC_H_ACC,
+    RC_H_FAIL,
+    RC_H_LU,
+    RC_H_OLD,
+    RC_JAC,
+    RC_JAC_FRESH,
+    RC_RHO,
+    RC_THETA,
+    RC_TIME_IMPLICIT,
+    ST_EVENT_RETRIES,
+    ST_EVENTS,
+    ST_MODEL_CODE,
+    ST_RECORDED,
+    ST_REJECTED,
+    ST_RHS,
+    ST_STEPS,
+    STEP_UNDERFLOW,
+    TERMINATED,
+    Scratch,
+)
+from workbench.solver._numerics import (
+    crossed,
+    dense_eval,
+    dop853_stiffness,
+    initial_difference,
+    initial_norms,
+    min_step,
+    n_stages,
+    read_decay,
+)
+from workbench.solver._problem import EVENT_INSIDE_STEP
+from workbench.solver._radau import (
+    explicit_test,
+    forget_jacobian,
+    implicit_cost,
+    implicit_test,
+)
+from workbench.solver._templates.explicit_steps import (  # @@STEPS@@
+    _dense_prepare,
+    _explicit_attempts,
+    _locate,
+)
+from workbench.solver._templates.placeholder_hooks import (  # @@HOOKS@@
+    apply_event,
+    event_values,
+    rhs,
+)
+from workbench.solver._templates.radau_step import (  # @@IMPLICIT@@
+    _radau_attempts,
+)
+
+_crossed = crossed  # the name tests and older callers use
+
+
+@njit(cache=True)
+def start(t, m, st):
+    """Derivative, event functions and stiff decay rates (into ``ctrl[N_CTRL:]``) at the
+    point (t, st.y, st.aux). Returns the hook code (0, a failure code, or EVENT_INSIDE_STEP when
+    the point lies beyond an event surface)."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
+    st.stats[ST_RHS] += 1
+    code = rhs(t, st.y, p, ip, st.aux, work, st.f)
+    read_decay(work, m.stiff_slot, st.ctrl[N_CTRL:])
+    if st.g_old.size > 0:
+        event_values(t, st.y, p, ip, st.aux, work, st.g_old)
+    return code
+
+
+@njit(cache=True)
+def initial_step(method, t0, t_end, s, m, st):
+    """Initial step size (Hairer et al. 1993, Sec. II.4, "starting step size") from the point
+    (t0, st.y) with derivative st.f, s."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
+    y0 = st.y
+    f0 = st.f
+    n = y0.size
+    interval = abs(t_end - t0)
+    if interval == 0.0:
+        return 0.0
+    order = 7 if method == DOP853 or method == AUTO else 4  # of the error estimator
+    if method == RADAU5:
+        order = 3
+    d0, d1 = initial_norms(y0, f0, s.rtol, s.atol)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    y1 = np.empty(n)
+    f1 = np.empty(n)
+    for i in range(n):
+        y1[i] = y0[i] + h0 * f0[i]
+    st.stats[ST_RHS] += 1
+    rhs(t0 + h0, y1, p, ip, st.aux, work, f1)
+    d2 = initial_difference(y0, f0, f1, s.rtol, s.atol, h0)
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
+    return min(100.0 * h0, h1, interval, s.max_step)
+
+
+@njit(cache=True, inline="always")  # no call boundary per step
+def _attempts(current, t, t_end, h_abs, f_inside, s, m, st, im, w):
+    """A step of the method in use (``current``): Radau IIA or an explicit pair."""
+    if im is not None:
+        if current == RADAU5:
+            return _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w)
+    return _explicit_attempts(current, t, t_end, h_abs, f_inside, s, m, st, w)
+
+
+@njit(cache=True, inline="always")  # no call boundary per step
+def _switch(current, h, h_next, s, st, im, K, before):
+    """The automatic method's stiffness tests after an accepted step (see
+    :func:`workbench.solver._radau.explicit_test` and ``implicit_test``). Returns the method
+    for the next step. ``before``: the counters of evaluations, implicit evaluations and LU
+    decompositions before the step."""
+    if im is None:
+        return current
+    if s.method != AUTO:
+        return current
+    rhs_before, imp_rhs_before, lu_before = before
+    if current == RADAU5:
+        cost = implicit_cost(im.stats, imp_rhs_before, lu_before, st.y.size)
+        if implicit_test(im.rc, im.stats, h_next, cost):
+            return DOP853
+        return RADAU5
+    h_lambda = dop853_stiffness(K, h, im.jac_scale)
+    if explicit_test(im.rc, im.stats, h_lambda, st.stats[ST_RHS] - rhs_before):
+        return RADAU5
+    return DOP853
+
+
+@njit(cache=True)
+def advance(t_end, t_pause, s, m, st, im):
+    """Integrate from st.ctrl[CT_T] until t_end (or the first step ending at or after t_pause).
+
+    ``s``, ``m``, ``st``, ``im``: the run's :class:`~workbench.solver._loop_types.Settings`, the
+    model's :class:`~workbench.solver._loop_types.Hooks`, the loop's
+    :class:`~workbench.solver._loop_types.State` and the implicit method's
+    :class:`~workbench.solver._loop_types.Implicit` (None for an explicit method: the loop is then
+    compiled without it). All loop state lives in the caller's arrays, so calling again
+    continues exactly where the last call stopped: a run split into pauses is bit-identical to
+    an unbroken one. Records ``Yrec[i] = y(t_rec[i])`` and ``AUXrec[i] = aux(t_rec[i])``.
+    Returns DONE, PAUSED, TERMINATED or a negative failure code.
+    """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
+    current = s.method
+    if im is not None:
+        current = int(im.rc[RC_CURRENT])
+    # the arrays taken out of the tuples once (an access in the loop costs a pair of atomic
+    # reference-count operations)
+    y = st.y
+    aux = st.aux
+    ctrl = st.ctrl
+    stats = st.stats
+    g_old = st.g_old
+    Yrec = st.Yrec
+    AUXrec = st.AUXrec
+    f = st.f
+    ev_dir = m.ev_dir
+    t_rec = s.t_rec
+    n = y.size
+    ne = ev_dir.size
+    nrec = t_rec.size
+    ms = m.stiff_idx.size
+    decay = ctrl[N_CTRL : N_CTRL + ms]
+    w = Scratch(
+        np.empty((16, n)),
+        np.empty((7, n)),
+        np.empty(n),
+        np.empty(n),
+        np.empty(n),
+        np.empty(ne),
+        np.empty(ne),
+        np.empty(ms),
+    )
+    K = w.K
+    F = w.F
+    y_new = w.y_new
+    yint = w.yint
+    g_new = w.g_new
+    gtmp = w.gtmp
+    decay_new = w.decay_new
+    t = ctrl[CT_T]
+    h_abs = ctrl[CT_H]
+    f_inside = ctrl[CT_F_INSIDE] > 0.0
+    i_rec = stats[ST_RECORDED]
+    status = DONE
+    while i_rec < nrec and t_rec[i_rec] <= t:
+        Yrec[i_rec, :] = y
+        AUXrec[i_rec, :] = aux
+        i_rec += 1
+    while True:
+        if t >= t_end:
+            status = DONE
+            break
+        if t >= t_pause:
+            status = PAUSED
+            break
+        if stats[ST_STEPS] >= s.max_steps:
+            status = MAX_STEPS
+            break
+        h_min = min_step(t)
+        if h_abs > s.max_step:
+            h_abs = s.max_step
+        elif h_abs < h_min:
+            h_abs = h_min
+        before = (stats[ST_RHS], 0, 0)
+        if im is not None:
+            before = (stats[ST_RHS], im.stats[IS_RHS], im.stats[IS_LU])
+        failed, last_code, t_new, h, h_abs, inside_end = _attempts(
+            current, t, t_end, h_abs, f_inside, s, m, st, im, w
+        )
+        if failed:
+            if last_code != 0:
+                stats[ST_MODEL_CODE] = last_code
+                status = MODEL_FAILURE
+            elif ctrl[CT_NONFINITE] > 0.0:
+                status = NON_FINITE
+            else:
+                status = STEP_UNDERFLOW
+            break
+        ctrl[CT_NONFINITE] = 0.0
+        stats[ST_STEPS] += 1
+        fired = -1
+        t_stop = t_new
+        # the dense output is needed where an event function crossed (to locate its root) or a
+        # record lies inside the step (the records before an event's root lie before t_new)
+        dense = i_rec < nrec and t_rec[i_rec] < t_new
+        if ne > 0:
+            event_values(t_new, y_new, p, ip, aux, work, g_new)
+            for k in range(ne):
+                if crossed(ev_dir[k], g_old[k], g_new[k]):
+                    dense = True
+        if dense:
+            code = _dense_prepare(current, t, h, m, st, w, im)
+            if code != 0:
+                stats[ST_MODEL_CODE] = code
+                status = MODEL_FAILURE
+                break
+        for k in range(ne):
+            if crossed(ev_dir[k], g_old[k], g_new[k]):
+                t_k = _locate(
+                    current, k, t, h, y, F, t, g_old[k], t_new, g_new[k], m, aux, yint, gtmp
+                )
+                if fired < 0 or t_k < t_stop:
+                    fired = k
+                    t_stop = t_k
+        while i_rec < nrec and t_rec[i_rec] <= t_stop:
+            if t_rec[i_rec] == t_new and fired < 0:
+                Yrec[i_rec, :] = y_new
+            else:
+                dense_eval(current, t, h, y, F, t_rec[i_rec], yint)
+                Yrec[i_rec, :] = yint
+            AUXrec[i_rec, :] = aux
+            i_rec += 1
+        if im is not None:
+            if current == RADAU5:
+                im.rc[RC_TIME_IMPLICIT] += t_stop - t
+        next_method = _switch(current, h, h_abs, s, st, im, K, before)
+        if fired >= 0:
+            if t_stop == t_new:
+                # the root is the step's end: its state is y_new, where g already has its
+                # post-crossing sign (the dense output can differ from it by rounding)
+                y[:] = y_new
+            else:
+                dense_eval(current, t, h, y, F, t_stop, yint)
+                y[:] = yint
+            t = t_stop
+            stats[ST_EVENTS] += 1
+            stop = apply_event(fired, t, y, p, ip, aux, work)
+            # simultaneous events: any other event function that has crossed by t_stop has its
+            # root there too (within the root's tolerance, or the same double), so its update
+            # is applied now; left for the next step, it would start beyond its surface and
+            # never fire
+            if ne > 1:
+                event_values(t, y, p, ip, aux, work, gtmp)
+                for k in range(ne):
+                    if k != fired and crossed(ev_dir[k], g_old[k], gtmp[k]):
+                        stats[ST_EVENTS] += 1
+                        if apply_event(k, t, y, p, ip, aux, work) != 0:
+                            stop = 1
+            if im is not None:
+                forget_jacobian(im.rc)  # the discrete state, and with it the rhs, changed
+            code = start(t, m, st)
+            f_inside = code == EVENT_INSIDE_STEP
+            if code != 0 and not f_inside:
+                stats[ST_MODEL_CODE] = code
+                status = MODEL_FAILURE
+                break
+            if stop != 0:
+                status = TERMINATED
+                break
+        else:
+            t = t_new
+            y[:] = y_new
+            if current == RADAU5:
+                if im is not None:
+                    f[:] = im.f_new
+                    read_decay(work, m.stiff_slot, decay)
+            else:
+                f[:] = K[n_stages(current)]
+                decay[:] = decay_new
+            f_inside = inside_end
+            if ne > 0:
+                g_old[:] = g_new
+        current = next_method
+        if im is not None:
+            im.rc[RC_CURRENT] = current
+    ctrl[CT_T] = t
+    ctrl[CT_F_INSIDE] = 1.0 if f_inside else 0.0
+    ctrl[CT_H] = h_abs
+    stats[ST_RECORDED] = i_rec
+    return status
