@@ -16,8 +16,9 @@
    with its Jacobian by copies, and its derivative in omega) at omega = 1.0, 1.5 and 1.7 pi,
    CPU time (the orbits are found first).
 
-Prints every figure with the CPU time (``time.process_time``), the wall time and the load;
-writes the continued diagram to ``benchmarks/results/continuation_fig32.png``.
+Prints every figure with the CPU time (``time.process_time``), the wall time and the load
+(appended to ``benchmarks/RESULTS.md``, :mod:`_results`); writes the continued diagram to
+``benchmarks/results/continuation_fig32.png``.
 
 Run: ``python benchmarks/continuation.py [--parts fig32,newton] [--points 300]`` (the whole
 figure takes ~20 min of CPU).
@@ -33,6 +34,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 
 import workbench
 from workbench.analysis import bifurcation_diagram
@@ -155,4 +157,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with recording(__file__):
+        main()

@@ -157,9 +157,7 @@ def _branch(scene, param: str, spec: dict, path: Path) -> dict:
 
     start, stop = float(spec["branch_start"]), float(spec["branch_stop"])
     point = scene.replace(sweep={}).with_parameters(**{param: start})
-    branch = continue_orbit(
-        point, param, stop=stop, rtol=1e-8, tolerance=1e-6
-    )
+    branch = continue_orbit(point, param, stop=stop, rtol=1e-8, tolerance=1e-6)
     save_run(branch, path)
     names = branch.label.attrs["flag_meanings"].split()
     stable = branch.stable.values
