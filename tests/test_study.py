@@ -516,3 +516,45 @@ def test_quick_route_of_the_speed_sweep(tmp_path):
     assert all(p.stat().st_size > 20_000 for p in paths)
     text = "\n".join(route_section(r))
     assert "continued both ways" in text and "no 0-1 test" in text
+
+
+@pytest.mark.slow  # ~1 min of CPU: the nine-bar's orbit continued over 5 % of omega
+def test_route_with_a_branch_and_exponents_at_small_size(tmp_path):
+    """The parts of [route] that quick mode leaves out, on the nine-bar at small size: the
+    period-1 orbit continued from omega = pi (its largest multiplier there is ~0.22: stable, no
+    bifurcation within 5 %), and the largest exponent at the two ends of a 3-point sweep."""
+    import dataclasses
+    import math
+
+    from workbench.study._route import route
+    from workbench.study._route_report import route_section
+
+    study = load_study("bifurcation_speed")
+    pi = math.pi
+    scene = study.cases["sweep"].replace(
+        run={"cycles": 8, "transient_cycles": 20},
+        sweep={"omega": [0.95 * pi, pi, 1.05 * pi]},
+    )
+    spec = {
+        "segments": 1,
+        "transient_cycles": 2,
+        "cycles": 8,
+        "method": "auto",
+        "branch_start": pi,
+        "branch_stop": 1.05 * pi,
+        "exponents": 2,
+    }
+    small = dataclasses.replace(study, cases={"sweep": scene}, route=spec)
+    r = route(small, tmp_path, quick=False, workers=1)
+    b = r["branch"]
+    assert b["monodromy"] == "copies" and b["ended"] == "the parameter left its range"
+    assert b["values"][0] == pi and pi * 1.04 < max(b["values"]) <= pi * 1.05
+    assert all(b["stable"]) and b["bifurcations"] == []
+    assert 0.1 < b["largest_modulus"][0] < 0.4  # benchmarks/continuation.py: 0.2225
+    assert (tmp_path / "sweep-branch.nc").is_file()
+    assert [e["value"] for e in r["exponents"]] == [0.95 * pi, 1.05 * pi]
+    assert all(math.isfinite(e["lle"]) and e["stderr"] > 0 for e in r["exponents"])
+    text = "\n".join(route_section(r))
+    assert "The periodic orbit does not lose stability on the continued range" in text
+    assert "monodromy matrix by copies, pseudo-arclength from 1 pi towards 1.05 pi" in text
+    assert "The largest exponent (two-trajectory method, 2 values)" in text
