@@ -85,3 +85,17 @@ def test_chaos_map_from_a_scene_file(tmp_path, capsys):
     assert maps.lle.attrs["units"] == "s-1" and (maps.lle.values[1] > 0).all()
     assert fig.stat().st_size > 10_000
     assert "4 points" in capsys.readouterr().out
+
+
+def test_the_nine_bar_chaos_map_scenes_are_valid():
+    """``make chaos-maps`` runs these: two swept dims, strobe records, 100 cycles for the 0-1
+    test (tests/test_continuation.py checks the indicators themselves)."""
+    from pathlib import Path
+
+    found = sorted((Path(__file__).parents[1] / "studies" / "chaos_maps").glob("*.toml"))
+    assert [p.stem for p in found] == ["clearance_friction", "omega_clearance"]
+    for path in found:
+        scene = workbench.load_scene(path)
+        assert scene.model == "ninebar" and len(scene.sweep) == 2, path
+        assert scene.record["samples_per_period"] == 1 and scene.run["cycles"] >= 100, path
+        assert not scene.continuation, path
