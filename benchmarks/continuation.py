@@ -15,13 +15,18 @@
 2. ``newton``: one Newton step on the nine-bar's period-1 branch (the map over one crank cycle
    with its Jacobian by copies, and its derivative in omega) at omega = 1.0, 1.5 and 1.7 pi,
    CPU time (the orbits are found first).
+3. ``chaos_maps``: what a point of the nine-bar's chaos maps (``make chaos-maps``:
+   ``studies/chaos_maps/*.toml``) costs: the run and its indicators
+   (:func:`workbench.continuation.chaos_indicators`: strobe period, 0-1 K, largest exponent)
+   at ``--map-points`` (2) corners of each grid in this process, CPU time per point, scaled to
+   the whole grid on ``--workers`` workers.
 
 Prints every figure with the CPU time (``time.process_time``), the wall time and the load
 (appended to ``benchmarks/RESULTS.md``, :mod:`_results`); writes the continued diagram to
 ``benchmarks/results/continuation_fig32.png``.
 
-Run: ``python benchmarks/continuation.py [--parts fig32,newton] [--points 300]`` (the whole
-figure takes ~20 min of CPU).
+Run: ``python benchmarks/continuation.py [--parts newton,fig32,chaos_maps] [--points 300]`` (the
+continued figure takes ~13 min of the workers' CPU: ``benchmarks/RESULTS.md``).
 """
 
 from __future__ import annotations
@@ -109,7 +114,7 @@ def fig32(args) -> None:
     fig = bifurcation_figure(diagram, scale=1 / math.pi, xlabel="crank speed omega / pi")
     fig.axes[0].set_title(
         f"Fig. 32 continued upwards: {args.points} points, {args.transient} + {args.cycles} "
-        f"cycles each ({cpu / 60:.1f} min CPU; brute force {total / 60:.1f} min)",
+        f"cycles each ({cpu / 60:.1f} min CPU; brute force {total / 60:.1f} min CPU)",
         fontsize=8,
     )
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -139,6 +144,39 @@ def newton(args) -> None:
         )
 
 
+def chaos_maps(args) -> None:
+    from workbench.continuation import chaos_indicators
+
+    for path in sorted((ROOT / "studies" / "chaos_maps").glob("*.toml")):
+        scene = workbench.load_scene(path)
+        dims = list(scene.sweep)
+        grid = [scene.sweep[d] for d in dims]
+        size = math.prod(len(v) for v in grid)
+        corners = [[v[0] for v in grid], [v[-1] for v in grid]][: args.map_points]
+        cpu = []
+        for corner in corners:
+            point = scene.replace(sweep={}).with_parameters(**dict(zip(dims, corner, strict=True)))
+            c0 = time.process_time()
+            run = workbench.simulate(point)
+            found = chaos_indicators(point, run)
+            cpu.append(time.process_time() - c0)
+            shown = ", ".join(f"{d}={v:.4g}" for d, v in zip(dims, corner, strict=True))
+            print(
+                f"  {path.stem} at {shown}: {cpu[-1]:.1f} s CPU (strobe period "
+                f"{int(found.strobe_period)}, K {float(found.zero_one_K):.2f}, lle "
+                f"{float(found.lle):.3g} +- {float(found.lle_stderr):.2g} s-1)"
+            )
+        each = float(np.mean(cpu))
+        shape = " x ".join(f"{d} {len(v)}" for d, v in zip(dims, grid, strict=True))
+        print(
+            f"chaos map {path.stem} ({shape} = {size} points, "
+            f"{scene.run['transient_cycles']} + {scene.run['cycles']} cycles): "
+            f"{each:.1f} s CPU per point -> {each * size / 60:.1f} min CPU, "
+            f"{each * size / args.workers / 60:.1f} min on {args.workers} idle workers; "
+            f"load {os.getloadavg()[0]:.1f}"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--parts", default="newton,fig32")
@@ -148,12 +186,15 @@ def main() -> None:
     ap.add_argument("--segments", type=int, default=8)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stride", type=int, default=30)
+    ap.add_argument("--map-points", type=int, default=2)
     args = ap.parse_args()
     parts = args.parts.split(",")
     if "newton" in parts:
         newton(args)
     if "fig32" in parts:
         fig32(args)
+    if "chaos_maps" in parts:
+        chaos_maps(args)
 
 
 if __name__ == "__main__":
