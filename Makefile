@@ -42,8 +42,9 @@ studies: $(STAMP)
 	$(VENV)/bin/workbench study all -o $(OUT)/studies
 	$(PY) docs/hooks.py $(OUT)/studies
 
-# Chaos indicators of the nine-bar over (omega, c) and (c, c_f) (docs/continuation.md states
-# their cost): campaigns whose workers measure the strobe period, 0-1 K and largest exponent.
+# Chaos indicators of the nine-bar over (omega, c) and (c, c_f): campaigns whose workers measure
+# the strobe period, 0-1 K and largest exponent (their cost: `python benchmarks/continuation.py
+# --parts chaos_maps`, recorded in benchmarks/RESULTS.md).
 chaos-maps: $(STAMP)
 	$(VENV)/bin/workbench chaos-map studies/chaos_maps/omega_clearance.toml --workers 2 -q \
 		-o $(OUT)/chaos_maps/omega_clearance.nc --figure $(OUT)/chaos_maps/omega_clearance.png
