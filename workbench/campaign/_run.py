@@ -284,7 +284,8 @@ def _run_locked(
             "campaign_block_sha256": " ".join(
                 manifest["checksums"][str(i)] for i in range(len(blocks))
             ),
-            "campaign_per_point": _name(per_point),
+            # the measurement's name, only when there is one (None: the attribute is absent)
+            **({"campaign_per_point": _name(per_point)} if per_point is not None else {}),
             "code_digests": " ".join(
                 sorted({manifest["code_digests"][str(i)] for i in range(len(blocks))})
             ),
