@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test test-fast lint format studies data notebooks docs benchmarks clean
+.PHONY: demo test test-fast lint format studies chaos-maps data notebooks docs benchmarks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -41,6 +41,15 @@ test-fast: $(STAMP)
 studies: $(STAMP)
 	$(VENV)/bin/workbench study all -o $(OUT)/studies
 	$(PY) docs/hooks.py $(OUT)/studies
+
+# Chaos indicators of the nine-bar over (omega, c) and (c, c_f): campaigns whose workers measure
+# the strobe period, 0-1 K and largest exponent (their cost: `python benchmarks/continuation.py
+# --parts chaos_maps`, recorded in benchmarks/RESULTS.md).
+chaos-maps: $(STAMP)
+	$(VENV)/bin/workbench chaos-map studies/chaos_maps/omega_clearance.toml --workers 2 -q \
+		-o $(OUT)/chaos_maps/omega_clearance.nc --figure $(OUT)/chaos_maps/omega_clearance.png
+	$(VENV)/bin/workbench chaos-map studies/chaos_maps/clearance_friction.toml --workers 2 -q \
+		-o $(OUT)/chaos_maps/clearance_friction.nc --figure $(OUT)/chaos_maps/clearance_friction.png
 
 # The small archives the notebooks open (tests/test_data.py fails when they are stale), and the
 # notebooks executed in place on them (committed with their outputs: the site shows them).

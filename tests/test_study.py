@@ -498,3 +498,126 @@ def test_exponent_table_of_the_chaos_case_at_small_size():
     # rtol 1e-6, defect 10: measured 3.2e-3 (below 1e-3 at defect 3): the directions' parts
     # orthogonal to the others, e^-10 of their size, are integrated to rtol e^10 only
     assert t.attrs["sum_check"] < 1e-2
+
+
+def test_route_section_says_where_and_how_the_periodic_motion_ends():
+    """The route section is written from the numbers alone: the first loss of stability, the
+    hysteresis, the agreement of the strobe period, the 0-1 test and the exponents."""
+    import math
+
+    from workbench.study._route_report import route_section
+
+    pi = math.pi
+    values = [1.0 * pi, 1.5 * pi, 2.0 * pi, 2.5 * pi]
+    route = {
+        "status": "computed",
+        "parameter": "omega",
+        "values": values,
+        "cycles": [100, 3],
+        "chained_seams": 1,
+        "cpu_time_continued_sweep": 120.0,
+        "wall_time": {"continued_sweep": 90.0},
+        "directions": {
+            "up": {"period": [1, 1, 0, 0], "spread": [0.0, 0.0, 0.2, 0.3], "K": [0, 0, 0.9, 0.95]},
+            "down": {"period": [1, 1, 0, 0], "spread": [0.0, 0.1, 0.2, 0.3], "K": [0, 0, 0.8, 0.9]},
+        },
+        "hysteresis": {"values": [1.5 * pi], "tolerance": 0.05, "differs": [0, 1, 0, 0]},
+        "branch": {
+            "start": pi,
+            "stop": 2.6 * pi,
+            "values": [pi, 1.5 * pi, 1.8 * pi, 1.9 * pi],
+            "stable": [1, 1, 1, 0],
+            "largest_modulus": [0.2, 0.5, 0.99, 1.2],
+            "events_per_period": [0, 0, 0, 0],
+            "monodromy": "copies",
+            "ended": "the parameter left its range",
+            "map_evaluations": 123,
+            "bifurcations": [
+                {
+                    "type": "neimark_sacker",
+                    "value": 1.85 * pi,
+                    "critical": [0.6, 0.8],
+                    "multipliers": [[0.6, 0.8], [0.6, -0.8]],
+                    "stable_before": True,
+                    "stable_after": False,
+                    "events_before": 0.0,
+                    "events_after": 0.0,
+                }
+            ],
+        },
+        "exponents": [
+            {"value": 1.0 * pi, "lle": -3.0, "stderr": 0.5},
+            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0},
+        ],
+    }
+    text = "\n".join(route_section(route))
+    assert "loses stability at omega = 1.85 pi by a **neimark sacker**" in text
+    assert "+0.6000+0.8000i (|mu| 1.0000)" in text
+    assert "different attractors at 1 of 4 values (1.5 pi" in text
+    assert "both directions are period-1 at 2 of 4 values (1 pi .. 1.5 pi)" in text
+    assert "K > 0.5 both ways at 2 (2 pi .. 2.5 pi)" in text
+    assert "positive beyond two standard errors at 2.5 pi, negative at 1 pi" in text
+    assert "the nearest continued orbit is stable at 2" in text
+    assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 |" in text
+
+
+def test_quick_route_of_the_speed_sweep(tmp_path):
+    """A study's [route] end to end, shortened (no branch, no exponents): the sweep continued
+    both ways, per direction the strobe spread, period and K, the hysteresis, the figures."""
+    from workbench.study._route import route
+    from workbench.study._route_figures import route_figures
+    from workbench.study._route_report import route_section
+
+    study = load_study("bifurcation_speed")
+    r = route(study, tmp_path, quick=True, workers=2)
+    assert r["parameter"] == "omega" and len(r["values"]) >= 4
+    for d in ("up", "down"):
+        assert len(r["directions"][d]["spread"]) == len(r["values"])
+    assert len(r["hysteresis"]["differs"]) == len(r["values"])
+    paths = route_figures(study, r, tmp_path)
+    assert [p.name for p in paths] == ["fig32-route.png", "fig32-route-indicators.png"]
+    assert all(p.stat().st_size > 20_000 for p in paths)
+    text = "\n".join(route_section(r))
+    assert "continued both ways" in text and "no 0-1 test" in text
+
+
+@pytest.mark.slow  # ~1 min of CPU: the nine-bar's orbit continued over 5 % of omega
+def test_route_with_a_branch_and_exponents_at_small_size(tmp_path):
+    """The parts of [route] that quick mode leaves out, on the nine-bar at small size: the
+    period-1 orbit continued from omega = pi (its largest multiplier there is ~0.22: stable, no
+    bifurcation within 5 %), and the largest exponent at the two ends of a 3-point sweep."""
+    import dataclasses
+    import math
+
+    from workbench.study._route import route
+    from workbench.study._route_report import route_section
+
+    study = load_study("bifurcation_speed")
+    pi = math.pi
+    scene = study.cases["sweep"].replace(
+        run={"cycles": 8, "transient_cycles": 20},
+        sweep={"omega": [0.95 * pi, pi, 1.05 * pi]},
+    )
+    spec = {
+        "segments": 1,
+        "transient_cycles": 2,
+        "cycles": 8,
+        "method": "auto",
+        "branch_start": pi,
+        "branch_stop": 1.05 * pi,
+        "exponents": 2,
+    }
+    small = dataclasses.replace(study, cases={"sweep": scene}, route=spec)
+    r = route(small, tmp_path, quick=False, workers=1)
+    b = r["branch"]
+    assert b["monodromy"] == "copies" and b["ended"] == "the parameter left its range"
+    assert b["values"][0] == pi and pi * 1.04 < max(b["values"]) <= pi * 1.05
+    assert all(b["stable"]) and b["bifurcations"] == []
+    assert 0.1 < b["largest_modulus"][0] < 0.4  # benchmarks/continuation.py: 0.2225
+    assert (tmp_path / "sweep-branch.nc").is_file()
+    assert [e["value"] for e in r["exponents"]] == [0.95 * pi, 1.05 * pi]
+    assert all(math.isfinite(e["lle"]) and e["stderr"] > 0 for e in r["exponents"])
+    text = "\n".join(route_section(r))
+    assert "The periodic orbit does not lose stability on the continued range" in text
+    assert "monodromy matrix by copies, pseudo-arclength from 1 pi towards 1.05 pi" in text
+    assert "The largest exponent (two-trajectory method, 2 values)" in text

@@ -31,6 +31,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analysis", ("workbench.analysis",)),
     ("plot", ("workbench.plot",)),
     ("campaign", ("workbench.campaign",)),
+    ("continuation", ("workbench.continuation",)),  # continued sweeps, periodic orbits
     ("verification", ("workbench.verification",)),  # workbench.verify
     ("study", ("workbench.study",)),
     ("cli", ("workbench.cli", "workbench.cli._exit_codes", "workbench.cli._console")),

@@ -88,25 +88,54 @@ statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluation
 TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It
 stores only what the scene records: ``record.samples_per_period = 1`` keeps strobe samples only.
 
+The pieces another package runs its own tasks with (:mod:`workbench.continuation`'s continued
+sweeps): :class:`Store`, :func:`execute` (with its own ``runner``), :func:`block_dataset`
+(:func:`run_outcome`, :func:`invalid_outcome`) and :func:`assemble_blocks`.
+
 Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--scheduler ADDRESS]
 [--chunk K] [--restart]`` and ``workbench bifurcation sweep.nc --var x [-o fig.png]``.
 """
 
-from workbench.campaign._assemble import summary
+from workbench.campaign._assemble import assemble_blocks, summary
+from workbench.campaign._block import (
+    block_dataset,
+    failed,
+    invalid_outcome,
+    run_outcome,
+)
 from workbench.campaign._errors import CampaignError, CampaignWarning
-from workbench.campaign._grid import SweepGrid, expand_sweep
+from workbench.campaign._execute import available_workers, execute
+from workbench.campaign._grid import (
+    SweepGrid,
+    campaign_id,
+    code_of,
+    expand_sweep,
+    parameter_attrs,
+)
 from workbench.campaign._jobqueue import DASK_CONFIG, jobqueue_cluster
 from workbench.campaign._run import run_campaign, store_paths
+from workbench.campaign._store import Store
 from workbench.campaign._warm import warm_kernel
 
 __all__ = [
     "DASK_CONFIG",
     "CampaignError",
     "CampaignWarning",
+    "Store",
     "SweepGrid",
+    "assemble_blocks",
+    "available_workers",
+    "block_dataset",
+    "campaign_id",
+    "code_of",
+    "execute",
     "expand_sweep",
+    "failed",
+    "invalid_outcome",
     "jobqueue_cluster",
+    "parameter_attrs",
     "run_campaign",
+    "run_outcome",
     "store_paths",
     "summary",
     "warm_kernel",

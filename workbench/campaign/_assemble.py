@@ -29,7 +29,7 @@ from workbench.run import (
 )
 from workbench.scene import Scene
 
-__all__ = ["assemble", "summary"]
+__all__ = ["assemble", "assemble_blocks", "summary"]
 
 _PER_POINT = ("status", "failure", *STATS, "point_wall_time")
 
@@ -72,6 +72,21 @@ def assemble(
         computed[i] if i in computed else open_run(store.block_path(i))
         for i in range(len(grid.blocks(chunk)))
     ]
+    ds = assemble_blocks(scene, grid, blocks)
+    ds.attrs.update(
+        campaign_id=cid,
+        campaign_chunk=chunk,
+        campaign_blocks=len(blocks),
+    )
+    ds.attrs.update(run_attrs)
+    return ds
+
+
+def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> xr.Dataset:
+    """One dataset over the grid from block datasets (:func:`workbench.campaign._block.
+    block_dataset`) that together hold every point once (see :func:`assemble`); the per-point
+    measurements of a block (variables over ``point`` alone) become variables over the
+    parameter dims, NaN where a block has none."""
     n, shape = grid.size, grid.shape
     n_time = max(b.sizes["time"] for b in blocks)
     first = blocks[0]
@@ -132,6 +147,12 @@ def assemble(
     for name, (_, dtype, missing, _) in STATS.items():
         data_vars[name] = (pdims, gather(name, missing).astype(dtype), stat_attrs(name))
     data_vars["point_wall_time"] = (pdims, gather("point_wall_time", np.nan), POINT_WALL_ATTRS)
+    for name, (tail, attrs) in _measured_variables(scene, blocks).items():
+        out = np.full((n,) + tail[1], np.nan)
+        for b in blocks:
+            if name in b.data_vars:
+                out[b["point"].values] = b[name].values
+        data_vars[name] = (pdims + tail[0], out.reshape(shape + tail[1]), attrs)
 
     params = parameter_coords(
         model, scene.resolved_parameters, skip=pdims, taken=[*coords, *data_vars]
@@ -149,12 +170,9 @@ def assemble(
     n_failed = int(failed(status).sum())
     ds.attrs.update(
         model=scene.model,
-        campaign_id=cid,
         campaign_dims=" ".join(pdims),
         campaign_grid=json.dumps(grid.as_dict()),
         campaign_points=n,
-        campaign_chunk=chunk,
-        campaign_blocks=len(blocks),
         failed_points=n_failed,
         solver_method=s["method"],
         solver_rtol=s["rtol"],
@@ -163,8 +181,20 @@ def assemble(
         solver_max_steps=s["max_steps"],
     )
     ds.attrs.update(grid_attrs)
-    ds.attrs.update(run_attrs)
     return ds
+
+
+def _measured_variables(scene: Scene, blocks: list[xr.Dataset]) -> dict:
+    """Per-point measurements found in the blocks: name -> ((dims, sizes) after ``point``,
+    attrs), in the order first seen."""
+    known = {*scene.variables, *_PER_POINT, "record_time"}
+    found: dict = {}
+    for b in blocks:
+        for name, v in b.data_vars.items():
+            if name in known or name in found or "time" in v.dims or v.dims[:1] != ("point",):
+                continue
+            found[name] = ((v.dims[1:], v.shape[1:]), dict(v.attrs))
+    return found
 
 
 def summary(ds: xr.Dataset, *, limit: int = 20) -> str:

@@ -14,6 +14,7 @@ import sys
 import threading
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,7 +22,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import save_run, sha256_file
-from workbench.campaign._grid import code_of
+from workbench.campaign._grid import code_of, modules_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
@@ -34,8 +35,11 @@ __all__ = [
     "RAISED",
     "STATUS",
     "STATS",
+    "block_dataset",
     "failed",
+    "invalid_outcome",
     "run_block",
+    "run_outcome",
     "worker_start",
 ]
 
@@ -88,7 +92,9 @@ PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork s
 class BlockTask:
     """What one task needs: the campaign scene (TOML), which points, where to write, and the
     module that defines the scene's model when it is not one of workbench's (a user's model,
-    registered when imported: a worker process that did not import it yet does so first)."""
+    registered when imported: a worker process that did not import it yet does so first), and
+    the function (if any) that measures each point's run in the worker (``per_point``, see
+    :func:`workbench.run_campaign`)."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -100,6 +106,7 @@ class BlockTask:
     max_memory: float | str | None = None  # the memory limit of one point's records
     model_module: str = ""
     model_directory: str = ""  # where the module's file lies, for a worker without it on sys.path
+    per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -128,33 +135,51 @@ def failed(status: np.ndarray) -> np.ndarray:
     return (status != Status.OK) & (status != Status.TERMINATED)
 
 
-def _point(scene: Scene, params: dict[str, float], max_memory=None) -> dict:
-    """Run one point. Its outcome is data: a failed run (its Status), rejected parameters
-    (INVALID) or any exception the point raised (RAISED, with the exception's type and message
-    in ``failure``): one bad point never stops its campaign. An interrupt (KeyboardInterrupt,
-    SystemExit) still stops the block."""
-    t0 = time.perf_counter()
-    try:
-        ds = simulate(scene.with_parameters(**params), throw=False, max_memory=max_memory)
-    except SceneError as exc:
-        wall = time.perf_counter() - t0
-        out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
-        return out | {"ds": None, "times": np.zeros(0)}
-    except Exception as exc:
-        wall = time.perf_counter() - t0
-        where = traceback.extract_tb(exc.__traceback__)[-1]
-        failure = (
-            f"error: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''} "
-            f"(raised at {Path(where.filename).name}:{where.lineno} in {where.name})"
-        )
-        out = {"status": RAISED, "failure": failure, "wall": wall}
-        return out | {"ds": None, "times": np.zeros(0)}
+def invalid_outcome(exc: SceneError, wall: float) -> dict:
+    """The outcome of a point whose parameters the model rejects (it did not run)."""
+    out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
+    return out | {"ds": None, "times": np.zeros(0)}
+
+
+def raised_outcome(exc: Exception, wall: float) -> dict:
+    """The outcome of a point that raised an exception (RAISED, with the exception's type,
+    message and where it was raised in ``failure``)."""
+    where = traceback.extract_tb(exc.__traceback__)[-1]
+    failure = (
+        f"error: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''} "
+        f"(raised at {Path(where.filename).name}:{where.lineno} in {where.name})"
+    )
+    out = {"status": RAISED, "failure": failure, "wall": wall}
+    return out | {"ds": None, "times": np.zeros(0)}
+
+
+def run_outcome(ds: xr.Dataset, wall: float) -> dict:
+    """The outcome of a point that ran: its status and failure message from the run's
+    dataset (see :func:`block_dataset`)."""
     status = run_status(ds)
     failure = f"{status.label}: {ds.attrs['run_message']}" if status.failed else ""
     if status is Status.TERMINATED:
         failure = "terminated: a terminal event ended the run early"
     out = {"status": int(status), "failure": failure, "ds": ds, "times": ds["time"].values}
-    return out | {"wall": time.perf_counter() - t0}
+    return out | {"wall": wall}
+
+
+def _point(scene: Scene, params: dict[str, float], max_memory=None, per_point=None) -> dict:
+    """Run one point. Its outcome is data: a failed run (its Status), rejected parameters
+    (INVALID) or any exception the point raised (RAISED): one bad point never stops its
+    campaign. An interrupt (KeyboardInterrupt, SystemExit) still stops the block."""
+    t0 = time.perf_counter()
+    try:
+        point = scene.with_parameters(**params)
+        ds = simulate(point, throw=False, max_memory=max_memory)
+        measured = None
+        if per_point is not None and not run_status(ds).failed:
+            measured = per_point(point, ds)
+    except SceneError as exc:
+        return invalid_outcome(exc, time.perf_counter() - t0)
+    except Exception as exc:
+        return raised_outcome(exc, time.perf_counter() - t0)
+    return run_outcome(ds, time.perf_counter() - t0) | {"measured": measured}
 
 
 def _import_model(module: str, directory: str) -> None:
@@ -187,10 +212,12 @@ def run_block(task: BlockTask) -> dict:
         _import_model(task.model_module, task.model_directory)
     scene = scene_from_toml(task.scene_toml)
     runs = [
-        _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory) for v in task.values
+        _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory, task.per_point)
+        for v in task.values
     ]
-    ds = _block_dataset(scene, task, runs)
-    code = code_of(scene)
+    ds = block_dataset(scene, task.flat, runs)
+    ds.attrs.update(campaign_id=task.campaign_id, block=task.block)
+    code = code_of(scene, *modules_of(task.per_point))
     ds.attrs.update(
         code_digest=code,
         worker_pid=os.getpid(),
@@ -215,7 +242,10 @@ def run_block(task: BlockTask) -> dict:
     }
 
 
-def _block_dataset(scene: Scene, task: BlockTask, runs: list[dict]) -> xr.Dataset:
+def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
+    """The dataset of a block: the points ``flat`` (flat grid indices) with their outcomes
+    (:func:`run_outcome`, :func:`invalid_outcome`; an outcome's ``measured`` dataset, if any,
+    becomes per-point variables, NaN where a point has none)."""
     model = get_model(scene.model)
     n = len(runs)
     n_time = max([len(r["times"]) for r in runs] + [0])
@@ -260,12 +290,23 @@ def _block_dataset(scene: Scene, task: BlockTask, runs: list[dict]) -> xr.Datase
     coords = {
         "point": (
             "point",
-            np.array(task.flat, np.int64),
+            np.array(flat, np.int64),
             {"long_name": "flat (C-order) index of the point in the grid", "units": "1"},
         )
     }
     for d, (values, attrs) in mcoords.items():
         coords[d] = (d, list(values), dict(attrs))
     ds = xr.Dataset(data_vars, coords=coords)
-    ds.attrs.update(campaign_id=task.campaign_id, block=task.block, model=scene.model)
+    ds = ds.merge(_measured(runs), combine_attrs="override")
+    ds.attrs.update(model=scene.model)
     return ds
+
+
+def _measured(runs: list[dict]) -> xr.Dataset:
+    """The per-point measurements of a block over ``point`` (NaN where a point has none)."""
+    found = [r.get("measured") for r in runs]
+    template = next((m for m in found if m is not None), None)
+    if template is None:
+        return xr.Dataset()
+    blank = xr.full_like(template, np.nan, dtype=np.float64)
+    return xr.concat([blank if m is None else m for m in found], dim="point")

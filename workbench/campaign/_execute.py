@@ -59,6 +59,7 @@ def execute(
     cid: str,
     on_done: Callable[[dict], None] | None = None,
     announce: bool = False,
+    runner: Callable[[BlockTask], dict] = run_block,
 ) -> list[dict]:
     """Run the block tasks, starting them in list order, ``workers`` at a time (and
     ``PREFETCH`` per worker waiting).
@@ -77,11 +78,15 @@ def execute(
         Called with each task's summary as it finishes (the client commits the block there).
     announce : bool
         Print the dashboard link of a client.
+    runner : callable
+        What a worker does with a task (a module-level function, so that it pickles):
+        :func:`run_block` by default; another task type needs the fields ``scene_toml``,
+        ``dims``, ``values`` (its first point's kernel is preloaded) and ``block``.
 
     Returns
     -------
     list of dict
-        The tasks' summaries (:func:`run_block`), in completion order.
+        The tasks' summaries (the runner's; :func:`run_block`'s), in completion order.
 
     Raises
     ------
@@ -103,7 +108,7 @@ def execute(
 
         def submit(t: BlockTask):
             key = f"campaign-{cid}-block-{t.block:05d}-{token}"
-            return client.submit(run_block, t, key=key, pure=False)
+            return client.submit(runner, t, key=key, pure=False)
 
         return _dispatch(submit, wait, tasks, workers * (1 + PREFETCH), on_done)
     if kernel_cached(scene_from_toml(first)) is False:
@@ -113,7 +118,7 @@ def execute(
 
         def submit_local(t: BlockTask):
             with _uninterrupted_start():
-                return pool.submit(run_block, t)
+                return pool.submit(runner, t)
 
         window = workers * (1 + PREFETCH)
         return _dispatch(submit_local, concurrent.futures.wait, tasks, window, on_done)

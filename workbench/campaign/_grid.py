@@ -30,6 +30,7 @@ __all__ = [
     "campaign_id",
     "check_archive_memory",
     "code_of",
+    "modules_of",
     "expand_sweep",
     "format_point",
     "forcing_period",
@@ -142,14 +143,23 @@ def format_point(point: Mapping[str, float]) -> str:
     return ", ".join(f"{k}={v:.6g}" for k, v in point.items())
 
 
-def code_of(scene: Scene) -> str:
+def code_of(scene: Scene, *modules: str) -> str:
     """Digest of the code that computes a block of ``scene``'s campaign (the run layer, the
-    model, the kernels and the block task; :func:`workbench.run.results_digest`)."""
-    return results_digest(scene.model, "workbench.campaign._block")
+    model, the kernels, the block task and ``modules``, e.g. the module of a per-point
+    measurement or of another block task; :func:`workbench.run.results_digest`)."""
+    return results_digest(scene.model, "workbench.campaign._block", *modules)
 
 
-def campaign_id(scene: Scene, chunk: int) -> str:
-    """Digest of what fixes the content of every block: the scene and the chunk size."""
+def modules_of(fn) -> tuple[str, ...]:
+    """The module of a per-point function as a tuple (empty for None), for :func:`code_of`."""
+    return () if fn is None else (fn.__module__,)
+
+
+def campaign_id(scene: Scene, chunk: int, per_point=None) -> str:
+    """Digest of what fixes the content of every block: the scene, the chunk size and the
+    function that measures each point (its qualified name; None: none)."""
     h = hashlib.sha256(scene.to_toml().encode())
     h.update(f"\nchunk={chunk}".encode())
+    if per_point is not None:
+        h.update(f"\nper_point={per_point.__module__}.{per_point.__qualname__}".encode())
     return h.hexdigest()[:16]

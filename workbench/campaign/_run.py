@@ -9,6 +9,7 @@ import shutil
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,7 @@ from workbench.campaign._grid import (
     code_of,
     expand_sweep,
     format_point,
+    modules_of,
 )
 from workbench.campaign._schedule import longest_first, partition
 from workbench.campaign._store import Store
@@ -57,6 +59,7 @@ def run_campaign(
     restart: bool = False,
     progress: bool = False,
     max_memory: float | str | None = None,
+    per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None,
 ) -> xr.Dataset:
     """Run every point of a scene's ``[sweep]`` grid in parallel and return one dataset.
 
@@ -95,6 +98,13 @@ def run_campaign(
         records) would take more memory than this (bytes, or text such as ``"16 GiB"``;
         default: the environment variable ``WORKBENCH_MAX_MEMORY``, else half of this
         machine's memory): a :class:`workbench.run.MemoryLimitError` that says what to lower.
+    per_point : callable, optional
+        ``per_point(scene, run)``, called in the worker on each point's single-run scene and
+        its run (the dataset of :func:`workbench.simulate`) when the run succeeded; returns a
+        Dataset of measurements without a ``time`` dim (e.g. a chaos indicator with its
+        units), which become variables over the parameter dims (NaN where a run failed). A
+        module-level function (it is pickled to the workers); its qualified name is part of
+        the campaign's identity, so a store of another measurement is refused.
 
     Returns
     -------
@@ -160,6 +170,14 @@ def run_campaign(
     """
     wall0 = time.perf_counter()
     scene = load_scene(scene)
+    if scene.continuation:
+        raise CampaignError(
+            "the scene's [sweep] asks for a continued sweep (continuation = "
+            f"{scene.continuation['direction']!r}): each point starts from its neighbour's "
+            "state, which run_campaign does not do; run it with "
+            "workbench.continuation.continued_sweep (CLI: workbench campaign), or remove "
+            "sweep.continuation"
+        )
     grid = expand_sweep(scene)
     size = check_archive_memory(scene, grid, max_memory)
     workers = _positive_int("workers", workers)
@@ -173,7 +191,17 @@ def run_campaign(
     _warn_disk(st, size)
     with st.lock():
         return _run_locked(
-            scene, grid, st, client, workers, chunk, restart, progress, wall0, max_memory
+            scene,
+            grid,
+            st,
+            client,
+            workers,
+            chunk,
+            restart,
+            progress,
+            wall0,
+            max_memory,
+            per_point,
         )
 
 
@@ -188,13 +216,14 @@ def _run_locked(
     progress: bool,
     wall0: float,
     max_memory: float | str | None = None,
+    per_point: Callable | None = None,
 ) -> xr.Dataset:
     """run_campaign while holding the store's lock."""
     if restart:
         st.clear()
     manifest = st.read_manifest()
     if manifest is None:
-        reused = _complete_archive(st, scene, chunk)
+        reused = _complete_archive(st, scene, chunk, per_point)
         if reused is not None:
             reused.attrs.update(
                 campaign_workers=0,
@@ -205,14 +234,27 @@ def _run_locked(
         if chunk is None:
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
-        cid = campaign_id(scene, chunk)
-        manifest = st.write_manifest(scene, grid, chunk, cid, partition(scene, grid, chunk))
+        cid = campaign_id(scene, chunk, per_point)
+        manifest = st.write_manifest(
+            scene,
+            grid,
+            chunk,
+            cid,
+            partition(scene, grid, chunk),
+            code_of(scene, *modules_of(per_point)),
+        )
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
         cid = manifest["campaign_id"]
+        if cid != campaign_id(scene, chunk, per_point):
+            raise CampaignError(
+                f"{str(st.blocks_dir)!r} holds a campaign measured per point by another function "
+                f"(per_point={_name(per_point)}); pass restart=True (CLI --restart) to start "
+                "afresh, or choose another output path"
+            )
     st.remove_temporaries()
     blocks = st.blocks(manifest, grid)
-    code = code_of(scene)
+    code = code_of(scene, *modules_of(per_point))
     done = st.verified_blocks(manifest, blocks, code)
     model_module, model_directory = _model_module(scene)
     tasks = [
@@ -227,6 +269,7 @@ def _run_locked(
             max_memory=max_memory,
             model_module=model_module,
             model_directory=model_directory,
+            per_point=per_point,
         )
         for i, rng in enumerate(blocks)
         if i not in done
@@ -278,6 +321,8 @@ def _run_locked(
             "campaign_block_sha256": " ".join(
                 manifest["checksums"][str(i)] for i in range(len(blocks))
             ),
+            # the measurement's name, only when there is one (None: the attribute is absent)
+            **({"campaign_per_point": _name(per_point)} if per_point is not None else {}),
             "code_digests": " ".join(
                 sorted({manifest["code_digests"][str(i)] for i in range(len(blocks))})
             ),
@@ -323,7 +368,13 @@ def _resumable(exc: DiskFull, st: Store) -> DiskFull:
     )
 
 
-def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset | None:
+def _name(fn: Callable | None) -> str:
+    return "None" if fn is None else f"{fn.__module__}.{fn.__qualname__}"
+
+
+def _complete_archive(
+    st: Store, scene: Scene, chunk: int | None, per_point: Callable | None = None
+) -> xr.Dataset | None:
     """The stored archive if it is this campaign, complete, and its blocks are gone; a
     CampaignError if the file at the store path is something else; None if there is none."""
     if not st.archive.is_file():
@@ -342,6 +393,8 @@ def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset 
             "choose another output path"
         )
     st.check_scene(ds.attrs["scene"], scene, repr(str(st.archive)))
+    if ds.attrs.get("campaign_per_point", "None") != _name(per_point):
+        return None  # same runs, another measurement: recompute
     if chunk is not None and chunk != int(ds.attrs["campaign_chunk"]):
         return None  # same numbers, other blocks: recompute with the chunk size asked for
     ds.attrs.update(computed_blocks=0, reused_blocks=int(ds.attrs["campaign_blocks"]))

@@ -85,8 +85,17 @@ class Store:
         return read_manifest(self.manifest_path, READ, "the campaign", CampaignError)
 
     def write_manifest(
-        self, scene: Scene, grid: SweepGrid, chunk: int, cid: str, blocks: list[tuple[int, ...]]
+        self,
+        scene: Scene,
+        grid: SweepGrid,
+        chunk: int,
+        cid: str,
+        blocks: list[tuple[int, ...]],
+        code: str | None = None,
     ) -> dict:
+        """Start the manifest of a campaign: its blocks' points (``blocks``), and ``code``, the
+        digest of the code that computes its blocks (default
+        :func:`workbench.campaign._grid.code_of` of the scene)."""
         data = {
             "format": FORMAT,
             "campaign_id": cid,
@@ -97,7 +106,7 @@ class Store:
             "points": grid.size,
             "blocks": len(blocks),
             "block_points": [list(b) for b in blocks],
-            "code_digest": code_of(scene),
+            "code_digest": code_of(scene) if code is None else code,
             "checksums": {},
             "code_digests": {},
         }

@@ -17,7 +17,7 @@ from workbench.cli._console import (
     positive_int,
     report_failures,
 )
-from workbench.cli._exit_codes import worst_exit_code
+from workbench.cli._exit_codes import UsageError, worst_exit_code
 
 __all__ = ["campaign_exit_code", "register_cli"]
 
@@ -65,16 +65,19 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             compile_kernel(scene, quiet=args.quiet)
         with warnings.catch_warnings():  # the summary below lists every failed point
             warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
-            ds = run_campaign(
-                scene,
-                args.output,
-                client=client,
-                workers=args.workers,
-                chunk=args.chunk,
-                restart=args.restart,
-                progress=not args.quiet,
-                max_memory=args.max_memory,
-            )
+            if scene.continuation:  # [sweep] continuation: points from their neighbours
+                ds = _continued(scene, args, client)
+            else:
+                ds = run_campaign(
+                    scene,
+                    args.output,
+                    client=client,
+                    workers=args.workers,
+                    chunk=args.chunk,
+                    restart=args.restart,
+                    progress=not args.quiet,
+                    max_memory=args.max_memory,
+                )
     except KeyboardInterrupt as exc:
         exc.add_note(
             f"the finished blocks are kept in '{args.output}.blocks/': run the same command "
@@ -99,6 +102,25 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     return code
 
 
+def _continued(scene, args: argparse.Namespace, client):
+    """A continued sweep (``[sweep] continuation``): segments, not chunks, make its tasks."""
+    from workbench.continuation import continued_sweep
+
+    if args.chunk is not None:
+        raise UsageError(
+            f"--chunk {args.chunk}: a continued sweep ([sweep] continuation) is cut into "
+            "segments, not chunks; set sweep.continuation.segments in the scene instead"
+        )
+    return continued_sweep(
+        scene,
+        args.output,
+        client=client,
+        workers=args.workers,
+        restart=args.restart,
+        progress=not args.quiet,
+    )
+
+
 def campaign_exit_code(flags) -> int:
     """The largest exit code among a campaign's point flags (a run's Status;
     invalid_parameters: invalid input; error: the point raised an exception)."""
@@ -112,7 +134,9 @@ def register_cli(sub) -> None:
         help="run a scene's [sweep] grid in parallel into one netCDF campaign (resumable)",
         description="Run every point of a scene's [sweep] grid as tasks (a local process "
         "pool, or a dask.distributed scheduler) and assemble one netCDF archive. Blocks go to "
-        "OUTPUT.blocks/; running the same command again computes only missing blocks.",
+        "OUTPUT.blocks/; running the same command again computes only missing blocks. With "
+        "[sweep] continuation = 'up' | 'down' | 'both' each point starts from its neighbour's "
+        "settled state (a continued sweep, in parallel by segments).",
     )
     p.add_argument("scene", help="scene file (TOML) with a [sweep] table")
     p.add_argument("-o", "--output", required=True, help="campaign netCDF file to write")

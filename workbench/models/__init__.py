@@ -61,6 +61,7 @@ _BUILTIN = {
     "lorenz": "workbench.models.lorenz",
     "ninebar": "workbench.models.ninebar",
     "slider_crank": "workbench.models.slider_crank",
+    "stop_oscillator": "workbench.models.stop_oscillator",
 }
 
 

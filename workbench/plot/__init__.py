@@ -14,6 +14,7 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import display_scale, register_overview, wrap_title
+from workbench.plot._continuation import LABEL_MARKS, branch_figure, chaos_map_figure
 from workbench.plot._failures import failure_note, mark_failed, run_status_note
 from workbench.plot._phase import (
     CoarseSamplingWarning,
@@ -32,6 +33,7 @@ from workbench.plot._stability import floquet_figure, jacobian_spectrum_figure
 from workbench.plot._verify import verification_figure
 
 __all__ = [
+    "LABEL_MARKS",
     "PANELS_PER_FIGURE",
     "CoarseSamplingWarning",
     "coarse_sampling",
@@ -43,7 +45,9 @@ __all__ = [
     "run_status_note",
     "wrap_title",
     "bifurcation_figure",
+    "branch_figure",
     "campaign_figure",
+    "chaos_map_figure",
     "embedding_figure",
     "floquet_figure",
     "jacobian_spectrum_figure",

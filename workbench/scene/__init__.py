@@ -7,9 +7,10 @@ dotted path, shows the value and says what is allowed.
 
 from workbench._errors import SceneError
 from workbench.scene._scene import Scene, SceneSource, load_scene, scene_from_toml
-from workbench.scene._tables import MAX_PERTURBATION, RUN_SWEEP_KEYS
+from workbench.scene._tables import CONTINUATION_DIRECTIONS, MAX_PERTURBATION, RUN_SWEEP_KEYS
 
 __all__ = [
+    "CONTINUATION_DIRECTIONS",
     "MAX_PERTURBATION",
     "RUN_SWEEP_KEYS",
     "Scene",

@@ -34,6 +34,7 @@ from workbench.scene._tables import (
     finite,
     table,
     unknown_keys,
+    validate_continuation,
     validate_effects,
     validate_ensemble,
     validate_parameters,
@@ -84,6 +85,9 @@ class Scene:
     model_module : str
         The module that defines a model of one's own (``[model] module``; imported, and so
         registered, when the scene is loaded: see ``docs/own-models.md``); '' for a built-in model.
+    continuation : Mapping
+        The ``[sweep]`` table's ``continuation`` settings, defaults filled in (empty: every point
+        of the sweep starts from the scene's initial state; see :mod:`workbench.continuation`).
     """
 
     model: str
@@ -94,6 +98,7 @@ class Scene:
     run: Mapping[str, Any]
     record: Mapping[str, Any]
     sweep: Mapping[str, tuple[float, ...]] = field(default_factory=lambda: _frozen({}))
+    continuation: Mapping[str, Any] = field(default_factory=lambda: _frozen({}))
     title: str = ""
     description: str = ""
     model_module: str = ""
@@ -131,6 +136,8 @@ class Scene:
                 d[key] = values
         if self.sweep:
             d["sweep"] = {k: list(v) for k, v in self.sweep.items()}
+            if self.continuation:
+                d["sweep"]["continuation"] = dict(self.continuation)
         return d
 
     def to_toml(self) -> str:
@@ -291,7 +298,12 @@ def _validate(data: Mapping[str, Any], directory: Path | None = None) -> Scene:
     ensemble = validate_ensemble(run_t)  # takes its keys out of run_t
     run = validate_run(run_t, period is not None) | ensemble
     record = validate_record(table(data, "record"), model, effects, period is not None, run)
-    sweep = validate_sweep(model, table(data, "sweep"), effects)
+    sweep_t = table(data, "sweep")
+    continuation_t = sweep_t.pop("continuation", None)
+    sweep = validate_sweep(model, sweep_t, effects)
+    continuation = (
+        {} if continuation_t is None else validate_continuation(continuation_t, sweep, run)
+    )
     return Scene(
         model=name,
         effects=_frozen(effects),
@@ -301,6 +313,7 @@ def _validate(data: Mapping[str, Any], directory: Path | None = None) -> Scene:
         run=_frozen(run),
         record=_frozen(record),
         sweep=_frozen(sweep),
+        continuation=_frozen(continuation),
         title=data.get("title", ""),
         description=data.get("description", ""),
         model_module=module,

@@ -15,12 +15,14 @@ from workbench._errors import SceneError
 from workbench.solver import METHODS
 
 __all__ = [
+    "CONTINUATION_DIRECTIONS",
     "finite",
     "number",
     "table",
     "unknown_keys",
     "validate_effects",
     "validate_parameters",
+    "validate_continuation",
     "validate_record",
     "validate_run",
     "validate_solver",
@@ -296,4 +298,81 @@ def validate_sweep(model, given: dict, effects) -> dict[str, tuple[float, ...]]:
             if problem:
                 raise SceneError(f"{key}[{i}]", f"got {float(v)!r}; {problem}")
         out[k] = tuple(float(v) for v in values)
+    return out
+
+
+#: directions of a continued sweep (``[sweep] continuation``)
+CONTINUATION_DIRECTIONS = ("up", "down", "both")
+_CONTINUATION_KEYS = (
+    "direction",
+    "along",
+    "segments",
+    "overlap",
+    "transient_cycles",
+    "transient",
+    "seam_tolerance",
+)
+
+
+def validate_continuation(spec: Any, sweep: Mapping, run: Mapping) -> dict:
+    """The ``continuation`` entry of ``[sweep]``, normalised with its defaults filled in.
+
+    ``continuation = "up" | "down" | "both"`` or a table ``{direction, along, segments, overlap,
+    transient_cycles (forced models; transient in s otherwise), seam_tolerance}``; see
+    :mod:`workbench.continuation` for what each does.
+    """
+    key = "sweep.continuation"
+    if isinstance(spec, str):
+        spec = {"direction": spec}
+    if not isinstance(spec, Mapping):
+        raise SceneError(
+            key,
+            f"must be one of {', '.join(repr(d) for d in CONTINUATION_DIRECTIONS)} or a table "
+            f"{{direction, along, segments, overlap, transient_cycles, seam_tolerance}}, got "
+            f"{spec!r}",
+        )
+    cycles = "cycles" in run
+    other = "transient" if cycles else "transient_cycles"
+    allowed = [k for k in _CONTINUATION_KEYS if k != other]
+    unknown_keys(key, spec, allowed)
+    direction = spec.get("direction")
+    if direction not in CONTINUATION_DIRECTIONS:
+        raise SceneError(
+            f"{key}.direction",
+            f"got {direction!r}; allowed: {', '.join(repr(d) for d in CONTINUATION_DIRECTIONS)}",
+        )
+    params = [k for k in sweep if k not in RUN_SWEEP_KEYS]
+    if not params:
+        raise SceneError(key, "needs a swept model parameter to continue along; [sweep] has none")
+    along = spec.get("along", params[0])
+    if along not in params:
+        raise SceneError(
+            f"{key}.along", f"got {along!r}; allowed: a swept parameter ({', '.join(params)})"
+        )
+    n = len(sweep[along])
+    segments = integer(f"{key}.segments", spec.get("segments", min(8, max(1, n // 10))), 1)
+    if segments > n:
+        raise SceneError(
+            f"{key}.segments",
+            f"got {segments!r}; at most the number of values of sweep.{along} ({n})",
+        )
+    overlap = integer(f"{key}.overlap", spec.get("overlap", 2), 1)
+    out = {"direction": direction, "along": along, "segments": segments, "overlap": overlap}
+    if cycles:
+        default = max(1, math.ceil(run["transient_cycles"] / 10))
+        out["transient_cycles"] = integer(
+            f"{key}.transient_cycles", spec.get("transient_cycles", default), 0
+        )
+    else:
+        t = number(f"{key}.transient", spec.get("transient", run["transient"] / 10))
+        if t < 0 or math.isinf(t):
+            raise SceneError(f"{key}.transient", f"must be a finite number >= 0 s, got {t!r}")
+        out["transient"] = t
+    tol = number(f"{key}.seam_tolerance", spec.get("seam_tolerance", 0.05))
+    if not 0 < tol <= 1:
+        raise SceneError(
+            f"{key}.seam_tolerance",
+            f"got {tol!r}; must lie in (0, 1] (a fraction of each recorded variable's range)",
+        )
+    out["seam_tolerance"] = tol
     return out

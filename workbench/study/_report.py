@@ -11,6 +11,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from workbench.archive import write_text_atomic
+from workbench.study._route_report import route_section
 from workbench.study._spec import available_studies, report_path
 
 __all__ = ["write_report"]
@@ -220,6 +221,8 @@ def _study_section(s: dict) -> list[str]:
         lines += _sweep_table(case, sweep)
     if s.get("flutter"):
         lines += _flutter_section(s["flutter"])
+    if s.get("route"):
+        lines += route_section(s["route"])
     if s["figures"]:
         lines += ["Figures: " + ", ".join(f"`{p}`" for p in s["figures"]), ""]
     return lines

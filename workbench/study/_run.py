@@ -18,6 +18,7 @@ from workbench.study._measure import member_run, seconds_per_cycle
 from workbench.study._numbers import measures as study_measures
 from workbench.study._numbers import sweep_contact, sweep_summary
 from workbench.study._paper import paper_values
+from workbench.study._route import route
 from workbench.study._spec import Study, load_study, quick_study
 from workbench.study._stats import describe
 from workbench.study._summary import summary_dataset
@@ -109,7 +110,12 @@ def run_study(
     measures["sweep_contact"] = {c: sweep_summary(d) for c, d in sweeps.items()}
     claims = [evaluate_claim(c, measures) for c in study.claims]
     paper_rows = paper_values(study, measures)
+    route_result = route(study, directory, quick, workers)
     figures = study_figures(study, runs, members, scenes, sweeps, directory, measures)
+    if route_result is not None:
+        from workbench.study._route_figures import route_figures
+
+        figures += route_figures(study, route_result, directory)
     summary = {
         "study": study.name,
         "title": study.title,
@@ -126,6 +132,7 @@ def run_study(
         "claims": claims,
         "measures": measures,
         "flutter": flutter(study, quick),
+        "route": route_result,
         "figures": [str(p) for p in figures],
         "wall_time": _time.perf_counter() - study_wall0,
     }

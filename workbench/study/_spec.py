@@ -22,7 +22,10 @@ run as a campaign) and ``study.toml`` with
   with its evidence whatever the verdict) and ``evidence`` (``contact``, ``strobe_contact`` or
   ``friction_law``: which measured numbers support the reason);
 - ``[flutter]``: the friction-coefficient study's flutter analysis (``parameter``, ``cases``,
-  ``method``): the Jacobian's eigenvalues at continuous contact against the parameter.
+  ``method``): the Jacobian's eigenvalues at continuous contact against the parameter;
+- ``[route]``: beyond the paper, how the motion of a bifurcation study becomes chaotic: its sweep
+  continued both ways, the periodic orbit's branch and its bifurcations, exponents
+  (:mod:`workbench.study._route`; keys :data:`ROUTE_KEYS`).
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from workbench.run import DEFAULT_PERTURBATION
 from workbench.scene import MAX_PERTURBATION, RUN_SWEEP_KEYS, Scene, load_scene
 
 __all__ = [
+    "ROUTE_KEYS",
     "Study",
     "available_studies",
     "load_study",
@@ -64,6 +68,17 @@ FIGURE_KINDS = (
     "energy_balance",
 )
 EVIDENCE_KINDS = ("contact", "strobe_contact", "friction_law")
+#: keys of a study's ``[route]`` table (see :mod:`workbench.study._route`)
+ROUTE_KEYS = (
+    "case",
+    "segments",
+    "transient_cycles",
+    "cycles",
+    "method",
+    "branch_start",
+    "branch_stop",
+    "exponents",
+)
 QUICK_REALISATIONS = 4  # the fewest for which the two-sample rank test can reach p < 0.05
 _KEYS = {
     "title",
@@ -77,6 +92,7 @@ _KEYS = {
     "paper_value",
     "claim",
     "flutter",
+    "route",
     "note",
 }
 
@@ -99,6 +115,7 @@ class Study:
     perturbation: float = DEFAULT_PERTURBATION
     views: dict[str, dict] = field(default_factory=dict)
     flutter: dict = field(default_factory=dict)
+    route: dict = field(default_factory=dict)
     note: str = ""
 
     @property
@@ -187,6 +204,16 @@ def load_study(name: str | Path, root: Path = STUDIES_DIR) -> Study:
                 raise ValueError(
                     f"{meta_path}: {table}[{i}].evidence = {kind!r}; allowed: {EVIDENCE_KINDS}"
                 )
+    route = dict(meta.get("route", {}))
+    unknown = sorted(set(route) - set(ROUTE_KEYS))
+    if unknown:
+        raise ValueError(f"{meta_path}: route: unknown keys {unknown!r}; allowed: {ROUTE_KEYS}")
+    swept = sorted(c for c, s in cases.items() if parameter_sweep(s))
+    if route and route.get("case", swept[0] if swept else None) not in swept:
+        raise ValueError(
+            f"{meta_path}: route.case = {route.get('case')!r}; allowed: a case with a "
+            f"parameter sweep, {swept}"
+        )
     return Study(
         name=directory.name,
         directory=directory,
@@ -202,6 +229,7 @@ def load_study(name: str | Path, root: Path = STUDIES_DIR) -> Study:
         perturbation=float(perturbation),
         views={name: {"case": v["case"], "select": v["select"]} for name, v in views.items()},
         flutter=dict(meta.get("flutter", {})),
+        route=route,
         note=str(meta.get("note", "")),
     )
 

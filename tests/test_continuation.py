@@ -1,0 +1,347 @@
+"""Continuation against answers it was not tuned on: the folds of a hardening Duffing oscillator
+(harmonic balance, the jumps of a quasi-static sweep), the period-doubling cascade of the
+default Duffing oscillator (the strobe's periods either side, Feigenbaum's constant), a grazing
+bifurcation in closed form; and the continued sweep's own guarantees (hysteresis both ways,
+the same numbers whatever the workers, seams chained where they disagree, resumable)."""
+
+import math
+
+import numpy as np
+import pytest
+from _harmonic_balance import folds as hb_folds
+from scipy.optimize import brentq
+
+import workbench
+from workbench.campaign import CampaignError
+from workbench.cli import main
+from workbench.continuation import (
+    StrobeMap,
+    chaos_map,
+    continue_orbit,
+    continued_sweep,
+    periodic_orbit,
+    strobe_period,
+)
+from workbench.models.stop_oscillator import grazing_amplitude
+
+# x'' + 0.05 x' + x + 0.1 x^3 = 0.1 cos(omega t): a hysteresis window omega ~ 1.076 .. 1.116
+HARDENING = {"alpha": 1.0, "beta": 0.1, "delta": 0.05, "gamma": 0.1}
+FEIGENBAUM = 4.669201609102990  # Feigenbaum (1978)
+
+
+def hardening(**tables):
+    data = {
+        "model": {"name": "duffing"},
+        "parameters": dict(HARDENING, omega=1.0),
+        "initial": {"x": 0.0, "v": 0.0},
+        "run": {"transient_cycles": 300},
+    }
+    data.update(tables)
+    return workbench.load_scene(data)
+
+
+@pytest.fixture(scope="module")
+def response():
+    """The hardening oscillator's period-1 branch over omega 1.0 .. 1.25 (both folds)."""
+    return continue_orbit(hardening(), "omega", stop=1.25, rtol=1e-10, tolerance=1e-9)
+
+
+def fold_values(branch):
+    kinds = branch.bifurcation_label.values
+    return np.sort(branch.bifurcation_parameter.values[kinds == 3])  # 3: fold
+
+
+def test_folds_agree_with_harmonic_balance(response):
+    """Harmonic balance with 7 and 9 harmonics agree to 1e-12 (converged); the shooting folds
+    (located to 1e-7 of the range) agree with them to 1e-7."""
+    h7, h9 = hb_folds(**HARDENING, H=7), hb_folds(**HARDENING, H=9)
+    assert np.allclose(h7, h9, rtol=0, atol=1e-12)
+    # the values docs/continuation.md quotes (and the single-harmonic ones)
+    assert np.allclose(h9, [1.0761313, 1.1161418], rtol=0, atol=5e-8)
+    assert np.allclose(hb_folds(**HARDENING, H=1), [1.0760671, 1.1155084], rtol=0, atol=5e-8)
+    up, down = fold_values(response)
+    assert abs(up - h9[0]) < 1e-7 and abs(down - h9[1]) < 1e-7, (up, down, h9)
+    # along the branch: stable up to the first fold, unstable between the folds (the middle
+    # branch), stable after the second
+    at = np.flatnonzero(response.label.values == 3)
+    stable = response.stable.values
+    assert (stable[: at[0]] == 1).all() and (stable[at[1] + 1 :] == 1).all()
+    assert at[1] - at[0] > 5 and (stable[at[0] + 1 : at[1]] == 0).all()
+    # the critical multiplier is +1 at both folds
+    crit = response.critical_real.values[response.bifurcation_label.values == 3]
+    assert np.allclose(crit, 1.0, atol=1e-4)
+
+
+def test_folds_bracket_the_jumps_of_a_quasi_static_sweep(response, tmp_path):
+    """A continued sweep with omega steps of 0.001 (100 periods per point) jumps down going up
+    and up going down past each fold, within one step of it (slow passage: just past a fold
+    the orbit's ghost holds the motion for a time ~ 1 / sqrt(distance); Strogatz 1994,
+    Sec. 4.3)."""
+    scene = hardening(
+        solver={"rtol": 1e-9, "atol": 1e-11},
+        run={"cycles": 2, "transient_cycles": 300},
+        record={"samples_per_period": 32},
+        sweep={
+            "omega": {"start": 1.06, "stop": 1.13, "num": 71},
+            "continuation": {"direction": "both", "segments": 1, "transient_cycles": 100},
+        },
+    )
+    ds = continued_sweep(scene, tmp_path / "qs.nc", workers=2)
+    amplitude = np.abs(ds.x).max("time")
+    up_fold, down_fold = fold_values(response)
+    omega = ds.omega.values
+    step = omega[1] - omega[0]
+    for direction, fold, sign in (("up", down_fold, 1), ("down", up_fold, -1)):
+        a = amplitude.sel(direction=direction).values[::sign]
+        w = omega[::sign]
+        jump = np.flatnonzero(np.abs(np.diff(a)) > 0.3)
+        assert jump.size == 1, (direction, a)
+        old, new = w[jump[0]], w[jump[0] + 1]
+        assert sign * (new - fold) > 0 and sign * (old - fold) < step, (direction, old, new)
+    # hysteresis: between the folds the two directions sit on different branches
+    inside = (ds.omega > up_fold + 0.002) & (ds.omega < down_fold - 0.002)
+    gap = amplitude.sel(direction="up") - amplitude.sel(direction="down")
+    assert (gap.where(inside, drop=True) > 0.5).all()
+
+
+@pytest.fixture(scope="module")
+def cascade():
+    """The default (double-well) Duffing oscillator's period-1 branch in gamma from 0.25 and
+    three switches to the doubled branch: period 1, 2, 4, 8."""
+    scene = {
+        "model": {"name": "duffing"},
+        "parameters": {"gamma": 0.25},
+        "run": {"transient_cycles": 100},
+    }
+    return continue_orbit(
+        scene, "gamma", stop=0.2922, doublings=3, rtol=1e-11, tolerance=1e-9, max_step=0.02
+    )
+
+
+def test_period_doubling_cascade_and_feigenbaum_ratio(cascade):
+    kinds = cascade.bifurcation_label.values
+    assert (kinds == 5).all() and kinds.size == 4, kinds  # 5: period_doubling, one per branch
+    assert (cascade.bifurcation_branch.values == np.arange(4)).all()
+    assert np.allclose(cascade.critical_real.values, -1.0, atol=1e-4)
+    g = cascade.bifurcation_parameter.values
+    # the values README.md and docs/continuation.md quote
+    assert np.allclose(g, [0.2655818, 0.2866932, 0.2910899, 0.2920310], rtol=0, atol=2e-7), g
+    d1 = (g[1] - g[0]) / (g[2] - g[1])
+    d2 = (g[2] - g[1]) / (g[3] - g[2])
+    assert (round(d1, 2), round(d2, 2)) == (4.80, 4.67)
+    # the ratios of a flow's first doublings approach Feigenbaum's constant (geometrically)
+    assert abs(d1 - FEIGENBAUM) < 0.05 * FEIGENBAUM, d1
+    assert abs(d2 - FEIGENBAUM) < 0.01 * FEIGENBAUM, d2
+    assert abs(d2 - FEIGENBAUM) < abs(d1 - FEIGENBAUM)
+    # each branch is stable between its birth and its doubling
+    for b in range(4):
+        on = (cascade.branch == b) & (cascade.gamma > (g[b - 1] if b else 0.25) + 1e-5)
+        on &= cascade.gamma < g[b] - 1e-5
+        assert (cascade.stable[on] == 1).all(), b
+
+
+def distinct_strobe_points(gamma: float) -> int:
+    """Distinct strobe samples of x over 64 periods after 1500 (tolerance 1e-6)."""
+    ds = workbench.simulate(
+        {
+            "model": {"name": "duffing"},
+            "parameters": {"gamma": gamma},
+            "solver": {"rtol": 1e-10, "atol": 1e-12},
+            "run": {"cycles": 64, "transient_cycles": 1500},
+            "record": {"samples_per_period": 1},
+        }
+    )
+    x = np.sort(ds.x.values)
+    return 1 + int(np.sum(np.diff(x) > 1e-6))
+
+
+def test_strobe_periods_either_side_of_each_doubling(cascade):
+    g = cascade.bifurcation_parameter.values
+    probes = [g[0] - 0.005] + [0.5 * (a + b) for a, b in zip(g[:-1], g[1:], strict=True)]
+    assert [distinct_strobe_points(x) for x in probes] == [1, 2, 4, 8]
+
+
+def test_grazing_against_the_closed_form():
+    """The non-impacting orbit of the forced oscillator with a stop at g grazes where its
+    linear amplitude F / sqrt((k - m w^2)^2 + (c w)^2) equals g."""
+    params = {"damping": 0.1, "stop_stiffness": 100.0, "gap": 1.0, "force": 0.5}
+    scene = {
+        "model": {"name": "stop_oscillator"},
+        "parameters": dict(params, omega=0.5),
+        "run": {"transient_cycles": 100},
+    }
+    model = {"mass": 1.0, "stiffness": 1.0, **params}
+    exact = brentq(lambda w: grazing_amplitude({**model, "omega": w}) - 1.0, 0.3, 0.99)
+    r = continue_orbit(scene, "omega", stop=0.8, rtol=1e-10, tolerance=1e-9)
+    grazing = r.bifurcation_parameter.values[r.bifurcation_label.values == 7]  # 7: grazing
+    assert grazing.size == 1
+    assert abs(grazing[0] - exact) < 1e-6 * exact, (grazing, exact)
+    assert round(exact, 7) == 0.7106874  # as docs/continuation.md quotes
+    assert (r.events_per_period[r.omega < grazing[0]] == 0).all()
+    # one onset and one end per period; contacts shallower than ~1e-4 m (within ~2e-5 rad/s
+    # past grazing) last a few ms and fall inside one solver step: their events are not seen
+    assert (r.events_per_period[r.omega > grazing[0] + 1e-4] == 2).all()
+
+
+def test_periodic_orbit_of_the_linear_oscillator_is_exact():
+    """Below the stop the orbit is the linear one: multipliers exp((-c/2m +- i w_d) T)."""
+    scene = {
+        "model": {"name": "stop_oscillator"},
+        "parameters": {"omega": 0.5, "force": 0.2},
+        "run": {"transient_cycles": 20},
+    }
+    r = periodic_orbit(scene, rtol=1e-11, tolerance=1e-10)
+    T = 2 * math.pi / 0.5
+    expected = math.exp(-0.05 * T)  # |mu| = exp(-c T / 2m)
+    assert np.allclose(r.multiplier_modulus.values, expected, rtol=1e-7)
+    amp = np.hypot(r.orbit_x, r.orbit_v / 0.5).item()
+    exact = grazing_amplitude(
+        {"mass": 1, "damping": 0.1, "stiffness": 1, "force": 0.2, "omega": 0.5}
+    )
+    assert abs(amp - exact) < 1e-8
+
+
+# -- the continued sweep's guarantees ----------------------------------------------------------
+def down_sweep(segments: int, **extra):
+    return hardening(
+        initial={"x": 2.0, "v": 0.0},
+        run={"cycles": 4, "transient_cycles": 300},
+        record={"samples_per_period": 1},
+        sweep={
+            "omega": {"start": 1.08, "stop": 1.12, "num": 17},
+            "continuation": {"direction": "down", "segments": segments, "transient_cycles": 60},
+        },
+        **extra,
+    )
+
+
+def test_a_disagreeing_seam_is_chained_and_equals_the_sequential_sweep(tmp_path):
+    """Going down from 1.12 the continuation stays on the small-amplitude branch; the second
+    segment's brute-force seed (from x = 2) lands on the large one: its seam disagrees and the
+    segment is run again from the first segment's last state, which is what one sequential
+    sweep does: the numbers are the same to the bit."""
+    one = continued_sweep(down_sweep(1), tmp_path / "one.nc", workers=1)
+    two = continued_sweep(down_sweep(2), tmp_path / "two.nc", workers=2)
+    assert int(two.seam_chained.item()) == 1 and two.seam_distance.item() > 0.05
+    assert two.attrs["continuation_rounds"] == 2
+    assert two.x.equals(one.x) and two.v.equals(one.v)
+    # the seeds differ only where the chained segment starts (chained_seed = 2)
+    assert (two.seed.values != one.seed.values).sum() == 1 and 2 in two.seed.values
+
+
+def test_continued_sweep_numbers_do_not_depend_on_workers_and_resume(tmp_path):
+    scene = down_sweep(4)
+    a = continued_sweep(scene, tmp_path / "a.nc", workers=1)
+    b = continued_sweep(scene, tmp_path / "b.nc", workers=2)
+    assert a.x.equals(b.x) and a.final_x.equals(b.final_x)
+    # interrupted after its blocks: the archive goes, the blocks stay; a re-run reuses them
+    (tmp_path / "b.nc").unlink()
+    c = continued_sweep(scene, tmp_path / "b.nc", workers=2)
+    assert c.attrs["computed_blocks"] == 0 and c.attrs["reused_blocks"] > 0
+    assert c.x.equals(a.x)
+
+
+def test_campaign_refuses_a_continued_sweep_and_the_cli_runs_it(tmp_path, capsys):
+    scene = down_sweep(2)
+    with pytest.raises(CampaignError, match="continued_sweep"):
+        workbench.run_campaign(scene, tmp_path / "no.nc")
+    path = tmp_path / "sweep.toml"
+    path.write_text(scene.to_toml())
+    assert main(["campaign", str(path), "-o", str(tmp_path / "s.nc"), "-q", "--workers", "2"]) == 0
+    assert "17 points" in capsys.readouterr().out
+    assert main(["campaign", str(path), "-o", str(tmp_path / "t.nc"), "--chunk", "3"]) == 2
+
+
+@pytest.mark.parametrize(
+    ("spec", "key"),
+    [
+        ("sideways", "sweep.continuation.direction"),
+        ({"direction": "up", "along": "beta"}, "sweep.continuation.along"),
+        ({"direction": "up", "segments": 99}, "sweep.continuation.segments"),
+        ({"direction": "up", "overlap": 0}, "sweep.continuation.overlap"),
+        ({"direction": "up", "transient": 3.0}, "sweep.continuation.transient"),
+        ({"direction": "up", "seam_tolerance": 2.0}, "sweep.continuation.seam_tolerance"),
+        (3, "sweep.continuation"),
+    ],
+)
+def test_continuation_settings_are_validated(spec, key):
+    with pytest.raises(workbench.SceneError) as info:
+        workbench.load_scene(
+            {
+                "model": {"name": "duffing"},
+                "sweep": {"gamma": [0.2, 0.3, 0.4], "continuation": spec},
+            }
+        )
+    assert info.value.key == key
+
+
+# -- chaos maps ----------------------------------------------------------------------------------
+def test_strobe_period_finds_the_least_period():
+    t = np.arange(40)
+    assert strobe_period(np.c_[np.cos(np.pi * t)]) == 2
+    assert strobe_period(np.c_[np.ones(40), np.cos(2 * np.pi * t / 3)]) == 3
+    assert strobe_period(np.c_[np.sin(0.7 * t)]) == 0  # quasi-periodic
+    assert strobe_period(np.c_[np.cos(np.pi * t)][:8]) == 0  # too short to tell
+    settling = np.c_[1 + 0.5**t * np.cos(np.pi * t)]  # a period-1 orbit approached
+    assert strobe_period(settling) == 1 and strobe_period(settling[:10]) == 0
+
+
+def test_chaos_map_indicators_against_floquet_and_a_chaotic_point(tmp_path):
+    """Over gamma x delta of the default Duffing oscillator: the period-1 point's exponent is
+    ln|mu| / T of its Floquet multipliers (-delta / 2 for a complex pair: the trace of the
+    Jacobian is -delta), the chaotic point has K near 1 and a positive exponent."""
+    scene = workbench.load_scene(
+        {
+            "model": {"name": "duffing"},
+            "run": {"cycles": 500, "transient_cycles": 150},  # exponents over 100 cycles
+            "record": {"samples_per_period": 1},
+            "sweep": {"gamma": [0.2, 0.5], "delta": [0.3, 0.35]},
+        }
+    )
+    maps = chaos_map(scene, tmp_path / "map.nc", workers=2)
+    assert maps.lle.dims == ("gamma", "delta") and maps.lle.attrs["units"] == "s-1"
+    periodic = maps.sel(gamma=0.2, delta=0.3)
+    assert int(periodic.strobe_period) == 1 and float(periodic.zero_one_K) == 0.0
+    orbit = periodic_orbit(scene.with_parameters(gamma=0.2, delta=0.3))
+    T = 2 * math.pi / 1.2
+    expected = math.log(float(orbit.multiplier_modulus.max())) / T
+    assert abs(expected + 0.15) < 1e-6  # -delta / 2
+    assert abs(float(periodic.lle) - expected) < 3 * float(periodic.lle_stderr) + 1e-3
+    chaotic = maps.sel(gamma=0.5, delta=0.3)
+    assert int(chaotic.strobe_period) == 0 and float(chaotic.zero_one_K) > 0.8
+    assert float(chaotic.lle) > 3 * float(chaotic.lle_stderr) > 0
+    assert (maps.lle_status == 0).all()
+
+
+@pytest.mark.parametrize(
+    ("scene", "value", "rtol"),
+    [
+        ({"model": {"name": "duffing"}, "parameters": {"gamma": 0.3}}, 0.3, 1e-8),
+        # an impacting orbit (two events per period; the stop's force has a kink)
+        ({"model": {"name": "stop_oscillator"}, "parameters": {"omega": 0.8}}, 0.8, 1e-4),
+    ],
+)
+def test_monodromy_by_copies_agrees_with_the_tangent_system(scene, value, rtol):
+    scene = dict(scene, run={"transient_cycles": 100})
+    param = next(iter(scene["parameters"]))
+    a = StrobeMap(scene, param, rtol=1e-10, monodromy="tangent")
+    b = StrobeMap(scene, param, rtol=1e-10, monodromy="copies")
+    y, aux = a.initial(value)
+    va, vb = a(y, aux, value), b(y, aux, value)
+    assert np.abs(va.y1 - vb.y1).max() < 1e-9
+    assert np.abs(va.M - vb.M).max() < rtol * np.abs(va.M).max(), (va.M, vb.M)
+    assert va.events == vb.events
+
+
+def test_detection_rules_of_the_branch():
+    """Which sign changes between two branch points name which bifurcation."""
+    from workbench.continuation._branch import _detect
+
+    base = {"size": 2, "fold": 1.0, "pd": 1.0, "ns": 0, "events": 0, "turn": 0.5}
+    assert _detect(base, dict(base, fold=-1.0, turn=-0.5)) == ["fold"]
+    assert _detect(base, dict(base, fold=-1.0)) == ["branch_point"]
+    assert _detect(base, dict(base, pd=-1.0)) == ["period_doubling"]
+    assert _detect(base, dict(base, ns=2)) == ["neimark_sacker"]
+    assert _detect(base, dict(base, events=2)) == ["grazing"]
+    assert _detect(base, dict(base, turn=-0.5)) == ["nonsmooth_fold"]  # no multiplier at +1
+    assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared

@@ -1,0 +1,101 @@
+"""``workbench orbit`` and ``workbench chaos-map`` from scene files: what they write, what they
+print, and their one-line errors (the continued sweep's ``workbench campaign`` is in
+``tests/test_continuation.py``)."""
+
+import pytest
+
+import workbench
+from workbench.archive import open_run
+from workbench.cli import main
+
+DUFFING = {
+    "model": {"name": "duffing"},
+    "parameters": {"gamma": 0.25},
+    "run": {"transient_cycles": 100},
+}
+
+
+def _scene_file(tmp_path, data, name="scene.toml"):
+    path = tmp_path / name
+    path.write_text(workbench.load_scene(data).to_toml())
+    return str(path)
+
+
+def test_orbit_writes_the_branch_and_names_its_period_doubling(tmp_path, capsys):
+    """The default Duffing oscillator's first period doubling (gamma = 0.2655818, see
+    test_continuation.py) from a scene file whose [sweep] gives the range, drawn over the
+    strobe samples of a continued sweep of the same scene."""
+    sweep = dict(
+        DUFFING,
+        record={"samples_per_period": 1},
+        run={"transient_cycles": 100, "cycles": 20},
+        sweep={"gamma": {"start": 0.25, "stop": 0.27, "num": 5}, "continuation": "up"},
+    )
+    path = _scene_file(tmp_path, sweep)
+    diagram = tmp_path / "sweep.nc"
+    assert main(["campaign", path, "-o", str(diagram), "-q", "--workers", "1"]) == 0
+    out, fig = tmp_path / "branch.nc", tmp_path / "branch.png"
+    code = main(
+        ["orbit", path, "-o", str(out), "--param", "gamma", "--figure", str(fig), "--state", "x"]
+        + ["--diagram", str(diagram), "--var", "x"]
+    )
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "period_doubling at gamma = 0.26558" in printed and "multiplier -1.0000" in printed
+    branch = open_run(out)
+    assert float(branch.gamma.min()) == 0.25 and 0.2656 < float(branch.gamma.max()) <= 0.27
+    assert fig.stat().st_size > 10_000
+    # an existing output is refused without --overwrite
+    assert main(["orbit", path, "-o", str(out), "--param", "gamma"]) == 2
+    assert "exists" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--param", "gamma"], "--stop: the scene does not sweep 'gamma'"),
+        (["--param", "gamma", "--stop", "0.26", "--figure", "f.png"], "--figure needs --state"),
+        (["--param", "gamma", "--stop", "0.26", "--diagram", "s.nc"], "--diagram needs"),
+        (["--param", "nope", "--stop", "0.26"], "nope"),
+    ],
+)
+def test_orbit_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, message):
+    monkeypatch.chdir(tmp_path)
+    path = _scene_file(tmp_path, DUFFING)
+    assert main(["orbit", path, "-o", "b.nc", *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "b.nc").exists()
+
+
+def test_chaos_map_from_a_scene_file(tmp_path, capsys):
+    data = {
+        "model": {"name": "duffing"},
+        "run": {"cycles": 100, "transient_cycles": 100},
+        "record": {"samples_per_period": 1},
+        "sweep": {"gamma": [0.25, 0.3], "delta": [0.3, 0.25]},
+    }
+    path = _scene_file(tmp_path, data)
+    out, fig = tmp_path / "map.nc", tmp_path / "map.png"
+    code = main(["chaos-map", path, "-o", str(out), "--workers", "2", "-q", "--figure", str(fig)])
+    assert code == 0
+    assert main(["chaos-map", path, "-o", str(out), "--workers", "2", "-q"]) == 0  # resumed
+    maps = open_run(out)
+    assert maps.strobe_period.values.tolist() == [[1, 2], [0, 0]]
+    assert maps.lle.attrs["units"] == "s-1" and (maps.lle.values[1] > 0).all()
+    assert fig.stat().st_size > 10_000
+    assert "4 points" in capsys.readouterr().out
+
+
+def test_the_nine_bar_chaos_map_scenes_are_valid():
+    """``make chaos-maps`` runs these: two swept dims, strobe records, 100 cycles for the 0-1
+    test (tests/test_continuation.py checks the indicators themselves)."""
+    from pathlib import Path
+
+    found = sorted((Path(__file__).parents[1] / "studies" / "chaos_maps").glob("*.toml"))
+    assert [p.stem for p in found] == ["clearance_friction", "omega_clearance"]
+    for path in found:
+        scene = workbench.load_scene(path)
+        assert scene.model == "ninebar" and len(scene.sweep) == 2, path
+        assert scene.record["samples_per_period"] == 1 and scene.run["cycles"] >= 100, path
+        assert not scene.continuation, path

@@ -1,0 +1,65 @@
+"""``workbench chaos-map``: chaos indicators over a campaign's parameters (strobe period, 0-1
+test K, largest exponent with its error; :func:`workbench.continuation.chaos_map`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import warnings
+from pathlib import Path
+
+from workbench.cli._console import positive_int
+
+__all__ = ["register_cli"]
+
+
+def _cmd_chaos_map(args: argparse.Namespace) -> int:
+    from workbench.archive import check_output_file
+    from workbench.campaign import summary
+    from workbench.cli._campaign import campaign_exit_code
+    from workbench.cli._console import announce_compile
+    from workbench.continuation import chaos_map
+    from workbench.scene import load_scene
+
+    scene = load_scene(args.scene)
+    check_output_file(args.output, "-o/--output", overwrite=True)
+    if args.figure:
+        check_output_file(args.figure, "--figure", overwrite=True)
+    announce_compile(scene)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
+        ds = chaos_map(
+            scene, args.output, workers=args.workers, restart=args.restart, progress=not args.quiet
+        )
+    print(summary(ds))
+    failed = int(ds["lle_status"].sum()) if "lle_status" in ds else 0
+    if failed:
+        print(f"  {failed} exponents failed (lle_status = 1, lle NaN)")
+    if args.figure:
+        from workbench.plot import chaos_map_figure
+
+        scales = {d: 1 / math.pi for d in ds.attrs["campaign_dims"].split() if d == "omega"}
+        labels = {"omega": "crank speed omega / pi"} if scales else {}
+        Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
+        chaos_map_figure(ds, scales=scales, labels=labels).savefig(args.figure, dpi=150)
+        print(f"figure: {args.figure}")
+    print(f"-> {Path(args.output)}")
+    return campaign_exit_code(ds["status"].values)
+
+
+def register_cli(sub) -> None:
+    """Add the ``chaos-map`` subcommand."""
+    p = sub.add_parser(
+        "chaos-map",
+        help="chaos indicators (strobe period, 0-1 test K, largest exponent) over a campaign",
+        description="Run a scene's [sweep] as a campaign whose workers measure each point's "
+        "strobe period, 0-1 test K and largest Lyapunov exponent (variational equations) "
+        "with its error; resumable like 'workbench campaign'.",
+    )
+    p.add_argument("scene", help="scene file (TOML) with a [sweep], recorded per period")
+    p.add_argument("-o", "--output", required=True, help="campaign netCDF file to write")
+    p.add_argument("--workers", type=positive_int, help="processes (default: CPUs)")
+    p.add_argument("--figure", metavar="PNG", help="draw the maps (two swept dims)")
+    p.add_argument("--restart", action="store_true", help="discard a stored map")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_chaos_map)

@@ -1,0 +1,35 @@
+"""How the motion changes with a parameter: continued sweeps (each point from its neighbour's
+settled state, up, down or both ways), periodic orbits of the stroboscopic map by shooting
+with their Floquet multipliers, pseudo-arclength branches with labelled bifurcations, and
+chaos indicators per campaign point.
+
+Above the run and analysis layers, beside campaign (whose store, executors and block files it
+uses for its parallel parts).
+"""
+
+from workbench.continuation._indicators import (
+    chaos_indicators,
+    chaos_map,
+    exponent_method,
+    lle_cycles,
+    strobe_period,
+    strobe_zero_one,
+)
+from workbench.continuation._orbits import continue_orbit, periodic_orbit
+from workbench.continuation._seams import attractor_distance
+from workbench.continuation._strobe import StrobeMap
+from workbench.continuation._sweep import continued_sweep
+
+__all__ = [
+    "StrobeMap",
+    "attractor_distance",
+    "chaos_indicators",
+    "chaos_map",
+    "continue_orbit",
+    "continued_sweep",
+    "exponent_method",
+    "lle_cycles",
+    "periodic_orbit",
+    "strobe_period",
+    "strobe_zero_one",
+]

@@ -1,0 +1,176 @@
+"""Newton's method on the stroboscopic map: a periodic orbit at a fixed parameter value, or on
+the pseudo-arclength hyperplane of a branch (Keller 1977; Seydel 2010, Sec. 4.4; Allgower &
+Georg 2003, Ch. 2), and the branch's tangent.
+
+A point of a branch is ``u = (y / s, aux[live], p / pscale)``: the scaled state, the live
+discrete states (:mod:`workbench.continuation._strobe`) and the scaled parameter. The orbit
+condition is ``G(u) = P^k(y, aux; p) - (y, aux)`` (scaled) ``= 0``; pseudo-arclength adds
+``tau . (u - u_pred) = 0`` with the tangent ``tau`` of the previous point, so that Newton's
+method converges through folds, where the parameter turns back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from workbench.continuation._strobe import MapValue, StrobeMap
+from workbench.solver import SolverError
+
+__all__ = ["NewtonFailure", "OrbitPoint", "correct", "orbit_at", "tangent"]
+
+
+class NewtonFailure(RuntimeError):
+    """Newton's method did not converge (or an integration failed on the way)."""
+
+
+@dataclass
+class OrbitPoint:
+    """A converged periodic orbit: parameter ``p``, strobe state ``y`` and discrete state
+    ``aux``, the map's value there (its Jacobian ``value.M`` in the scaled unknowns), the
+    derivative in the scaled parameter (``Pp``; None at a fixed parameter), Newton's work."""
+
+    p: float
+    y: np.ndarray
+    aux: np.ndarray
+    value: MapValue
+    iterations: int
+    residual: float
+    Pp: np.ndarray | None = None
+    evaluations: int = 0
+    tau: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def multipliers(self) -> np.ndarray:
+        """Floquet multipliers (eigenvalues of the monodromy matrix), largest modulus first."""
+        mu = np.linalg.eigvals(self.value.M)
+        return mu[np.lexsort((-mu.imag, -np.abs(mu)))]
+
+    def u(self, s: np.ndarray, pscale: float) -> np.ndarray:
+        """The point in scaled unknowns (y / s, aux[live], p / pscale)."""
+        live = self.value.live
+        return np.concatenate([self.y / s, self.aux[live], [self.p / pscale]])
+
+
+def _residual(v: MapValue, y, aux, s) -> np.ndarray:
+    live = v.live
+    return np.concatenate([(v.y1 - y) / s, v.aux1[live] - aux[live]])
+
+
+def _evaluate(smap: StrobeMap, y, aux, p) -> MapValue:
+    try:
+        return smap(y, aux, p)
+    except SolverError as exc:
+        raise NewtonFailure(f"the map failed at p = {p:.10g}: {exc}") from exc
+
+
+def orbit_at(
+    smap: StrobeMap,
+    y: np.ndarray,
+    aux: np.ndarray,
+    p: float,
+    *,
+    tolerance: float,
+    max_iterations: int = 30,
+) -> OrbitPoint:
+    """Newton's method on ``P^k(x) = x`` at the fixed parameter value ``p`` from (y, aux)."""
+    s = smap.scale()
+    y, aux = np.array(y, float), np.array(aux, float)
+    for it in range(max_iterations + 1):
+        v = _evaluate(smap, y, aux, p)
+        G = _residual(v, y, aux, s)
+        r = float(np.max(np.abs(G)))
+        if r < tolerance:
+            return OrbitPoint(p, y, aux, v, it, r, evaluations=it + 1)
+        if it == max_iterations:
+            break
+        step = _solve(v.M - np.eye(v.M.shape[0]), -G)
+        y = y + s * step[: y.size]
+        aux[v.live] = aux[v.live] + step[y.size :]
+    raise NewtonFailure(
+        f"Newton's method did not converge at p = {p:.10g} in {max_iterations} iterations "
+        f"(scaled residual {r:.3g}, tolerance {tolerance:.3g}); start closer to the orbit (a "
+        "longer transient, or the state of a continued sweep) or loosen the tolerance"
+    )
+
+
+def _solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    try:
+        x = np.linalg.solve(A, b)
+    except np.linalg.LinAlgError as exc:
+        raise NewtonFailure(f"singular Newton matrix ({exc})") from exc
+    if not np.all(np.isfinite(x)):
+        raise NewtonFailure("the Newton step is not finite (singular matrix)")
+    return x
+
+
+def correct(
+    smap: StrobeMap,
+    pred: OrbitPoint,
+    tau: np.ndarray,
+    u_pred: np.ndarray,
+    pscale: float,
+    *,
+    tolerance: float,
+    max_iterations: int = 8,
+) -> OrbitPoint:
+    """Newton's method on the pseudo-arclength system from the predicted point ``pred`` (its
+    y, aux and p; ``u_pred`` in scaled unknowns, ``tau`` the tangent): ``G = 0`` and
+    ``tau . (u - u_pred) = 0``. The parameter column ``Pp`` (d P / d(p / pscale), central
+    differences) is computed at every iterate (a column kept from the prediction slowed the
+    convergence to linear near branch points); the one of the last iterate is returned with
+    the point (for its tangent)."""
+    s = smap.scale()
+    y, aux, p = np.array(pred.y, float), np.array(pred.aux, float), float(pred.p)
+    n = y.size
+    evaluations = 0
+    Pp = None
+    for it in range(max_iterations + 1):
+        v = _evaluate(smap, y, aux, p)
+        evaluations += 1
+        G = _residual(v, y, aux, s)
+        r = float(np.max(np.abs(G)))
+        u = np.concatenate([y / s, aux[v.live], [p / pscale]])
+        if u.size != tau.size:
+            raise NewtonFailure(
+                "the live discrete states changed during the correction (a contact was held "
+                "or released at the strobe time); take a shorter step"
+            )
+        arc = float(tau @ (u - u_pred))
+        if r < tolerance and abs(arc) < tolerance:
+            return OrbitPoint(p, y, aux, v, it, r, Pp=Pp, evaluations=evaluations)
+        if it == max_iterations:
+            break
+        try:
+            Pp = smap.parameter_derivative(y, aux, p, v.live, pscale)
+        except SolverError as exc:
+            raise NewtonFailure(f"the map failed near p = {p:.10g}: {exc}") from exc
+        evaluations += 2
+        m = v.M.shape[0]
+        J = np.zeros((m + 1, m + 1))
+        J[:m, :m] = v.M - np.eye(m)
+        J[:m, m] = Pp
+        J[m] = tau
+        step = _solve(J, -np.concatenate([G, [arc]]))
+        y = y + s * step[:n]
+        aux[v.live] = aux[v.live] + step[n:m]
+        p = p + pscale * step[m]
+    raise NewtonFailure(
+        f"the corrector did not converge near p = {p:.10g} (scaled residual {r:.3g}, "
+        f"tolerance {tolerance:.3g})"
+    )
+
+
+def tangent(point: OrbitPoint, orientation: np.ndarray) -> np.ndarray:
+    """The unit tangent of the branch at a converged point (``point.Pp`` needed), oriented
+    along ``orientation`` (the previous tangent, or the direction to go)."""
+    M = point.value.M
+    m = M.shape[0]
+    J = np.zeros((m + 1, m + 1))
+    J[:m, :m] = M - np.eye(m)
+    J[:m, m] = point.Pp
+    J[m] = orientation
+    t = _solve(J, np.concatenate([np.zeros(m), [1.0]]))
+    t /= np.linalg.norm(t)
+    return t if t @ orientation >= 0 else -t

@@ -1,0 +1,351 @@
+"""Periodic orbits of a forced scene: one orbit by shooting (``periodic_orbit``), and its
+branch continued over a parameter with labelled bifurcations (``continue_orbit``)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import xarray as xr
+
+from workbench.continuation._branch import (
+    LABELS,
+    Settings,
+    Traced,
+    start_point,
+    switch_at_doubling,
+    trace,
+)
+from workbench.continuation._newton import NewtonFailure
+from workbench.continuation._strobe import StrobeMap
+from workbench.models import get_model
+from workbench.run import provenance
+from workbench.scene import SceneSource, load_scene
+
+__all__ = ["continue_orbit", "periodic_orbit"]
+
+LABEL_ATTRS = {
+    "long_name": "kind of the branch point",
+    "units": "1",
+    "flag_values": np.array(list(LABELS.values()), np.int8),
+    "flag_meanings": " ".join(LABELS),
+    "comment": "fold: a real multiplier through +1 where the parameter turns back; "
+    "branch_point: through +1 without a turn; period_doubling: a real multiplier through -1; "
+    "neimark_sacker: a complex pair leaves the unit circle; grazing: the number of events per "
+    "period changes (a contact appears or vanishes), or the branch ends where it would; "
+    "nonsmooth_fold: the parameter turns back with no multiplier at +1 (the map is not smooth "
+    "there)",
+}
+
+
+def _guess(smap: StrobeMap, p: float, state, aux, transient: int | None):
+    if state is None:
+        return smap.initial(p, transient)
+    pb = smap.prepared(p).problem
+    names = [q.name for q in pb.states]
+    if isinstance(state, dict):
+        y = pb.y0.copy()
+        for k, v in state.items():
+            if k not in names:
+                raise ValueError(f"state: unknown state {k!r}; the states are {names!r}")
+            y[names.index(k)] = float(v)
+    else:
+        y = np.asarray(state, dtype=float)
+        if y.shape != pb.y0.shape:
+            raise ValueError(f"state: expected {pb.y0.size} values ({names}), got {y.shape}")
+    a = pb.aux0.copy() if aux is None else np.asarray(aux, dtype=float)
+    return y, a
+
+
+def periodic_orbit(
+    scene: SceneSource,
+    *,
+    periods: int = 1,
+    state=None,
+    discrete_state=None,
+    tolerance: float = 1e-8,
+    max_iterations: int = 30,
+    rtol: float | None = None,
+    monodromy: str = "auto",
+) -> xr.Dataset:
+    """A period-``k`` orbit of a forced scene's stroboscopic map, stable or not, by Newton's
+    method (shooting) with the monodromy matrix of the tangent system (saltation at events),
+    and its Floquet multipliers.
+
+    Parameters
+    ----------
+    scene : Scene, path or mapping
+        A forced model at the parameter values of the orbit.
+    periods : int
+        ``k``: the orbit's period in forcing periods.
+    state : mapping or array, optional
+        Start of Newton's method (state units; a mapping of state names, or the whole state).
+        Default: the state after the scene's ``run.transient_cycles`` from its initial state.
+    discrete_state : array, optional
+        The discrete state to start from (default the model's initial one, or the transient's).
+    tolerance : float
+        Newton stops when the scaled residual ``max |P^k(x) - x| / s`` is below this.
+    rtol : float, optional
+        Integration tolerance (default ``min(scene rtol, 1e-9)``).
+    monodromy : str
+        How the map's Jacobian is computed: ``"tangent"`` (the tangent system with saltation),
+        ``"copies"`` (central differences of copies in one step sequence) or ``"auto"``
+        (tangent for a model with an analytic Jacobian; :mod:`workbench.continuation._strobe`).
+
+    Returns
+    -------
+    xarray.Dataset
+        One point of :func:`continue_orbit`'s layout (dim ``point`` of size 1).
+
+    Examples
+    --------
+    >>> r = periodic_orbit({"model": {"name": "duffing"}, "parameters": {"gamma": 0.2},
+    ...                     "run": {"transient_cycles": 50}})
+    >>> bool(r.stable[0]), int(r.newton_iterations[0]) <= 5
+    (True, True)
+    """
+    smap = StrobeMap(scene, None, periods=periods, rtol=rtol, monodromy=monodromy)
+    t0 = time.perf_counter()
+    y, aux = _guess(smap, math.nan, state, discrete_state, None)
+    pt = start_point(smap, y, aux, math.nan, Settings(1.0, (-math.inf, math.inf), tolerance))
+    tr = Traced(smap, [pt], ["start"], [complex(np.nan, np.nan)], "one orbit", pt.evaluations)
+    tr.wall_time = time.perf_counter() - t0
+    return _dataset([tr], None, tolerance, max_iterations)
+
+
+def continue_orbit(
+    scene: SceneSource,
+    parameter: str,
+    *,
+    stop: float,
+    start: float | None = None,
+    periods: int = 1,
+    state=None,
+    discrete_state=None,
+    doublings: int = 0,
+    tolerance: float = 1e-8,
+    step: float = 0.02,
+    max_step: float = 0.05,
+    max_points: int = 300,
+    rtol: float | None = None,
+    monodromy: str = "auto",
+) -> xr.Dataset:
+    """Continue a branch of period-``k`` orbits over ``parameter`` by pseudo-arclength (so it
+    passes folds), with Floquet multipliers at every point and its bifurcations detected,
+    located and labelled (fold, branch point, period doubling, Neimark-Sacker, grazing);
+    optionally switching to the doubled branch at the first period doubling, ``doublings``
+    times (a cascade).
+
+    Parameters
+    ----------
+    scene : Scene, path or mapping
+        A forced model; its other parameters are fixed.
+    parameter : str
+        The model parameter to continue in (SI units).
+    stop : float
+        The branch is followed until the parameter leaves the range between ``start`` and
+        ``stop`` (also after a fold turns it back).
+    start : float, optional
+        Where the branch starts (default the scene's value).
+    periods : int
+        ``k`` of the first branch.
+    state, discrete_state : optional
+        Newton's start at ``start`` (see :func:`periodic_orbit`; default after the scene's
+        transient).
+    doublings : int
+        How many times to switch to the doubled branch at the first period doubling found on
+        the current branch.
+    tolerance : float
+        Newton's tolerance on the scaled residual; bifurcations are located to
+        ``1e-7 |stop - start|`` in the parameter.
+    step, max_step : float
+        First and largest arclength step, in scaled units (states by their characteristic
+        sizes, the parameter by ``|stop - start|``).
+    max_points : int
+        Points per branch at most.
+    rtol : float, optional
+        Integration tolerance (default ``min(scene rtol, 1e-9)``).
+    monodromy : str
+        ``"tangent"``, ``"copies"`` or ``"auto"`` (see :func:`periodic_orbit`).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dim ``point`` along the branches (special points in their place), ``multiplier``
+        (largest modulus first) and ``sample`` (the ``k`` strobe states of an orbit):
+        the parameter (named after it, with its units), ``orbit_<state>`` (the orbit's state at
+        the strobe time, state units), ``strobe_<state>`` (point, sample), ``branch`` and
+        ``periods`` per point, ``multiplier_real``, ``multiplier_imag`` and
+        ``multiplier_modulus`` (1), ``stable`` (all inside the unit circle),
+        ``events_per_period``, ``label`` (CF flags: regular, start, end, fold, branch_point,
+        period_doubling, neimark_sacker, grazing), ``newton_iterations``, ``residual``; and
+        per located bifurcation (dim ``bifurcation``): ``bifurcation_parameter``,
+        ``bifurcation_label``, ``bifurcation_branch``, ``critical_real`` and
+        ``critical_imag`` (the multiplier that crossed). Attributes: the scene, the cost
+        (map evaluations, wall time), why each branch ended.
+
+    Examples
+    --------
+    >>> r = continue_orbit({"model": {"name": "duffing"}, "parameters": {"gamma": 0.25},
+    ...                     "run": {"transient_cycles": 100}}, "gamma", stop=0.27)
+    >>> [round(float(g), 3) for g in r.bifurcation_parameter]   # the first period doubling
+    [0.266]
+    """
+    base = load_scene(scene)
+    smap = StrobeMap(base, parameter, periods=periods, rtol=rtol, monodromy=monodromy)
+    p0 = smap.value if start is None else float(start)
+    stop = float(stop)
+    if not (math.isfinite(stop) and stop != p0):
+        raise ValueError(f"stop={stop!r}: must be a finite value other than start ({p0!r})")
+    pscale = abs(stop - p0)
+    cfg = Settings(
+        pscale=pscale,
+        bounds=(min(p0, stop), max(p0, stop)),
+        tolerance=tolerance,
+        step=step,
+        max_step=max_step,
+        max_points=max_points,
+    )
+    y, aux = _guess(smap, p0, state, discrete_state, None)
+    t0 = time.perf_counter()
+    first = start_point(smap, y, aux, p0, cfg)
+    direction = np.zeros(first.value.M.shape[0] + 1)
+    direction[-1] = math.copysign(1.0, stop - p0)
+    branches = [trace(smap, first, direction, cfg)]
+    for _ in range(doublings):
+        last = branches[-1]
+        pd = [
+            p for p, lab in zip(last.points, last.labels, strict=True) if lab == "period_doubling"
+        ]
+        if not pd:
+            break
+        try:
+            double, pt, away = switch_at_doubling(last.smap, pd[0], cfg)
+        except NewtonFailure as exc:
+            last.ended += f"; switching at the period doubling failed ({exc})"
+            break
+        branches.append(trace(double, pt, away, cfg, label="start"))
+    ds = _dataset(branches, parameter, tolerance, max_points)
+    ds.attrs["wall_time"] = time.perf_counter() - t0
+    return ds
+
+
+def _attrs(long_name: str, units: str = "1", **extra) -> dict:
+    return {"long_name": long_name, "units": units, **extra}
+
+
+METHOD = (
+    "shooting on the stroboscopic map (Newton), monodromy matrix from the tangent system with "
+    "saltation at events, pseudo-arclength continuation; bifurcations from the Floquet "
+    "multipliers (det(M - I), det(M + I), complex multipliers outside the unit circle) and "
+    "the events per period (grazing located on the extreme of an event function)"
+)
+
+
+def _dataset(
+    branches: list[Traced], parameter: str | None, tolerance: float, max_points: int
+) -> xr.Dataset:
+    """The branches as one dataset (layout: :func:`continue_orbit`)."""
+    smap = branches[0].smap
+    pb = smap.prepared(smap.value).problem
+    states = [q for q in pb.states if not q.name.startswith("_")]
+    index = {q.name: i for i, q in enumerate(pb.states)}
+    rows = [
+        (b, pt, lab, crit)
+        for b, tr in enumerate(branches)
+        for pt, lab, crit in zip(tr.points, tr.labels, tr.critical, strict=True)
+    ]
+    n = len(rows)
+    m = max(pt.value.M.shape[0] for _, pt, _, _ in rows)
+    kmax = max(tr.smap.periods for tr in branches)
+    mu = np.full((n, m), np.nan + 0j)
+    strobe = {q.name: np.full((n, kmax), np.nan) for q in states}
+    for i, (b, pt, _, _) in enumerate(rows):
+        mult = pt.multipliers
+        mu[i, : mult.size] = mult
+        samples = branches[b].smap.orbit_samples(pt.y, pt.aux, pt.p)
+        for q in states:
+            strobe[q.name][i, : samples.shape[0]] = samples[:, index[q.name]]
+    modulus = np.abs(mu)
+    periods = np.array([branches[b].smap.periods for b, _, _, _ in rows], np.int32)
+    data: dict = {}
+    if parameter is not None:
+        par = get_model(smap.scene.model).parameter(parameter)
+        p_attrs = _attrs(par.long_name, par.units)
+        data[parameter] = ("point", np.array([r[1].p for r in rows]), p_attrs)
+    for q in states:
+        y = np.array([r[1].y[index[q.name]] for r in rows])
+        long_name = f"{q.long_name} on the orbit at the strobe time"
+        data[f"orbit_{q.name}"] = ("point", y, _attrs(long_name, q.units))
+        long_name = f"{q.long_name} at the orbit's strobe times"
+        data[f"strobe_{q.name}"] = (("point", "sample"), strobe[q.name], _attrs(long_name, q.units))
+    branch = np.array([r[0] for r in rows], np.int32)
+    data["branch"] = ("point", branch, _attrs("branch index (b + 1 switched from b)"))
+    data["periods"] = ("point", periods, _attrs("period of the orbit in forcing periods"))
+    pm = ("point", "multiplier")
+    data["multiplier_real"] = (pm, mu.real, _attrs("real part of a Floquet multiplier"))
+    data["multiplier_imag"] = (pm, mu.imag, _attrs("imaginary part of a Floquet multiplier"))
+    data["multiplier_modulus"] = (pm, modulus, _attrs("modulus of a Floquet multiplier"))
+    stable = (np.nanmax(modulus, axis=1) < 1.0).astype(np.int8)
+    data["stable"] = (
+        "point",
+        stable,
+        _attrs(
+            "all Floquet multipliers inside the unit circle",
+            flag_values=np.array([0, 1], np.int8),
+            flag_meanings="unstable stable",
+        ),
+    )
+    events = np.array([r[1].value.events for r in rows]) / periods
+    data["events_per_period"] = (
+        "point",
+        events,
+        _attrs("events located per forcing period (the mechanisms: contact onsets and ends)"),
+    )
+    data["label"] = ("point", np.array([LABELS[r[2]] for r in rows], np.int8), LABEL_ATTRS)
+    iterations = np.array([r[1].iterations for r in rows], np.int32)
+    data["newton_iterations"] = ("point", iterations, _attrs("Newton iterations of the point"))
+    residual = np.array([r[1].residual for r in rows])
+    data["residual"] = ("point", residual, _attrs("scaled residual max |P^k(x) - x| / s"))
+    special = [r for r in rows if r[2] not in ("regular", "start", "end")]
+    kinds = np.array([LABELS[r[2]] for r in special], np.int8)
+    data["bifurcation_label"] = (
+        "bifurcation",
+        kinds,
+        dict(LABEL_ATTRS, long_name="kind of the bifurcation"),
+    )
+    data["bifurcation_branch"] = (
+        "bifurcation",
+        np.array([r[0] for r in special], np.int32),
+        _attrs("branch index of the bifurcation"),
+    )
+    crit = np.array([r[3] for r in special], complex)
+    long_name = "part of the multiplier that crossed the unit circle"
+    data["critical_real"] = ("bifurcation", crit.real, _attrs(f"real {long_name}"))
+    data["critical_imag"] = ("bifurcation", crit.imag, _attrs(f"imaginary {long_name}"))
+    if parameter is not None:
+        where = np.array([r[1].p for r in special])
+        data["bifurcation_parameter"] = ("bifurcation", where, dict(p_attrs))
+    coords = {
+        "point": ("point", np.arange(n), _attrs("index along the branches")),
+        "multiplier": ("multiplier", np.arange(m), _attrs("multiplier (largest modulus first)")),
+        "sample": ("sample", np.arange(kmax), _attrs("strobe sample of the orbit (k T on)")),
+        "bifurcation": ("bifurcation", np.arange(len(special)), _attrs("located bifurcation")),
+    }
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update(provenance(smap.scene, by="workbench.continuation.continue_orbit"))
+    title = f"periodic orbits of model {smap.scene.model}"
+    ds.attrs.update(
+        title=title + (f" continued over {parameter}" if parameter else ""),
+        continuation_parameter=parameter or "",
+        method=METHOD,
+        monodromy=smap.monodromy,
+        rtol=smap.rtol,
+        tolerance=tolerance,
+        map_evaluations=int(sum(tr.evaluations for tr in branches)),
+        branch_wall_time=" ".join(f"{tr.wall_time:.6g}" for tr in branches),
+        branch_ended=" | ".join(tr.ended or "-" for tr in branches),
+        max_points=max_points,
+    )
+    return ds

@@ -1,0 +1,356 @@
+"""``continued_sweep``: a sweep whose points start from their neighbour's settled state (up,
+down or both), in parallel by segments, resumable and reproducible like a campaign."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import xarray as xr
+
+from workbench.archive import open_run, save_run
+from workbench.campaign import (
+    CampaignError,
+    Store,
+    assemble_blocks,
+    available_workers,
+    campaign_id,
+    execute,
+    expand_sweep,
+)
+from workbench.continuation._plan import BRUTE, CHAINED, Plan, SegmentSpec
+from workbench.continuation._seams import attractor_distance, cloud, line_scale
+from workbench.continuation._segment import SEED_ATTRS, SegmentTask, run_segment, segment_code
+from workbench.scene import Scene, SceneSource, load_scene
+
+__all__ = ["continued_sweep"]
+
+DIRECTION_ATTRS = {
+    "long_name": "direction of the continuation over the swept parameter",
+    "units": "1",
+}
+
+
+def continued_sweep(
+    scene: SceneSource,
+    store: str | os.PathLike,
+    *,
+    client=None,
+    workers: int | None = None,
+    restart: bool = False,
+    progress: bool = False,
+) -> xr.Dataset:
+    """Run a scene's ``[sweep]`` as a continued sweep (``[sweep] continuation``): along one
+    swept parameter each point starts from the state its neighbour settled to, with a short
+    per-point transient, upwards, downwards or both ways.
+
+    Parallel by segments: each line (combination of the other swept values) and direction is
+    cut into ``segments`` runs of consecutive points continued side by side, each seeded by a
+    brute-force point ``overlap`` points before its own range (the scene's initial state and
+    transient). At each seam the last overlap point, computed by both segments, is compared
+    (:mod:`workbench.continuation._seams`); where the two did not reach the same attractor the
+    later segment is run again from the state the earlier one left at its last point, which is
+    what one sequential continuation does, until every seam agrees or is chained. The result
+    does not depend on the number of workers (segments are fixed by the scene); the store is
+    resumable like a campaign's (:func:`workbench.run_campaign`: lock, manifest, checksummed
+    block files; brute-force and chained segments are blocks).
+
+    Parameters
+    ----------
+    scene : Scene, path or mapping
+        With a ``[sweep]`` and its ``continuation`` (``"up"``, ``"down"``, ``"both"`` or a
+        table: ``direction``, ``along`` (default: the first swept parameter), ``segments``
+        (default ``min(8, max(1, n // 10))`` for ``n`` values along), ``overlap`` (points, 2),
+        ``transient_cycles`` (per continued point; default a tenth of the scene's
+        ``run.transient_cycles``, at least 1; ``transient`` in s for an autonomous model),
+        ``seam_tolerance`` (0.05 of each variable's range)).
+    store : path
+        The archive to write; blocks and manifest go to ``<store>.blocks/``.
+    client, workers, restart, progress
+        As :func:`workbench.run_campaign`.
+
+    Returns
+    -------
+    xarray.Dataset
+        The campaign's variables (:func:`workbench.run_campaign`), with a leading ``direction``
+        dim (``up``, ``down``) when ``direction = "both"``; per point ``seed`` (how it started,
+        CF flags) and its final state (``final_<state>``, ``final_discrete_state``); per seam
+        (dim ``seam``: between segments j-1 and j) ``seam_distance`` and ``seam_spread`` (the
+        cross and within distances of the check, fractions of the ranges) and
+        ``seam_chained`` (1 where the segment was run again from its predecessor's state).
+        Attributes: those of a campaign, the settings (``continuation_*``), the rounds of
+        chained segments (``continuation_rounds``) and the workers' CPU time of the blocks
+        computed by this call (``campaign_cpu_time``, s).
+
+    Examples
+    --------
+    >>> import tempfile, workbench
+    >>> from workbench.continuation import continued_sweep
+    >>> scene = workbench.load_scene({
+    ...     "model": {"name": "duffing"},
+    ...     "parameters": {"alpha": 1.0, "beta": 0.04, "delta": 0.1, "gamma": 0.1},
+    ...     "run": {"cycles": 4, "transient_cycles": 100},
+    ...     "record": {"samples_per_period": 1},
+    ...     "sweep": {"omega": {"start": 1.2, "stop": 1.6, "num": 6}, "continuation": "both"},
+    ... })
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     ds = continued_sweep(scene, f"{d}/sweep.nc", workers=2)
+    >>> ds.x.dims, [str(d) for d in ds.direction.values]
+    (('direction', 'omega', 'time'), ['up', 'down'])
+    """
+    wall0 = time.perf_counter()
+    scene = load_scene(scene)
+    if not scene.continuation:
+        raise CampaignError(
+            "the scene's [sweep] has no continuation setting; run it with "
+            'workbench.run_campaign, or add e.g. continuation = "both" to [sweep]'
+        )
+    grid = expand_sweep(scene)
+    plan = Plan(grid, scene.continuation)
+    st = Store(store)
+    with st.lock():
+        if restart:
+            st.clear()
+        return _run(scene, plan, st, client, workers, progress, wall0)
+
+
+def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) -> xr.Dataset:
+    manifest = st.read_manifest()
+    cid = campaign_id(scene, plan.segments)
+    code = segment_code(scene)
+    if manifest is None:
+        if st.archive.is_file():
+            ds = open_run(st.archive)
+            st.check_scene(ds.attrs.get("scene", ""), scene, repr(str(st.archive)))
+            return ds
+        manifest = st.write_manifest(scene, plan.grid, plan.segments, cid, code)
+    else:
+        st.check_manifest(manifest, scene, plan.segments)
+    st.remove_temporaries()
+    done = st.verified_blocks(manifest, [range(0)] * plan.n_blocks, code)
+    n_workers = available_workers(client, workers)
+    blocks: dict[int, xr.Dataset] = {}
+    stats = {"computed": 0, "reused": 0, "rounds": 0, "compute": 0.0, "cpu": 0.0}
+    bar = _bar(plan, progress)
+
+    def run(tasks: list[SegmentTask]) -> None:
+        for t in tasks:
+            if t.block in done:
+                blocks[t.block] = open_run(st.block_path(t.block)).load()
+                stats["reused"] += 1
+        todo = [t for t in tasks if t.block not in done]
+        if not todo:
+            return
+        todo.sort(key=lambda t: (-len(t.flat), t.block))  # longest first (Graham 1969)
+        t0 = time.perf_counter()
+
+        def commit(result: dict) -> None:
+            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
+            blocks[result["block"]] = result["dataset"]
+            stats["cpu"] += result["dataset"].attrs["block_cpu_time"]
+            if bar is not None:
+                bar.update(result["points"])
+
+        execute(
+            todo,
+            client=client,
+            workers=min(n_workers, len(todo)) if client is None else n_workers,
+            cid=cid,
+            on_done=commit,
+            announce=progress,
+            runner=run_segment,
+        )
+        stats["computed"] += len(todo)
+        stats["rounds"] += 1
+        stats["compute"] += time.perf_counter() - t0
+
+    try:
+        run([_task(scene, plan, st, cid, s, BRUTE) for s in plan.all_segments()])
+        final, seams = _settle_seams(scene, plan, st, cid, blocks, run)
+    finally:
+        if bar is not None:
+            bar.close()
+    ds = _assemble(scene, plan, final, seams, blocks)
+    ds.attrs.update(
+        campaign_id=cid,
+        campaign_chunk=plan.segments,
+        campaign_blocks=len(final),
+        computed_blocks=stats["computed"],
+        reused_blocks=stats["reused"],
+        campaign_workers=n_workers if stats["computed"] else 0,
+        campaign_compute_wall_time=stats["compute"],
+        campaign_cpu_time=stats["cpu"],
+        continuation_rounds=stats["rounds"],
+        campaign_wall_time=time.perf_counter() - wall0,
+        campaign_block_sha256=" ".join(
+            manifest["checksums"][str(b)] for b in sorted(final.values())
+        ),
+        code_digests=" ".join(sorted({manifest["code_digests"][str(b)] for b in final.values()})),
+    )
+    save_run(ds, st.archive)
+    return open_run(st.archive)
+
+
+def _task(scene: Scene, plan: Plan, st: Store, cid: str, seg: SegmentSpec, kind: int, seed=None):
+    values = tuple(tuple(plan.grid.point(f).values()) for f in seg.flat)
+    block = plan.block(kind, seg)
+    return SegmentTask(
+        scene_toml=scene.to_toml(),
+        dims=plan.grid.dims,
+        flat=seg.flat,
+        values=values,
+        own_from=seg.own_from,
+        path=str(st.block_path(block)),
+        campaign_id=cid,
+        block=block,
+        seed_state=None if seed is None else tuple(float(x) for x in seed[0]),
+        seed_aux=None if seed is None else tuple(float(x) for x in seed[1]),
+    )
+
+
+def _final_state(ds: xr.Dataset, flat: int):
+    """(y, aux) a block's point ``flat`` ended in, or None if it failed."""
+    names = ds.attrs.get("state_names", "").split()
+    if not names:
+        return None
+    p = ds.sel(point=flat)
+    y = np.array([float(p[f"final_{n}"]) if f"final_{n}" in p else 0.0 for n in names])
+    aux = p["final_discrete_state"].values if "final_discrete_state" in p else np.zeros(0)
+    if not (np.isfinite(y).all() and np.isfinite(aux).all()):
+        return None
+    return y, np.asarray(aux, dtype=float)
+
+
+def _settle_seams(scene: Scene, plan: Plan, st: Store, cid: str, blocks: dict, run):
+    """Walk every line's seams in order; a seam whose two runs disagree has its later segment
+    run again (chained) from the earlier one's final state, round by round, until every seam
+    agrees or is chained. Returns the block chosen per segment and the seam measurements."""
+    tol = scene.continuation["seam_tolerance"]
+    variables = scene.variables
+    final: dict[tuple[int, int, int], int] = {}
+    seams: dict[tuple[int, int, int], tuple[float, float, int]] = {}
+    scales = {}
+    for d in range(len(plan.directions)):
+        for line in range(plan.lines):
+            clouds = []
+            for j in range(plan.segments):
+                b = blocks[plan.block(BRUTE, plan.segment(d, line, j))]
+                clouds += [cloud(b, variables, "point", f, "time") for f in b.point.values]
+            scales[d, line] = line_scale(clouds)
+            final[d, line, 0] = plan.block(BRUTE, plan.segment(d, line, 0))
+    while True:
+        pending = []
+        for d in range(len(plan.directions)):
+            for line in range(plan.lines):
+                for j in range(1, plan.segments):
+                    if (d, line, j) in final:
+                        continue
+                    prev = blocks[final[d, line, j - 1]]
+                    spec = plan.segment(d, line, j)
+                    brute = blocks[plan.block(BRUTE, spec)]
+                    f = spec.flat[spec.own_from - 1]
+                    a = cloud(prev, variables, "point", f, "time")
+                    seam_vars = [f"seam_{v}" for v in variables]
+                    b = cloud(brute, seam_vars, "seam_point", f, "seam_time")
+                    cross, within = attractor_distance(a, b, scales[d, line])
+                    if cross <= tol + 2 * within:
+                        final[d, line, j] = plan.block(BRUTE, spec)
+                        seams[d, line, j] = (cross, within, 0)
+                        continue
+                    chained = plan.segment(d, line, j, CHAINED)
+                    seams[d, line, j] = (cross, within, 1)
+                    block = plan.block(CHAINED, chained)
+                    if block in blocks:
+                        final[d, line, j] = block
+                        continue
+                    seed = _final_state(prev, f)
+                    pending.append(_task(scene, plan, st, cid, chained, CHAINED, seed))
+                    break  # the next seam of this line waits for this segment
+        if not pending:
+            return final, seams
+        run(pending)
+
+
+def _assemble(scene: Scene, plan: Plan, final: dict, seams: dict, blocks: dict) -> xr.Dataset:
+    per_direction = []
+    for d in range(len(plan.directions)):
+        chosen = [
+            blocks[final[d, line, j]].drop_dims(["seam_point"], errors="ignore")
+            for line in range(plan.lines)
+            for j in range(plan.segments)
+        ]
+        ds = assemble_blocks(scene, plan.grid, chosen)
+        ds["seed"] = ds["seed"].fillna(-1).astype(np.int8).assign_attrs(SEED_ATTRS)
+        if plan.segments > 1:
+            ds = _with_seams(ds, plan, seams, d)
+        per_direction.append(ds)
+    ds = per_direction[0]
+    if len(per_direction) > 1:
+        ds = xr.concat(
+            per_direction,
+            dim="direction",
+            data_vars="all",
+            coords="minimal",
+            compat="override",
+            combine_attrs="override",
+        )
+        if "forcing_period" in ds:
+            ds["forcing_period"] = per_direction[0]["forcing_period"]
+        ds = ds.assign_coords(direction=("direction", list(plan.directions), DIRECTION_ATTRS))
+        ds.attrs["campaign_dims"] = "direction " + ds.attrs["campaign_dims"]
+        ds.attrs["campaign_points"] = len(plan.directions) * plan.grid.size
+        ds.attrs["failed_points"] = sum(d.attrs["failed_points"] for d in per_direction)
+    ds.attrs.update({f"continuation_{k}": v for k, v in scene.continuation.items()})
+    ds.attrs["history"] = ds.attrs["history"].replace(
+        "workbench.run_campaign", "workbench.continuation.continued_sweep"
+    )
+    return ds
+
+
+def _with_seams(ds: xr.Dataset, plan: Plan, seams: dict, d: int) -> xr.Dataset:
+    """The seam measurements of direction ``d`` over (the other swept dims, ``seam``)."""
+    shape = plan.other_shape + (plan.segments - 1,)
+    dist, spread = np.full(shape, np.nan), np.full(shape, np.nan)
+    chained = np.zeros(shape, np.int8)
+    for line in range(plan.lines):
+        idx = tuple(np.unravel_index(line, plan.other_shape)) if plan.other_shape else ()
+        for j in range(1, plan.segments):
+            k = idx + (j - 1,)
+            dist[k], spread[k], chained[k] = seams[d, line, j]
+    dims = plan.other_dims + ("seam",)
+    ds["seam_distance"] = (
+        dims,
+        dist,
+        {
+            "long_name": "mean nearest-record distance at a seam between the two segments' runs",
+            "units": "1",
+            "comment": "in fractions of each recorded variable's range over the line",
+        },
+    )
+    ds["seam_spread"] = (
+        dims,
+        spread,
+        {"long_name": "mean nearest-record distance within the two runs at a seam", "units": "1"},
+    )
+    ds["seam_chained"] = (
+        dims,
+        chained,
+        {
+            "long_name": "whether the later segment was run again from the earlier one's state",
+            "units": "1",
+            "flag_values": np.array([0, 1], np.int8),
+            "flag_meanings": "seam_agreed chained",
+        },
+    )
+    seam_attrs = {"long_name": "seam before segment j (between segments j-1 and j)", "units": "1"}
+    return ds.assign_coords(seam=("seam", np.arange(1, plan.segments), seam_attrs))
+
+
+def _bar(plan: Plan, progress: bool):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    total = sum(len(s.flat) for s in plan.all_segments())
+    return tqdm(total=total, unit="pt", desc="continued sweep", smoothing=0.05)

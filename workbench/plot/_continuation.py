@@ -1,0 +1,180 @@
+"""Figures of continuation results: a branch of periodic orbits over an orbit diagram, and maps
+of chaos indicators over two parameters."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import xarray as xr
+
+from workbench.plot._base import axis_label, plt
+
+__all__ = ["branch_figure", "chaos_map_figure", "LABEL_MARKS"]
+
+#: marker, short text and colour of each labelled point of a branch
+LABEL_MARKS = {
+    "fold": ("s", "LP", "tab:red"),
+    "branch_point": ("D", "BP", "tab:purple"),
+    "period_doubling": ("o", "PD", "tab:green"),
+    "neimark_sacker": ("^", "NS", "tab:orange"),
+    "grazing": ("v", "G", "tab:brown"),
+    "nonsmooth_fold": ("X", "NF", "tab:pink"),
+}
+_DIRECTION_COLOURS = {"up": "tab:blue", "down": "tab:orange"}
+
+
+def _label_names(ds: xr.Dataset, var: str = "label") -> list[str]:
+    return ds[var].attrs["flag_meanings"].split()
+
+
+def _diagram(ax, diagram: xr.Dataset, param: str, scale: float) -> None:
+    """Strobe samples of a (continued) sweep: one colour per direction."""
+    var = diagram.attrs["diagram_variable"]
+    samples = diagram[var]
+    groups = (
+        [(str(d), samples.sel(direction=d)) for d in samples.direction.values]
+        if "direction" in samples.dims
+        else [("", samples)]
+    )
+    for name, da in groups:
+        other = [d for d in da.dims if d != param]
+        da = da.transpose(param, *other)
+        x = np.broadcast_to(da[param].values.reshape((-1,) + (1,) * len(other)), da.shape)
+        keep = np.isfinite(da.values)
+        colour = _DIRECTION_COLOURS.get(name, "0.3")
+        label = f"strobe samples ({'sweep ' + name if name else 'sweep'})"
+        ax.plot(x[keep] * scale, da.values[keep], ".", ms=2, color=colour, alpha=0.45, label=label)
+
+
+def branch_figure(
+    branch: xr.Dataset,
+    state: str,
+    *,
+    diagram: xr.Dataset | None = None,
+    scale: float = 1.0,
+    xlabel: str | None = None,
+    ylabel: str | None = None,
+):
+    """A branch of periodic orbits (from :func:`workbench.continuation.continue_orbit`) over an
+    orbit diagram: each orbit's strobe samples of ``state`` against the parameter, solid where
+    the orbit is stable and dashed where not, its labelled points marked (LP fold, BP branch
+    point, PD period doubling, NS Neimark-Sacker, G grazing); under it, when given, the strobe
+    samples of a sweep (:func:`workbench.analysis.bifurcation_diagram` of a campaign or a
+    continued sweep, one colour per direction).
+
+    ``scale`` multiplies the parameter on the x axis (e.g. ``1 / pi``, with ``xlabel``).
+    """
+    param = branch.attrs["continuation_parameter"]
+    values = branch[f"strobe_{state}"]
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    if diagram is not None:
+        _diagram(ax, diagram, diagram.attrs["diagram_parameter"], scale)
+    names = _label_names(branch)
+    p = branch[param].values * scale
+    for b in np.unique(branch.branch.values):
+        on = np.flatnonzero(branch.branch.values == b)
+        k = int(branch.periods.values[on[0]])
+        stable = branch.stable.values[on]
+        for s in range(k):
+            y = values.values[on, s]
+            # runs of equal stability, each drawn to the next point so that the line is whole
+            start = 0
+            for i in range(1, on.size + 1):
+                if i == on.size or stable[i] != stable[start]:
+                    seg = slice(start, min(i + 1, on.size))
+                    ax.plot(
+                        p[on][seg],
+                        y[seg],
+                        "-" if stable[start] else "--",
+                        color="k",
+                        lw=1.2 if stable[start] else 0.9,
+                    )
+                    start = i
+    shown = set()
+    for i in np.flatnonzero(branch.label.values >= 3):
+        kind = names[int(branch.label.values[i])]
+        marker, text, colour = LABEL_MARKS[kind]
+        k = int(branch.periods.values[i])
+        for s in range(k):
+            ax.plot(
+                p[i],
+                values.values[i, s],
+                marker,
+                ms=6,
+                mfc="none",
+                mec=colour,
+                mew=1.5,
+                label=None if kind in shown else f"{text}: {kind.replace('_', ' ')}",
+            )
+            shown.add(kind)
+        ax.annotate(
+            text,
+            (p[i], values.values[i, 0]),
+            textcoords="offset points",
+            xytext=(4, 4),
+            fontsize=7,
+            color=colour,
+        )
+    ax.plot([], [], "-", color="k", label="periodic orbit, stable")
+    ax.plot([], [], "--", color="k", lw=0.9, label="periodic orbit, unstable")
+    ax.set_xlabel(xlabel or axis_label(branch[param]))
+    ax.set_ylabel(ylabel or axis_label(values))
+    ax.legend(fontsize=7, loc="best")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"periodic orbits over {param} (strobe samples of {state})", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def chaos_map_figure(
+    maps: xr.Dataset,
+    *,
+    indicators: tuple[str, ...] = ("strobe_period", "zero_one_K", "lle"),
+    scales: Mapping[str, float] | None = None,
+    labels: Mapping[str, str] | None = None,
+):
+    """Maps of chaos indicators over the two parameter dims of a campaign (from
+    :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
+    x axis. ``scales`` multiplies a dim's values (e.g. ``{"omega": 1 / pi}``), ``labels``
+    names its axis."""
+    scales = dict(scales or {})
+    labels = dict(labels or {})
+    dims = maps.attrs["campaign_dims"].split()
+    if len(dims) != 2:
+        raise ValueError(f"a chaos map needs two parameter dims; this campaign has {dims!r}")
+    xd, yd = dims
+    shown = [v for v in indicators if v in maps]
+    fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.8), squeeze=False)
+    x = maps[xd].values * scales.get(xd, 1.0)
+    y = maps[yd].values * scales.get(yd, 1.0)
+    for ax, name in zip(axes[0], shown, strict=True):
+        da = maps[name].transpose(yd, xd)
+        if name == "strobe_period":
+            vals = da.values.astype(float)
+            cmap = plt.get_cmap("viridis", 9)
+            im = ax.pcolormesh(
+                x,
+                y,
+                np.where(vals > 0, np.minimum(vals, 8), 9),
+                cmap=cmap,
+                vmin=0.5,
+                vmax=9.5,
+                shading="nearest",
+            )
+            bar = fig.colorbar(im, ax=ax, ticks=range(1, 10))
+            bar.ax.set_yticklabels([*map(str, range(1, 8)), "8+", "none"])
+        else:
+            cmap = "magma" if name != "lle" else "coolwarm"
+            kw = {}
+            if name == "lle":
+                lim = float(np.nanmax(np.abs(da.values))) or 1.0
+                kw = {"vmin": -lim, "vmax": lim}
+            im = ax.pcolormesh(x, y, da.values, cmap=cmap, shading="nearest", **kw)
+            fig.colorbar(im, ax=ax)
+        ax.set_xlabel(labels.get(xd, axis_label(maps[xd])))
+        ax.set_ylabel(labels.get(yd, axis_label(maps[yd])))
+        units = maps[name].attrs.get("units", "1")
+        ax.set_title(f"{name} [{units}]", fontsize=9)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,200 @@
+"""Beyond the paper: how the motion of a bifurcation study becomes chaotic (``[route]`` of a
+``study.toml``).
+
+For the study's swept case: the sweep continued both ways (each point from its neighbour's
+settled state, :func:`workbench.continuation.continued_sweep`), so that coexisting attractors
+and hysteresis show; per point and direction the strobe spread, period and 0-1 test K; where
+the two directions sit on different attractors; optionally the period-1 orbit continued over
+the parameter (:func:`workbench.continuation.continue_orbit`) until it loses stability, with
+the type, parameter and multipliers of every bifurcation; and the largest Lyapunov exponent at a
+few values. ``[route]`` keys: ``case`` (default the swept one), ``segments``,
+``transient_cycles`` (per continued point), ``cycles`` (recorded; >= 100 for the 0-1 test),
+``method`` (solver), ``branch_start``, ``branch_stop`` (the orbit's range; no branch without
+them), ``exponents`` (how many values of the sweep get an exponent, default 0).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from workbench.archive import save_run
+from workbench.study._measure import CLEARANCE_COORDINATES, clearance_of, select
+from workbench.study._spec import Study, parameter_sweep
+
+__all__ = ["route"]
+#: two attractors differ at a point when their clouds are further apart than this fraction of
+#: the clearance plus twice their own record spacing (the seam test of the continued sweep)
+HYSTERESIS_TOLERANCE = 0.05
+EXPONENT_CYCLES = 20
+
+
+def _coordinates(ds: xr.Dataset, scene, param: str, value: float) -> np.ndarray:
+    """Strobe samples of x1, y1, x2, y2 at one value (rows: samples), in units of c."""
+    point = ds.sel({param: value})
+    cols = []
+    for var, where in CLEARANCE_COORDINATES.values():
+        c = value if param == "clearance" else clearance_of(scene, where["joint"])
+        cols.append(select(point, var, where).values / c)
+    rows = np.column_stack(cols)
+    return rows[np.isfinite(rows).all(axis=1)]
+
+
+def _continued_scene(scene, spec: dict, quick: bool):
+    (param,) = list(parameter_sweep(scene))
+    values = list(scene.sweep[param])
+    run = dict(scene.run, cycles=int(spec.get("cycles", scene.run["cycles"])))
+    if quick:
+        values = values[:: max(1, len(values) // 6)]
+        run.update(cycles=min(run["cycles"], 6), transient_cycles=min(run["transient_cycles"], 4))
+    sweep = {
+        param: values,
+        "continuation": {
+            "direction": "both",
+            "segments": min(int(spec.get("segments", 2)), len(values)),
+            "transient_cycles": int(spec.get("transient_cycles", 3)),
+        },
+    }
+    solver = dict(scene.solver, method=spec.get("method", scene.solver["method"]))
+    return scene.replace(run=run, sweep=sweep, solver=solver), param
+
+
+def route(study: Study, directory: Path, quick: bool, workers: int | None) -> dict | None:
+    """The route to chaos of a study with ``[route]`` (see the module docstring): a dict for
+    ``summary.json`` (parameter values, per direction spread / period / K, hysteresis, the
+    branch's bifurcations, exponents, the files written and the wall time of each part)."""
+    if not study.route:
+        return None
+    from workbench.analysis import lle_from_equations
+    from workbench.continuation import (
+        continued_sweep,
+        strobe_period,
+        strobe_zero_one,
+    )
+
+    spec = dict(study.route)
+    swept = [c for c, s in study.cases.items() if parameter_sweep(s)]
+    case = spec.get("case", swept[0] if swept else None)
+    scene = study.cases[case]
+    cscene, param = _continued_scene(scene, spec, quick)
+    out: dict = {"case": case, "parameter": param, "status": "computed", "wall_time": {}}
+    t0 = time.perf_counter()
+    ds = continued_sweep(cscene, directory / f"{case}-continued.nc", workers=workers, restart=True)
+    out["wall_time"]["continued_sweep"] = time.perf_counter() - t0
+    out["cpu_time_continued_sweep"] = float(ds.attrs["campaign_cpu_time"])
+    out["archive"] = str(directory / f"{case}-continued.nc")
+    values = [float(v) for v in ds[param].values]
+    out["values"] = values
+    out["cycles"] = [int(cscene.run["cycles"]), int(cscene.continuation["transient_cycles"])]
+    out["chained_seams"] = int(ds["seam_chained"].sum()) if "seam_chained" in ds else 0
+    per: dict = {}
+    clouds: dict = {}
+    for d in ("up", "down"):
+        part = ds.sel(direction=d)
+        rows = {"spread": [], "period": [], "K": []}
+        clouds[d] = []
+        for v in values:
+            x = _coordinates(part, scene, param, v)
+            clouds[d].append(x)
+            rows["spread"].append(float(np.mean(np.std(x, axis=0))) if len(x) else math.nan)
+            rows["period"].append(strobe_period(x) if len(x) else -1)
+            ks = [strobe_zero_one(x[:, j]) for j in range(x.shape[1])] if len(x) else []
+            rows["K"].append(float(np.nanmedian(ks)) if np.isfinite(ks).any() else math.nan)
+        per[d] = rows
+    out["directions"] = per
+    out["hysteresis"] = _hysteresis(clouds, values)
+    if "branch_start" in spec and not quick:
+        t0 = time.perf_counter()
+        out["branch"] = _branch(scene, param, spec, directory / f"{case}-branch.nc")
+        out["wall_time"]["branch"] = time.perf_counter() - t0
+    n_exp = int(spec.get("exponents", 0)) if not quick else 0
+    if n_exp:
+        t0 = time.perf_counter()
+        picks = np.unique(np.linspace(0, len(values) - 1, n_exp).round().astype(int))
+        out["exponents"] = []
+        for i in picks:
+            point = scene.with_parameters(**{param: values[i]})
+            try:
+                r = lle_from_equations(
+                    point, cycles=EXPONENT_CYCLES, tighten=False, variational=False
+                )
+                out["exponents"].append(
+                    {"value": values[i], "lle": float(r.lle), "stderr": float(r.stderr)}
+                )
+            except Exception as exc:  # a failed run is a finding, not a crash of the study
+                out["exponents"].append({"value": values[i], "error": str(exc)[:200]})
+        out["wall_time"]["exponents"] = time.perf_counter() - t0
+    return out
+
+
+def _hysteresis(clouds: dict, values: list[float]) -> dict:
+    """Per value: the distance of the up and down attractors (mean nearest-record distance,
+    in units of c) and whether they differ (beyond the tolerance and their own spacing)."""
+    from workbench.continuation import attractor_distance
+
+    cross, within, differs = [], [], []
+    for a, b in zip(clouds["up"], clouds["down"], strict=True):
+        c, w = attractor_distance(a, b, np.ones(a.shape[1] if a.ndim == 2 else 4))
+        cross.append(c)
+        within.append(w)
+        differs.append(bool(np.isfinite(c) and c > HYSTERESIS_TOLERANCE + 2 * w))
+    return {
+        "distance": cross,
+        "spread": within,
+        "differs": differs,
+        "values": [v for v, d in zip(values, differs, strict=True) if d],
+        "tolerance": HYSTERESIS_TOLERANCE,
+    }
+
+
+def _branch(scene, param: str, spec: dict, path: Path) -> dict:
+    """The period-1 orbit continued from ``branch_start`` towards ``branch_stop``."""
+    from workbench.continuation import continue_orbit
+
+    start, stop = float(spec["branch_start"]), float(spec["branch_stop"])
+    point = scene.replace(sweep={}).with_parameters(**{param: start})
+    branch = continue_orbit(point, param, stop=stop, rtol=1e-8, tolerance=1e-6)
+    save_run(branch, path)
+    names = branch.label.attrs["flag_meanings"].split()
+    stable = branch.stable.values
+    bifurcations = []
+    for k, p, re, im in zip(
+        branch.bifurcation_label.values,
+        branch.bifurcation_parameter.values,
+        branch.critical_real.values,
+        branch.critical_imag.values,
+        strict=True,
+    ):
+        i = int(np.flatnonzero(np.isclose(branch[param].values, p))[0])
+        mu = branch.multiplier_real.values[i] + 1j * branch.multiplier_imag.values[i]
+        mu = mu[np.isfinite(mu)]
+        bifurcations.append(
+            {
+                "type": names[int(k)],
+                "value": float(p),
+                "critical": [float(re), float(im)],
+                "multipliers": [[float(z.real), float(z.imag)] for z in mu[:4]],
+                "stable_before": bool(stable[max(i - 1, 0)]),
+                "stable_after": bool(stable[min(i + 1, stable.size - 1)]),
+                "events_before": float(branch.events_per_period.values[max(i - 1, 0)]),
+                "events_after": float(branch.events_per_period.values[min(i + 1, stable.size - 1)]),
+            }
+        )
+    modulus = np.nanmax(branch.multiplier_modulus.values, axis=1)
+    return {
+        "archive": str(path),
+        "start": start,
+        "stop": stop,
+        "values": [float(v) for v in branch[param].values],
+        "stable": [int(s) for s in stable],
+        "largest_modulus": [float(m) for m in modulus],
+        "events_per_period": [float(e) for e in branch.events_per_period.values],
+        "bifurcations": bifurcations,
+        "ended": branch.attrs["branch_ended"],
+        "map_evaluations": int(branch.attrs["map_evaluations"]),
+        "monodromy": branch.attrs["monodromy"],
+    }

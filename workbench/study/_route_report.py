@@ -1,0 +1,182 @@
+"""The REPORT section of a study's route to chaos (:mod:`workbench.study._route`), written from
+the numbers of its ``summary.json`` only."""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["route_section"]
+
+
+def _v(x: float, param: str) -> str:
+    """A parameter value as the report shows it (omega in units of pi, clearance in mm)."""
+    if param == "omega":
+        return f"{x / math.pi:.4g} pi"
+    if param == "clearance":
+        return f"{x * 1e3:.4g} mm"
+    return f"{x:.4g}"
+
+
+def _num(x) -> str:
+    return "–" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.3g}"
+
+
+def _mu(z: list[float]) -> str:
+    re, im = z
+    return (
+        f"{re:+.4f}" if abs(im) < 1e-9 else f"{re:+.4f}{im:+.4f}i (|mu| {math.hypot(re, im):.4f})"
+    )
+
+
+def route_section(r: dict) -> list[str]:
+    """Markdown lines: what the continued sweeps, the periodic branch and the indicators say."""
+    if not r or r.get("status") != "computed":
+        return []
+    p = r["parameter"]
+    values = r["values"]
+    cycles, transient = r["cycles"]
+    up, down = r["directions"]["up"], r["directions"]["down"]
+    lines = [
+        f"**Beyond the paper: how the motion becomes chaotic.** The sweep over {p} continued "
+        f"both ways (`workbench.continuation.continued_sweep`: each point starts from the state "
+        f"its neighbour settled to, {transient} transient + {cycles} recorded cycles per "
+        f"point; {r['chained_seams']} seam(s) chained; workers' CPU "
+        f"{r['cpu_time_continued_sweep'] / 60:.1f} min, "
+        f"{r['wall_time']['continued_sweep'] / 60:.1f} min wall).",
+        "",
+    ]
+    b = r.get("branch")
+    if b:
+        lines += _branch_lines(b, p)
+    h = r["hysteresis"]
+    if h["values"]:
+        shown = ", ".join(_v(v, p) for v in h["values"])
+        lines += [
+            f"*Hysteresis*: the two directions settle on different attractors at "
+            f"{len(h['values'])} of {len(values)} values ({shown}; mean nearest-sample distance "
+            f"above {h['tolerance']:g} c plus twice the samples' own spacing).",
+            "",
+        ]
+    else:
+        lines += [
+            f"*Hysteresis*: none; at every value the two directions reach the same attractor "
+            f"(mean nearest-sample distance within {h['tolerance']:g} c plus twice the "
+            "samples' own spacing).",
+            "",
+        ]
+    exps = {e["value"]: e for e in r.get("exponents", [])}
+    head = f"| {p} | period up / down | strobe spread / c, up / down | 0-1 K up / down |"
+    head += " largest Lyapunov exponent [1/s] |" if exps else ""
+    lines += [head, "|---|---|---|---|" + ("---|" if exps else "")]
+    for i, v in enumerate(values):
+        per = "/".join(str(x) if x > 0 else "none" for x in (up["period"][i], down["period"][i]))
+        row = (
+            f"| {_v(v, p)} | {per} | {_num(up['spread'][i])} / {_num(down['spread'][i])} | "
+            f"{_num(up['K'][i])} / {_num(down['K'][i])} |"
+        )
+        if exps:
+            e = exps.get(v)
+            if e is None:
+                row += " |"
+            elif "lle" in e:
+                row += f" {e['lle']:.3g} +- {e['stderr']:.2g} |"
+            else:
+                row += " failed |"
+        lines.append(row)
+    lines += ["", *_agreement(r), ""]
+    return lines
+
+
+def _branch_lines(b: dict, p: str) -> list[str]:
+    stable = [v for v, s in zip(b["values"], b["stable"], strict=True) if s]
+    lines = [
+        f"*The periodic orbit* (`workbench.continuation.continue_orbit`, shooting with the "
+        f"monodromy matrix by {b['monodromy']}, pseudo-arclength from {_v(b['start'], p)} "
+        f"towards {_v(b['stop'], p)}; {b['map_evaluations']} map evaluations; ended: "
+        f"{b['ended']}): stable at "
+        + (f"{_v(min(stable), p)} .. {_v(max(stable), p)}" if stable else "no point")
+        + f" of the {len(b['values'])} continued orbits.",
+        "",
+    ]
+    if b["bifurcations"]:
+        lines += [
+            f"| bifurcation | {p} | critical multiplier | largest multipliers there | stable "
+            "before / after | events per cycle before / after |",
+            "|---|---|---|---|---|---|",
+        ]
+        for f in b["bifurcations"]:
+            mus = ", ".join(_mu(z) for z in f["multipliers"][:3])
+            lines.append(
+                f"| {f['type'].replace('_', ' ')} | {_v(f['value'], p)} | {_mu(f['critical'])} "
+                f"| {mus} | {'yes' if f['stable_before'] else 'no'} / "
+                f"{'yes' if f['stable_after'] else 'no'} | {f['events_before']:g} / "
+                f"{f['events_after']:g} |"
+            )
+        lines.append("")
+    loss = next(
+        (f for f in b["bifurcations"] if f["stable_before"] and not f["stable_after"]), None
+    )
+    if loss:
+        lines += [
+            f"Where and how the periodic motion ends: the orbit loses stability at "
+            f"{p} = {_v(loss['value'], p)} by a **{loss['type'].replace('_', ' ')}** (critical "
+            f"multiplier {_mu(loss['critical'])}).",
+            "",
+        ]
+    else:
+        lines += [
+            "The periodic orbit does not lose stability on the continued range "
+            f"(largest |multiplier| {max(b['largest_modulus']):.3g}).",
+            "",
+        ]
+    return lines
+
+
+def _agreement(r: dict) -> list[str]:
+    """How the branch, the strobe periods, the 0-1 test and the exponents agree."""
+    p = r["parameter"]
+    up, down = r["directions"]["up"], r["directions"]["down"]
+    values = r["values"]
+    periodic = [
+        v for v, a, b in zip(values, up["period"], down["period"], strict=True) if a == b == 1
+    ]
+    chaotic = [
+        v
+        for v, a, b in zip(values, up["K"], down["K"], strict=True)
+        if a is not None and b is not None and math.isfinite(a) and a > 0.5 and b > 0.5
+    ]
+    tested = any(k is not None and math.isfinite(k) for k in up["K"] + down["K"])
+    text = [
+        f"Agreement: both directions are period-1 at {len(periodic)} of {len(values)} values"
+        + (f" ({_v(min(periodic), p)} .. {_v(max(periodic), p)})" if periodic else "")
+        + (
+            f"; the 0-1 test gives K > 0.5 both ways at {len(chaotic)}"
+            + (f" ({_v(min(chaotic), p)} .. {_v(max(chaotic), p)})" if chaotic else "")
+            if tested
+            else f"; no 0-1 test (it needs 100 strobe samples, these record {r['cycles'][0]})"
+        )
+        + "."
+    ]
+    b = r.get("branch")
+    if b:
+        inside = [v for v in periodic if b["start"] <= v <= max(b["values"])]
+        stable_at = {v: s for v, s in zip(b["values"], b["stable"], strict=True)}
+        if inside and stable_at:
+            near = [stable_at[min(stable_at, key=lambda w, v=v: abs(w - v))] for v in inside]
+            text.append(
+                f"Where the sweeps are period-1 inside the branch's range ({len(inside)} values) "
+                f"the nearest continued orbit is stable at {sum(near)}."
+            )
+    exps = [e for e in r.get("exponents", []) if "lle" in e]
+    if exps:
+        pos = [e for e in exps if e["lle"] > 2 * e["stderr"]]
+        neg = [e for e in exps if e["lle"] < -2 * e["stderr"]]
+        text.append(
+            f"The largest exponent (two-trajectory method, {len(exps)} values) is positive "
+            f"beyond two standard errors at "
+            + (", ".join(_v(e["value"], p) for e in pos) or "none")
+            + ", negative at "
+            + (", ".join(_v(e["value"], p) for e in neg) or "none")
+            + "."
+        )
+    return [" ".join(text)]
