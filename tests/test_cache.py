@@ -164,3 +164,20 @@ def test_generated_code_imports_no_template(hooks):
         for n in ast.walk(ast.parse(Path(tangent.__file__).read_text()))
         if isinstance(n, ast.ImportFrom)
     }
+
+
+def test_a_kernel_importing_an_in_memory_module_is_refused():
+    """A hooks module built in memory has no source to digest: the kernel's key would miss an
+    edit of the model it imports (benchmarks/ninebar_speed.py ran stale machine code so).
+    Refused, naming the module."""
+    import types
+
+    from workbench._sources import source_digest
+
+    sys.modules["wb_in_memory_hooks"] = types.ModuleType("wb_in_memory_hooks")
+    try:
+        with pytest.raises(ValueError, match="'wb_in_memory_hooks', a module built in memory"):
+            source_digest("from wb_in_memory_hooks import rhs\n", "kernel_x")
+        assert source_digest("import math\n", "kernel_x")  # built in: fine
+    finally:
+        del sys.modules["wb_in_memory_hooks"]

@@ -475,6 +475,21 @@ def test_exponent_report_says_no_more_than_its_numbers():
     assert "did not converge" in text and "this is the exponent" not in text
 
 
+def test_exponent_report_of_an_older_summary_claims_nothing():
+    """A chaos summary written before the spectrum carried errors (fixed 6 cycles, knob
+    variants only): its values are shown, said to predate the errors, and never called the
+    exponent, whatever its old 'trusted' flags say."""
+    from workbench.study._report import _exponent_table
+
+    old = _exponent_numbers(26.78, 26.66, 7.58, True)
+    for key in ("spectrum_stderr", "spectrum_trusted", "spectrum_cycles", "sum_check"):
+        del old[key]
+    text = "\n".join(_exponent_table(old))
+    assert "26.4, 1.6, -5 (no standard errors: this summary predates them" in text
+    assert "predates the exponents' convergence in time" in text
+    assert "this is the exponent" not in text
+
+
 @pytest.mark.slow
 def test_exponent_table_of_the_chaos_case_at_small_size():
     """The chaos study's exponent table over 2 cycles (no room to grow): every estimate from the

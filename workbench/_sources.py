@@ -146,7 +146,27 @@ def _imports(name: str, imports: tuple[_Import, ...], is_package: bool) -> set[s
                 sub = f"{base}.{n}"
                 candidates.append(sub if n != "*" and module_path(sub) is not None else base)
         found.update(c for c in candidates if module_path(c) is not None)
+        for c in candidates:
+            if module_path(c) is None and _in_memory(c):
+                raise ValueError(
+                    f"module {name!r} imports {c!r}, a module built in memory (no source "
+                    "file): compiled code keyed by its sources cannot see its code, and a "
+                    "cached kernel would outlive an edit of it; write it to a .py file and "
+                    "import that"
+                )
     return found
+
+
+def _in_memory(name: str) -> bool:
+    """Whether module ``name`` is imported and was built in memory (e.g. ``types.ModuleType``
+    put in ``sys.modules``): no file, not built in or frozen, not a namespace package."""
+    module = sys.modules.get(name)
+    if module is None or getattr(module, "__file__", None) is not None:
+        return False
+    spec = getattr(module, "__spec__", None)
+    if spec is None:
+        return True
+    return spec.origin in (None, "") and not spec.submodule_search_locations
 
 
 @cache

@@ -291,6 +291,13 @@ def _agreement(e: dict) -> str:
     """What the two exponents from the equations (same trajectory) say, from their numbers."""
     if "variational, same trajectory" not in e["method"]:
         return ""
+    if "spectrum_stderr" not in e:  # written before the estimates grew to an error target
+        return (
+            "This summary predates the exponents' convergence in time: its estimates from the "
+            f"equations come from {e.get('cycles')} crank cycles with knob variants on one "
+            "trajectory only, which is not enough to call any of them the exponent; "
+            "`workbench study chaos` recomputes them."
+        )
     i = e["method"].index("two trajectories")
     j = e["method"].index("variational, same trajectory")
     a, b, err = e["lle"][i], e["lle"][j], e["stderr"][i]
