@@ -35,7 +35,8 @@ against DOP853 at 1e-11 (first 30 ms, ``workbench.accuracy``), which backs the c
 
 Run: ``python benchmarks/ninebar_speed.py [--repeats N] [--accuracy]`` (8-12 min; the first run
 also compiles the kernels, ~3-6 min); ``--stiff [--parts sweep,rest,lugre,fig32]`` runs only
-sections 6-8.
+sections 6-8; ``--kernel`` only sections 1 and 2, the run after a change of a model's compiled
+code (the record-time evaluation is what ``rhs_reference`` calls; ~1 min).
 """
 
 from __future__ import annotations
@@ -219,6 +220,11 @@ def main() -> None:
     ap.add_argument("--accuracy", action="store_true", help="also ARK548's short-horizon error")
     ap.add_argument("--stiff", action="store_true", help="only the implicit and auto sections")
     ap.add_argument(
+        "--kernel",
+        action="store_true",
+        help="only the right-hand sides alone and the Coulomb rows (after a kernel change)",
+    )
+    ap.add_argument(
         "--lugre-fraction",
         type=float,
         default=0.01,
@@ -263,6 +269,8 @@ def main() -> None:
         f"{before[1] / best[0]:.1f}x; target <= {TARGET['coulomb']} s/cycle: "
         f"{'met' if best[0] <= TARGET['coulomb'] else 'NOT met'} (best repeat {best[0]:.4f})"
     )
+    if args.kernel:
+        return
 
     print("--- first cycle (the transient; from rest)")
     first = solve("coulomb", "dop853", 1, 0, args.repeats)
