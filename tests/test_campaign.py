@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 import workbench
-from workbench.archive import StoreWarning
+from workbench.archive import DiskFull, StoreWarning
 from workbench.campaign import CampaignError, CampaignWarning, store_paths, summary
 from workbench.cli import main
 
@@ -81,7 +81,7 @@ def test_dims_units_and_archive(scene, one_worker):
     ds = one_worker
     assert ds.x.dims == ("gamma", "omega", "time")  # parameter dims first
     assert ds.status.dims == ("gamma", "omega") and ds.status.dtype == np.int8
-    meanings = [s.label for s in workbench.Status] + ["invalid_parameters"]
+    meanings = [s.label for s in workbench.Status] + ["invalid_parameters", "error"]
     assert ds.status.attrs["flag_meanings"].split() == meanings
     np.testing.assert_array_equal(ds.status.attrs["flag_values"], range(len(meanings)))
     model = workbench.models.get_model("duffing")
@@ -132,9 +132,10 @@ def test_failing_points_are_data_and_a_changed_scene_is_refused(tmp_path):
     assert (ds.solver_steps.sel(beta=1e6) == 2000).all()  # up to the failure
     text = summary(ds)
     assert "2 ok; 2 max_steps" in text and "failed beta=1e+06, gamma=0.3: max_steps" in text
-    # Same record times everywhere: a 1-D time coordinate, as from simulate
+    # Same record times everywhere: a 1-D time coordinate, as from simulate; a point carries
+    # every parameter as the run does (the swept ones selected, the others scalar)
     ref = workbench.simulate(scene.with_parameters(beta=1.0, gamma=0.5))
-    xr.testing.assert_identical(ds.x.sel(beta=1.0, gamma=0.5, drop=True), ref.x)
+    xr.testing.assert_identical(ds.x.sel(beta=1.0, gamma=0.5), ref.x)
     assert all("units" in v.attrs and "long_name" in v.attrs for v in ds.variables.values())
 
     changed = workbench.load_scene({**spec, "solver": {"max_steps": 10**6}})
@@ -160,11 +161,14 @@ def test_scene_without_sweep_and_bad_arguments_are_refused(scene, tmp_path):
         workbench.run_campaign(scene, tmp_path / "run.nc")
 
 
-def test_an_error_stops_the_blocks_in_flight(tmp_path):
-    """A point that raises (a bug, not a failed run) ends the campaign at once: the other
-    worker's long block is stopped, not waited for, and writes no file."""
+def test_an_error_stops_the_blocks_in_flight(tmp_path, monkeypatch):
+    """An error outside the points (here the disk fills as a block is written) ends the
+    campaign at once: the other worker's long block is stopped, not waited for, and writes no
+    file. (A point that raises is a failed point: tests/test_faults.py.)"""
     import dask
     import failing_model
+
+    import workbench.campaign._block as block_task
 
     scene = workbench.load_scene(
         {
@@ -172,17 +176,22 @@ def test_an_error_stops_the_blocks_in_flight(tmp_path):
             "run": {"duration": 1.0},
             "solver": {"max_step": 1e-7},  # 1e7 steps: minutes for the ok point
             "record": {"dt": 0.5},
-            "sweep": {"mode": [failing_model.OK, failing_model.BUG]},
+            "sweep": {"mode": [failing_model.OK, failing_model.BUG]},  # BUG: at once
         }
     )
     store = tmp_path / "c.nc"
     # compile the model's kernel first (forked workers inherit it): the time bound below is
     # for stopping the blocks, not for a cold compile on a loaded machine
     workbench.simulate(scene.replace(sweep={}, run={"duration": 1e-3}, record={"dt": 5e-4}))
+
+    def full_disk(ds, path, **kwargs):
+        raise DiskFull(f"cannot write {str(path)!r}: no space left on its file system")
+
+    monkeypatch.setattr(block_task, "save_run", full_disk)  # inherited by the forked workers
     t0 = time.monotonic()
     with (
         dask.config.set({"multiprocessing.context": "fork"}),  # the workers know the model
-        pytest.raises(RuntimeError, match="raised RuntimeError: a bug in the test model"),
+        pytest.raises(DiskFull, match="the finished blocks are kept in"),
     ):
         workbench.run_campaign(scene, store, workers=2, chunk=1)
     assert time.monotonic() - t0 < 20

@@ -1,8 +1,11 @@
-"""Fault injection (issue 18): kill -9, Ctrl-C, corrupt blocks, two writers on one store, failed
-points, and bad arguments. Each case runs on the Duffing oscillator in well under 30 s, and every
-process a case starts is gone when it ends."""
+"""Fault injection (issues 18 and 23): kill -9, Ctrl-C, SIGTERM, corrupt blocks, two writers on
+one store, failed points, a point that raises, a full disk, and bad arguments (the single run's
+and the writes' cases: tests/test_faults_run.py, tests/test_faults_output.py). Each case runs on
+the Duffing oscillator (or the test model) in well under 30 s, and every process a case starts
+is gone when it ends."""
 
 import contextlib
+import errno
 import json
 import os
 import signal
@@ -19,6 +22,7 @@ import xarray as xr
 import workbench
 from workbench.archive import ArchiveError, StoreLocked, StoreWarning, sha256_file
 from workbench.campaign import CampaignWarning, store_paths
+from workbench.campaign._block import RAISED
 from workbench.campaign._store import Store
 from workbench.cli import main
 
@@ -294,6 +298,104 @@ def test_a_campaign_whose_points_all_fail_exits_non_zero_with_the_count(tmp_path
     assert "workbench campaign: 4 of 4 points failed (4 max_steps); exit code 3" in err
 
 
+def test_a_point_that_raises_is_a_failed_point_and_the_campaign_goes_on(tmp_path, capsys):
+    """Issue 23 item 2: an exception inside one point (here the test model's bug) becomes its
+    status 'error' with the exception in 'failure'; the other points run, and the command says
+    how many failed."""
+    import dask
+    import failing_model
+
+    spec = {
+        "model": {"name": "failing"},
+        "run": {"duration": 1.0},
+        "record": {"dt": 0.5},
+        "sweep": {"mode": [failing_model.OK, failing_model.BUG, failing_model.NON_FINITE]},
+    }
+    scene = scene_file(tmp_path, spec)
+    with dask.config.set({"multiprocessing.context": "fork"}):  # the workers know the model
+        code = main(["campaign", str(scene), "-o", str(tmp_path / "c.nc"), "--workers", "1"])
+    ds = workbench.open_run(tmp_path / "c.nc")
+    assert ds.status.values.tolist() == [0, RAISED, int(workbench.Status.NON_FINITE)]
+    assert str(ds.failure.values[1]).startswith(
+        "error: RuntimeError: a bug in the test model (raised at failing_model.py:"
+    )
+    assert np.isfinite(ds.y.values[0]).all() and np.isnan(ds.y.values[1]).all()
+    assert code == 4  # the largest: non_finite 4 over error 1
+    err = capsys.readouterr().err
+    assert "2 of 3 points failed (1 non_finite, 1 error); exit code 4" in err
+
+
+def test_the_issue_s_huge_initial_value_in_a_sweep_fails_one_point_only(tmp_path, capsys):
+    """Issue 23: x0 = 1e50 in a sweep aborted the campaign (ZeroDivisionError, 65-line
+    traceback, 1 of 4 blocks done)."""
+    sweep = {**QUICK, "sweep": {"x0": [1.0, 1e50, 2.0, 3.0]}}
+    code = main(["campaign", str(scene_file(tmp_path, sweep)), "-o", str(tmp_path / "c.nc"), "-q"])
+    assert code == 4
+    ds = workbench.open_run(tmp_path / "c.nc")
+    assert ds.status.values.tolist() == [0, 4, 0, 0]
+    assert "initial step cannot be formed" in str(ds.failure.values[1])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["workbench campaign: 1 of 4 points failed (1 non_finite); exit code 4"], err
+
+
+def test_sigterm_stops_a_campaign_in_one_line_and_keeps_its_blocks(tmp_path):
+    """SIGTERM (a scheduler's or systemd's stop) does what Ctrl-C does: one line, exit 143,
+    every process gone, the committed blocks kept, and the resume identical."""
+    scene = scene_file(tmp_path, SLOW)
+    store = tmp_path / "term.nc"
+    args = ["campaign", str(scene), "-o", str(store), "--workers", "2", "--chunk", "1", "-q"]
+    with cli_process(args, tmp_path) as proc:
+        deadline = time.monotonic() + 25
+        while committed(store) < 2:
+            assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
+            assert time.monotonic() < deadline, "no block committed in time"
+            time.sleep(0.02)
+        os.kill(proc.pid, signal.SIGTERM)  # the campaign alone, as `kill PID` does
+        assert proc.wait(timeout=20) == 143
+        wait_gone(proc.pid, 10.0)
+    err = (tmp_path / "stderr.txt").read_text().strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("workbench campaign: terminated by SIGTERM; "), err
+    assert f"'{store}.blocks/'" in err[0]
+    done = committed(store)
+    assert 2 <= done < 8
+    resumed = workbench.run_campaign(scene, store, workers=2)  # identical: see the kill -9 case
+    assert resumed.attrs["reused_blocks"] == done and (resumed.status == 0).all()
+
+
+def test_a_full_disk_stops_a_campaign_in_one_line_and_the_resume_completes_it(
+    tmp_path, capsys, monkeypatch
+):
+    """Issue 23: a 63-line worker traceback. The disk fills when block 2 is written (injected
+    in the forked workers): one line naming the file, the bytes needed and free and where the
+    finished blocks are; with space again the same command completes the campaign."""
+    import dask
+
+    import workbench.archive._atomic as atomic
+
+    real = xr.Dataset.to_netcdf
+
+    def to_netcdf(self, path=None, *args, **kwargs):
+        if path is not None and ".block-00002.nc." in str(path):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, path, *args, **kwargs)
+
+    scene = scene_file(tmp_path, QUICK)
+    store = tmp_path / "c.nc"
+    argv = ["campaign", str(scene), "-o", str(store), "--workers", "1", "--chunk", "1", "-q"]
+    with dask.config.set({"multiprocessing.context": "fork"}), monkeypatch.context() as m:
+        m.setattr(xr.Dataset, "to_netcdf", to_netcdf)
+        m.setattr(atomic, "_free_bytes", lambda directory: 5000.0)
+        code = main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert "block-00002.nc': no space left on its file system (the file needs up to" in err[0]
+    assert "4.88 KiB free" in err[0] and "the finished blocks are kept in" in err[0]
+    assert not list(store_paths(store)["blocks"].glob(".*.tmp"))
+    assert main(argv) == 0
+    whole = workbench.run_campaign(QUICK, tmp_path / "whole.nc", workers=1)
+    xr.testing.assert_identical(numbers(workbench.open_run(store)), numbers(whole))
+
+
 def run_cli(argv: list[str], capsys) -> tuple[int, str]:
     """Exit code and stderr of ``workbench ARGV`` (argparse's errors exit via SystemExit)."""
     try:
@@ -323,6 +425,13 @@ def files(tmp_path):
         "norun": tmp_path / "norun.nc",
     }
     paths["huge"].write_text('[model]\nname = "duffing"\n[solver]\nmax_steps = 1e21\n')
+    # the issue's cases, as given there
+    paths["nan"] = tmp_path / "nan.toml"
+    paths["nan"].write_text('[model]\nname="duffing"\n[initial]\nx=nan\n[run]\ncycles=5\n')
+    paths["cycles"] = tmp_path / "cycles.toml"
+    paths["cycles"].write_text('[model]\nname="duffing"\n[run]\ncycles=1000000000\n')
+    paths["lorenz"] = tmp_path / "lorenz.toml"
+    paths["lorenz"].write_text('[model]\nname="lorenz"\n[run]\nduration=1e6\n[record]\ndt=1e-6\n')
     paths["dir"].mkdir()
     workbench.save_run(workbench.simulate(run), paths["file"])
     paths["truncated"].write_bytes(paths["file"].read_bytes()[:3000])
@@ -335,6 +444,21 @@ def files(tmp_path):
 # {out} a file that must not appear (nothing ran).
 CASES = [
     ("max_steps 1e21", "run {huge} -o {out}", 2, "solver.max_steps"),
+    ("initial nan", "run {nan} -o {out}", 2, "initial.x: got nan; must be a finite number"),
+    ("cycles 1e9", "run {cycles} -o {out}", 2, "run.cycles: the records of this run would take"),
+    ("lorenz dt 1e-6", "run {lorenz} -o {out}", 2, "run.duration: the records of this run"),
+    (
+        "max memory",
+        "run {scene} -o {out} --max-memory 10XB",
+        2,
+        "--max-memory: got '10XB'; allowed: a number of bytes > 0",
+    ),
+    (
+        "campaign archive",
+        "campaign {sweep} -o {out} --max-memory 100B",
+        2,
+        "run.cycles: the campaign's archive would take",
+    ),
     ("sweep to run", "run {sweep} -o {out}", 2, "'workbench campaign SCENE -o OUT.nc'"),
     ("workers 0", "campaign {sweep} -o {out} --workers 0", 2, "--workers: got 0; allowed"),
     ("workers -1", "campaign {sweep} -o {out} --workers -1", 2, "--workers: got -1; allowed"),

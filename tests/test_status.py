@@ -93,7 +93,7 @@ def test_campaign_flags_every_status(tmp_path):
         ds = workbench.run_campaign(sweep, tmp_path / "c.nc", workers=1)
     assert ds.status.values.tolist() == [int(s) for s in Status]
     meanings = ds.status.attrs["flag_meanings"].split()
-    assert meanings == [s.label for s in Status] + ["invalid_parameters"]
+    assert meanings == [s.label for s in Status] + ["invalid_parameters", "error"]
     for s in Status:
         point = ds.sel(mode=float(s))
         assert str(point.failure.values).startswith(s.label if s.failed else ""), s

@@ -12,7 +12,16 @@ from __future__ import annotations
 __all__ = ["LAYERS", "layer_of"]
 
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("base", ("workbench._cache", "workbench._layers", "workbench._sources", "workbench._version")),
+    (
+        "base",
+        (
+            "workbench._cache",
+            "workbench._layers",
+            "workbench._progress",
+            "workbench._sources",
+            "workbench._version",
+        ),
+    ),
     ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators
     ("models", ("workbench.models", "workbench._errors")),  # build Problems
     ("scene", ("workbench.scene",)),  # validated against the models

@@ -25,8 +25,9 @@ def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) ->
     Returns
     -------
     xarray.Dataset
-        ``var`` with dims ``(param, strobe, ...)`` (NaN where a point failed) and its units;
-        attributes ``diagram_parameter`` and ``diagram_variable``. Storable as netCDF and drawn
+        ``var`` with dims ``(param, strobe, ...)`` (NaN where a point failed) and its units,
+        the campaign's ``status`` per point (when it has one); attributes
+        ``diagram_parameter`` and ``diagram_variable``. Storable as netCDF and drawn
         by :func:`workbench.plot.bifurcation_figure`.
 
     Raises
@@ -47,5 +48,7 @@ def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) ->
     if var not in runs:
         raise ValueError(f"no variable {var!r}; variables: {sorted(runs.data_vars)}")
     samples = poincare_section(runs, var).transpose(param, "strobe", ...)
+    if "status" in runs:  # which points failed (their samples are NaN), for the figure
+        samples["status"] = runs["status"]
     samples.attrs.update(diagram_parameter=param, diagram_variable=var)
     return samples

@@ -280,7 +280,7 @@ def lyapunov_spectrum(
     Examples
     --------
     >>> r = lyapunov_spectrum({"model": {"name": "lorenz"},
-    ...                        "run": {"duration": 100.0, "transient": 10.0}}, check=False)
+    ...                        "run": {"duration": 400.0, "transient": 10.0}}, check=False)
     >>> [round(float(v), 1) for v in r.exponent]
     [0.9, 0.0, -14.6]
     """

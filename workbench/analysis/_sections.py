@@ -10,10 +10,13 @@ __all__ = ["phase_portrait", "poincare_section", "crossing_section", "rate_of"]
 
 
 def rate_of(ds: xr.Dataset, var: str) -> str:
-    """Name of the variable holding the rate of ``var`` in a run: ``v`` for Duffing's ``x``,
-    ``clearance_vx`` for ``clearance_x`` (the convention of the models); a clear error if none."""
+    """Name of the variable holding the rate of ``var`` in a run: the one its attribute
+    ``rate_variable`` names (the model's declaration, :class:`workbench.models.Quantity`), else
+    by the models' convention (``v`` for Duffing's ``x``, ``clearance_vx`` for
+    ``clearance_x``); a clear error if none is stored."""
     candidates = {"x": "v", "clearance_x": "clearance_vx", "clearance_y": "clearance_vy"}
-    name = candidates.get(var)
+    name = ds[var].attrs.get("rate_variable") if var in ds else None
+    name = name or candidates.get(var)
     if name is None or name not in ds:
         raise KeyError(
             f"no rate variable for {var!r} in the run (looked for {name!r}); record it or pass "

@@ -1,8 +1,17 @@
-"""netCDF archives of runs and campaigns: atomic writing (a temporary file, then a rename),
-exact reading, output paths checked before any work, and the integrity of stores (one writer at
-a time, checksummed files), and the archive format (``format_version`` on every archive; older
-formats upgraded or refused with a message)."""
+"""netCDF archives of runs and campaigns: atomic writing (a temporary file, then a rename that
+never replaces a file unless asked to, a full disk in one line, no stale temporaries), exact
+reading, output paths checked before any work, the integrity of stores (one writer at a time,
+checksummed files), and the archive format (``format_version`` on every archive; older formats
+upgraded or refused with a message)."""
 
+from workbench.archive._atomic import (
+    DiskFull,
+    OutputExists,
+    atomic_path,
+    keep_elsewhere,
+    remove_stale_temporaries,
+    write_text_atomic,
+)
 from workbench.archive._format import stamp_format, upgrade_archive
 from workbench.archive._integrity import (
     ArchiveError,
@@ -14,20 +23,24 @@ from workbench.archive._integrity import (
     sha256_file,
     store_lock,
 )
-from workbench.archive._netcdf import atomic_path, open_run, save_run, write_text_atomic
+from workbench.archive._netcdf import open_run, save_run
 from workbench.archive._outputs import check_output_directory, check_output_file
 
 __all__ = [
     "ArchiveError",
+    "DiskFull",
+    "OutputExists",
     "StoreLocked",
     "StoreWarning",
     "atomic_path",
     "check_output_directory",
     "check_output_file",
     "file_problem",
+    "keep_elsewhere",
     "mapping_diff",
     "open_run",
     "read_manifest",
+    "remove_stale_temporaries",
     "save_run",
     "sha256_file",
     "stamp_format",

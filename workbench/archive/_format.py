@@ -29,8 +29,9 @@ FORMAT1_STATUS = {
     "terminated_early": "terminated",
     "invalid_parameters": "invalid_parameters",
 }
-#: format 2's code of a status label that is not a Status (a campaign point that did not run)
-FORMAT2_EXTRA_FLAGS = {"invalid_parameters": 6}
+#: format 2's codes of the status labels that are not a Status: a campaign point that did not
+#: run, and one whose run raised an exception (workbench.campaign's INVALID and RAISED)
+FORMAT2_EXTRA_FLAGS = {"invalid_parameters": 6, "error": 7}
 
 
 def stamp_format(ds: xr.Dataset) -> xr.Dataset:

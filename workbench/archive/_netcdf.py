@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import os
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from workbench.archive._atomic import atomic_path
 from workbench.archive._format import stamp_format, upgrade_archive
 from workbench.archive._integrity import ArchiveError
 
-__all__ = ["atomic_path", "open_run", "save_run", "write_text_atomic"]
+__all__ = ["open_run", "save_run"]
 
 
 def _encodable(ds: xr.Dataset) -> xr.Dataset:
@@ -30,40 +28,23 @@ def _encodable(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-@contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Context manager for an atomic write: yields a temporary path beside ``path``; on success
-    the file gets the usual permissions (0666 less the umask, not mkstemp's 0600) and is renamed
-    onto ``path``, on failure it is removed and ``path`` is left as it was."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
-    """Write ``text`` to ``path`` atomically (see :func:`atomic_path`)."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(text)
-    return Path(path)
-
-
 def save_run(
-    ds: xr.Dataset, path: str | os.PathLike, *, compress: bool = True, classic: bool = False
+    ds: xr.Dataset,
+    path: str | os.PathLike,
+    *,
+    compress: bool = True,
+    classic: bool = False,
+    overwrite: bool = True,
 ) -> Path:
-    """Write a dataset to netCDF-4 atomically: a temporary file beside ``path``, then a rename.
+    """Write a dataset to netCDF-4 atomically: a temporary file beside ``path``, then a rename
+    (:func:`workbench.archive.atomic_path`).
 
     A reader never sees a half-written file, and an interrupted write leaves any previous file
-    at ``path`` intact. Float variables are zlib-compressed (level 4, lossless) when ``compress``.
+    at ``path`` intact. With ``overwrite=False`` a file that appeared at ``path`` meanwhile is
+    never replaced (checked atomically at the rename; the new file is kept beside it and named
+    in :class:`OutputExists`). A full disk raises :class:`DiskFull`, naming the path, the bytes
+    needed and the bytes free; ``ds`` is untouched, to be written elsewhere. Float variables
+    are zlib-compressed (level 4, lossless) when ``compress``.
     ``classic`` writes the netCDF-3 64-bit-offset format instead (no compression, 64-bit
     integers stored as 32-bit where their values fit) with scipy's writer: faster than netCDF-4
     for a small file, whose cost is mostly HDF5's per-variable overhead (the campaign's block
@@ -78,20 +59,30 @@ def save_run(
     ds = stamp_format(ds)
     encoding = {}
     if classic:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, overwrite=overwrite, size=ds.nbytes) as tmp:
             _encodable(ds).to_netcdf(tmp, engine="scipy", format="NETCDF3_64BIT")
         return path
     if compress:
         for name, var in ds.data_vars.items():
             if var.dtype.kind in "fiu" and var.ndim > 0:
                 encoding[name] = {"zlib": True, "complevel": 4}
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=overwrite, size=ds.nbytes) as tmp:
         _encodable(ds).to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
     return path
 
 
-def open_run(path: str | os.PathLike) -> xr.Dataset:
-    """Read a stored run (or campaign) fully into memory and close the file.
+def open_run(path: str | os.PathLike, *, chunks: int | str | dict | None = None) -> xr.Dataset:
+    """Read a stored run (or campaign).
+
+    Parameters
+    ----------
+    path : str or path
+        A netCDF file written by :func:`save_run` (or :func:`workbench.run_campaign`).
+    chunks : int, "auto", dict or None
+        None (default): read everything into memory and close the file. Otherwise open it
+        lazily: variables are dask arrays in chunks of this size (as :func:`xarray.open_dataset`
+        takes them, e.g. ``{"time": 100_000}``, ``"auto"``, or ``{}`` for one chunk per
+        variable) read when computed; the file stays open until ``ds.close()``.
 
     An archive of an older format (its ``format_version``, :mod:`workbench._version`) is
     upgraded in memory where the change is unambiguous (``upgraded_from_format`` says so).
@@ -104,6 +95,16 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         The file is not a readable netCDF file (truncated, corrupt, or something else), or an
         archive of a newer format, or of an older one that cannot be upgraded (the message
         says what to do).
+
+    Examples
+    --------
+    >>> import workbench, tempfile, pathlib
+    >>> ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 2}})
+    >>> path = workbench.save_run(ds, pathlib.Path(tempfile.mkdtemp()) / "run.nc")
+    >>> lazy = open_run(path, chunks={"time": 50})
+    >>> lazy.x.chunks[0][:2], float(lazy.x.max()) == float(ds.x.max())
+    ((50, 50), True)
+    >>> lazy.close()
     """
     path = Path(path)
     if not path.exists():
@@ -112,10 +113,14 @@ def open_run(path: str | os.PathLike) -> xr.Dataset:
         raise ArchiveError(f"{str(path)!r} is a directory, not a netCDF file")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds = ds.load()
+            if chunks is None:
+                ds = ds.load()
     except (OSError, ValueError, RuntimeError, KeyError, IndexError) as exc:
         raise ArchiveError(
             f"{str(path)!r} is not a readable netCDF file (truncated or corrupt?): "
             f"{type(exc).__name__}: {exc}"
         ) from None
-    return upgrade_archive(ds, str(path))
+    if chunks is None:
+        return upgrade_archive(ds, str(path))
+    # readable: now lazily, where a chunk that names no dim is xarray's own error
+    return upgrade_archive(xr.open_dataset(path, engine="netcdf4", chunks=chunks), str(path))

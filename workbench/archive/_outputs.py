@@ -6,6 +6,7 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
+from workbench.archive._atomic import remove_stale_temporaries
 from workbench.archive._integrity import ArchiveError
 
 __all__ = ["check_output_directory", "check_output_file"]
@@ -31,7 +32,9 @@ def _check_parents(path: Path, argument: str) -> None:
 def check_output_file(
     path: str | os.PathLike, argument: str, *, overwrite: bool = False, flag: str = "--overwrite"
 ) -> Path:
-    """Check, before any work, that a file can be written at ``path``.
+    """Check, before any work, that a file can be written at ``path``; remove the temporary
+    files that writers of ``path`` killed mid-write left beside it
+    (:func:`workbench.archive.remove_stale_temporaries`).
 
     Parameters
     ----------
@@ -61,6 +64,8 @@ def check_output_file(
             f"(e.g. {str(path / 'out.nc')!r})"
         )
     _check_parents(path, argument)
+    if path.parent.is_dir():
+        remove_stale_temporaries(path)  # of a writer killed before (named in a warning)
     if path.exists() and not overwrite:
         raise ArchiveError(
             f"{argument}: {str(path)!r} exists; pass {flag} to replace it, or choose another path"

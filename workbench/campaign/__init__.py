@@ -76,7 +76,8 @@ workers die within a fraction of a second: ``_lifeline``).
 
 The archive carries, per point, ``status`` (int8 with CF ``flag_values``/``flag_meanings``: the
 codes of :class:`workbench.Status`, 0 ok, 1 terminated, 2 max_steps, 3 step_underflow,
-4 non_finite, 5 model_failure, and 6 invalid_parameters), ``failure`` (the message), solver
+4 non_finite, 5 model_failure, 6 invalid_parameters, and 7 error: the point raised an exception,
+which never stops the campaign), ``failure`` (the message), solver
 statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluations``,
 ``solver_events``, ``solver_wall_time``) and ``point_wall_time``; and in its attributes the scene
 TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It

@@ -20,7 +20,13 @@ from workbench.campaign._block import (
 from workbench.campaign._grid import SweepGrid, forcing_period, format_point, parameter_attrs
 from workbench.campaign._store import Store
 from workbench.models import get_model
-from workbench.run import provenance, record_times
+from workbench.run import (
+    PARAMETERS_ATTR,
+    REALISATION_ATTRS,
+    parameter_coords,
+    provenance,
+    record_times,
+)
 from workbench.scene import Scene
 
 __all__ = ["assemble", "summary"]
@@ -54,7 +60,9 @@ def assemble(
     """Build the campaign dataset from its blocks: those in ``computed`` (block index ->
     dataset, as the tasks of this call wrote them) from memory, every other from its file.
 
-    Dims: the parameter dims (scene ``[sweep]`` order), then ``time``, then the model's dims.
+    Dims: the parameter dims (scene ``[sweep]`` order), then ``time``, then the model's dims;
+    every other parameter of the model is a scalar coordinate with its units
+    (:func:`workbench.run.parameter_coords`; ``model_parameters`` lists them, swept first).
     When every point has the same record times they are the 1-D coordinate ``time``; otherwise
     (e.g. a sweep over the forcing frequency) ``time`` is a dim without coordinate and the
     coordinate ``record_time`` (parameter dims, time) holds each point's times, NaN-padded.
@@ -102,6 +110,7 @@ def assemble(
         )
         coords["record_time"][2].pop("standard_name", None)
     model = get_model(scene.model)
+    model_names = {p.name for p in model.parameters}
     for d, (values, attrs) in model.coords(scene.effects).items():
         coords[d] = (d, list(values), dict(attrs))
 
@@ -124,7 +133,14 @@ def assemble(
         data_vars[name] = (pdims, gather(name, missing).astype(dtype), stat_attrs(name))
     data_vars["point_wall_time"] = (pdims, gather("point_wall_time", np.nan), POINT_WALL_ATTRS)
 
+    params = parameter_coords(
+        model, scene.resolved_parameters, skip=pdims, taken=[*coords, *data_vars]
+    )
+    coords.update(params)
+    if "realisation" in scene.run and "realisation" not in pdims:
+        coords["realisation"] = ((), np.int64(scene.run["realisation"]), dict(REALISATION_ATTRS))
     ds = xr.Dataset(data_vars, coords=coords)
+    ds.attrs[PARAMETERS_ATTR] = " ".join([*(d for d in pdims if d in model_names), *params])
     prov = provenance(scene, by="workbench.run_campaign")
     if not scene.title:
         prov["title"] = f"workbench campaign of model {scene.model} over {', '.join(pdims)}"

@@ -7,10 +7,14 @@ file atomically and returns a small summary to the client.
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
+import sys
 import time
+import traceback
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -23,18 +27,31 @@ from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
 
-__all__ = ["BlockTask", "INVALID", "STATUS", "STATS", "failed", "run_block", "worker_start"]
+__all__ = [
+    "BlockTask",
+    "INVALID",
+    "RAISED",
+    "STATUS",
+    "STATS",
+    "failed",
+    "run_block",
+    "worker_start",
+]
 
 # Per-point outcome (int8 ``status``, CF flag_values / flag_meanings): the run's Status, or
-# INVALID for a point that did not run.
+# INVALID for a point that did not run, or RAISED for a point whose run raised an exception.
 INVALID = len(Status)
-STATUS_ATTRS = status_attrs("outcome of the point's run", {INVALID: "invalid_parameters"})
+RAISED = INVALID + 1
+STATUS_ATTRS = status_attrs(
+    "outcome of the point's run", {INVALID: "invalid_parameters", RAISED: "error"}
+)
 STATUS_ATTRS["comment"] = (
     "a workbench.Status of the point's run (ok; terminated: a terminal event ended the run, "
     "records after it NaN; max_steps, step_underflow, non_finite, model_failure: the run failed, "
     "data NaN, solver statistics up to the failure, message in 'failure'), or "
     "invalid_parameters: the model rejects this combination of parameters (the point did not "
-    "run; data NaN)"
+    "run; data NaN), or error: the point raised an exception (a bug or a broken setup; its "
+    "type and message in 'failure'; data NaN)"
 )
 STATUS = dict(
     zip(STATUS_ATTRS["flag_values"].tolist(), STATUS_ATTRS["flag_meanings"].split(), strict=True)
@@ -68,7 +85,9 @@ PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork s
 
 @dataclass(frozen=True)
 class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points, where to write."""
+    """What one task needs: the campaign scene (TOML), which points, where to write, and the
+    module that defines the scene's model when it is not one of workbench's (a user's model,
+    registered when imported: a worker process that did not import it yet does so first)."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -77,6 +96,9 @@ class BlockTask:
     path: str
     campaign_id: str
     block: int
+    max_memory: float | str | None = None  # the memory limit of one point's records
+    model_module: str = ""
+    model_directory: str = ""  # where the module's file lies, for a worker without it on sys.path
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -105,29 +127,46 @@ def failed(status: np.ndarray) -> np.ndarray:
     return (status != Status.OK) & (status != Status.TERMINATED)
 
 
-def _point(scene: Scene, params: dict[str, float]) -> dict:
-    """Run one point; a failed run and rejected parameters become data, anything else raises."""
+def _point(scene: Scene, params: dict[str, float], max_memory=None) -> dict:
+    """Run one point. Its outcome is data: a failed run (its Status), rejected parameters
+    (INVALID) or any exception the point raised (RAISED, with the exception's type and message
+    in ``failure``): one bad point never stops its campaign. An interrupt (KeyboardInterrupt,
+    SystemExit) still stops the block."""
     t0 = time.perf_counter()
     try:
-        ds = simulate(scene.with_parameters(**params), throw=False)
+        ds = simulate(scene.with_parameters(**params), throw=False, max_memory=max_memory)
     except SceneError as exc:
         wall = time.perf_counter() - t0
         out = {"status": INVALID, "failure": f"invalid_parameters: {exc}", "wall": wall}
         return out | {"ds": None, "times": np.zeros(0)}
     except Exception as exc:
-        shown = ", ".join(f"{k}={v:.6g}" for k, v in params.items())
-        raise RuntimeError(
-            f"campaign point {shown} raised {type(exc).__name__}: {exc}. Only a failed run (a "
-            "workbench.Status) or invalid parameters are recorded as a point's outcome; anything "
-            "else is a bug or a broken setup. Finished blocks are kept: fix the cause and run "
-            "the campaign again."
-        ) from exc
+        wall = time.perf_counter() - t0
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        failure = (
+            f"error: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''} "
+            f"(raised at {Path(where.filename).name}:{where.lineno} in {where.name})"
+        )
+        out = {"status": RAISED, "failure": failure, "wall": wall}
+        return out | {"ds": None, "times": np.zeros(0)}
     status = run_status(ds)
     failure = f"{status.label}: {ds.attrs['run_message']}" if status.failed else ""
     if status is Status.TERMINATED:
         failure = "terminated: a terminal event ended the run early"
     out = {"status": int(status), "failure": failure, "ds": ds, "times": ds["time"].values}
     return out | {"wall": time.perf_counter() - t0}
+
+
+def _import_model(module: str, directory: str) -> None:
+    """Import (and so register) a user's model module in this worker: by name, and if the
+    worker's ``sys.path`` lacks it (a fork server started before the caller extended its
+    path), from the directory the caller imported it from."""
+    try:
+        importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if not directory or exc.name != module.split(".")[0]:
+            raise
+        sys.path.insert(0, directory)
+        importlib.import_module(module)
 
 
 def run_block(task: BlockTask) -> dict:
@@ -142,8 +181,12 @@ def run_block(task: BlockTask) -> dict:
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
     wall0 = time.perf_counter()
+    if task.model_module:
+        _import_model(task.model_module, task.model_directory)
     scene = scene_from_toml(task.scene_toml)
-    runs = [_point(scene, dict(zip(task.dims, v, strict=True))) for v in task.values]
+    runs = [
+        _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory) for v in task.values
+    ]
     ds = _block_dataset(scene, task, runs)
     code = code_of(scene)
     ds.attrs.update(

@@ -117,23 +117,34 @@ def _uninterrupted_start() -> Iterator[None]:
     the workers it forks) inherit the block: a terminal's Ctrl-C reaches the campaign alone,
     which stops them. A Ctrl-C that arrives meanwhile (possibly through another thread) is
     raised as KeyboardInterrupt once the start is done: after the fork server's start (it only
-    loads the kernel, compiled beforehand) at most, a few seconds.
+    loads the kernel, compiled beforehand) at most, a few seconds. SIGTERM and SIGHUP, which
+    the command line turns into interrupts, are deferred likewise (not blocked).
     """
-    defer = threading.current_thread() is threading.main_thread()
-    previous = signal.getsignal(signal.SIGINT) if defer else None
-    defer = defer and previous is not None
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        # the Python handlers of SIGINT and of the signals a command turns into interrupts
+        # (SIGTERM, SIGHUP: workbench.cli._signals) are deferred; only SIGINT is blocked (the
+        # processes started here must still die of the SIGTERM that stops them)
+        for sig in _DEFERRED:
+            handler = signal.getsignal(sig)
+            if callable(handler):
+                previous[sig] = handler
     caught: list[int] = []
-    if defer:
-        signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    for sig in previous:
+        signal.signal(sig, lambda signum, frame: caught.append(signum))
     old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
-        if defer:
-            signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         if caught:
+            previous[caught[0]](caught[0], None)  # raises (KeyboardInterrupt, Terminated)
             raise KeyboardInterrupt from None
+
+
+_DEFERRED = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
 
 
 def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, on_done) -> list[dict]:

@@ -5,6 +5,7 @@ computes a block)."""
 from __future__ import annotations
 
 import hashlib
+import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -13,12 +14,21 @@ import numpy as np
 
 from workbench.campaign._errors import CampaignError
 from workbench.models import get_model
-from workbench.run import REALISATION_ATTRS, results_digest
+from workbench.run import (
+    REALISATION_ATTRS,
+    check_memory,
+    parameter_coords,
+    record_count,
+    results_digest,
+    values_per_record,
+    what_to_lower,
+)
 from workbench.scene import RUN_SWEEP_KEYS, Scene
 
 __all__ = [
     "SweepGrid",
     "campaign_id",
+    "check_archive_memory",
     "code_of",
     "expand_sweep",
     "format_point",
@@ -85,13 +95,47 @@ def forcing_period(scene: Scene, grid: SweepGrid, flat: int) -> float | None:
     return get_model(scene.model).forcing_period(params)
 
 
+def check_archive_memory(scene: Scene, grid: SweepGrid, max_memory=None) -> float:
+    """Refuse, before anything runs, a campaign whose assembled archive would exceed the memory
+    limit (:func:`workbench.run.check_memory`): points x the most records of a point x the
+    values of a record (the variables and the record time), 8 bytes each. Each point's own
+    records are checked again when it is prepared. Returns the estimate (bytes)."""
+    model = get_model(scene.model)
+    base = scene.resolved_parameters
+    counts = set()
+    if model.forcing_period(base) is None:
+        counts.add(record_count(scene.run, scene.record, None))
+    else:
+        for values in itertools.product(*grid.values):
+            params = dict(base)
+            params.update(
+                (d, v) for d, v in zip(grid.dims, values, strict=True) if d not in RUN_SWEEP_KEYS
+            )
+            counts.add(record_count(scene.run, scene.record, model.forcing_period(params)))
+    n_time = max(counts)
+    per_record = values_per_record(model, scene.effects, scene.variables)
+    key, lower = what_to_lower(scene.run, scene.record)
+    needed = 8.0 * grid.size * n_time * per_record
+    check_memory(
+        needed,
+        what="the campaign's archive",
+        count=f"{grid.size} points x {n_time:.3g} records x {per_record} values x 8 bytes",
+        key=key,
+        lower=f"{lower}, sweep fewer points",
+        max_memory=max_memory,
+    )
+    return needed
+
+
 def parameter_attrs(scene: Scene, name: str) -> dict[str, str]:
-    """``units`` and ``long_name`` of a model parameter (from its declaration), or of a swept
-    ``[run]`` key (``realisation``)."""
+    """``units``, ``long_name`` and ``comment`` of a model parameter (from its declaration, as a
+    run's coordinate of it has them), or of a swept ``[run]`` key (``realisation``)."""
     if name in RUN_SWEEP_KEYS:
         return dict(REALISATION_ATTRS)
-    p = get_model(scene.model).parameter(name)
-    return {"units": p.units, "long_name": p.long_name}
+    model = get_model(scene.model)
+    model.parameter(name)  # KeyError for a name that is no parameter
+    # the attributes a run gives the parameter's coordinate (units, long name, comment)
+    return parameter_coords(model, {name: 0.0})[name][2]
 
 
 def format_point(point: Mapping[str, float]) -> str:

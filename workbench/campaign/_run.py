@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -13,14 +15,23 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench.archive import open_run, save_run
+from workbench.archive import DiskFull, open_run, save_run
 from workbench.campaign._assemble import assemble
 from workbench.campaign._block import BlockTask, failed
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
-from workbench.campaign._grid import SweepGrid, campaign_id, code_of, expand_sweep, format_point
+from workbench.campaign._grid import (
+    SweepGrid,
+    campaign_id,
+    check_archive_memory,
+    code_of,
+    expand_sweep,
+    format_point,
+)
 from workbench.campaign._schedule import longest_first
 from workbench.campaign._store import Store
+from workbench.models import get_model
+from workbench.run import format_bytes
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["run_campaign", "store_paths"]
@@ -45,6 +56,7 @@ def run_campaign(
     chunk: int | None = None,
     restart: bool = False,
     progress: bool = False,
+    max_memory: float | str | None = None,
 ) -> xr.Dataset:
     """Run every point of a scene's ``[sweep]`` grid in parallel and return one dataset.
 
@@ -78,13 +90,19 @@ def run_campaign(
         it, a store of a different scene or chunk size is refused with the differences named.
     progress : bool
         Show a progress bar over points with an ETA (and the dashboard link of a client).
+    max_memory : float or str, optional
+        Refuse, before anything runs, a campaign whose assembled archive (or one point's
+        records) would take more memory than this (bytes, or text such as ``"16 GiB"``;
+        default: the environment variable ``WORKBENCH_MAX_MEMORY``, else half of this
+        machine's memory): a :class:`workbench.run.MemoryLimitError` that says what to lower.
 
     Returns
     -------
     xarray.Dataset
         The parameter dims first, then ``time`` and the model's dims. Variables: the scene's
         recorded variables (NaN where a point failed), ``status`` (int8 per point: the
-        point's :class:`workbench.Status`, or 6 invalid_parameters; CF flag attributes),
+        point's :class:`workbench.Status`, or 6 invalid_parameters, or 7 error: the point raised
+        an exception; CF flag attributes),
         ``failure`` (message per point, empty if none), ``solver_steps``,
         ``solver_rejected_steps``, ``solver_rhs_evaluations``, ``solver_events``,
         ``solver_wall_time`` (s), ``point_wall_time`` (s), and ``forcing_period`` (s) for a
@@ -106,8 +124,9 @@ def run_campaign(
         Another live process is writing the store (the message names its pid and host). The
         lock is held for the whole call; a lock left by a dead process is taken over.
     RuntimeError
-        A point raised something other than a failed run or invalid parameters (a bug or a
-        broken setup); the blocks finished so far are kept.
+        A worker process died (killed, out of memory); the blocks finished so far are kept.
+        (A point that raises an exception does not stop the campaign: it is flagged ``error``
+        in ``status``, with the exception in ``failure``.)
 
     Warns
     -----
@@ -142,6 +161,7 @@ def run_campaign(
     wall0 = time.perf_counter()
     scene = load_scene(scene)
     grid = expand_sweep(scene)
+    size = check_archive_memory(scene, grid, max_memory)
     workers = _positive_int("workers", workers)
     chunk = _positive_int("chunk", chunk)
     if client is not None and workers is not None:
@@ -150,8 +170,11 @@ def run_campaign(
             "workers; pass one of them, not both"
         )
     st = Store(store)
+    _warn_disk(st, size)
     with st.lock():
-        return _run_locked(scene, grid, st, client, workers, chunk, restart, progress, wall0)
+        return _run_locked(
+            scene, grid, st, client, workers, chunk, restart, progress, wall0, max_memory
+        )
 
 
 def _run_locked(
@@ -164,6 +187,7 @@ def _run_locked(
     restart: bool,
     progress: bool,
     wall0: float,
+    max_memory: float | str | None = None,
 ) -> xr.Dataset:
     """run_campaign while holding the store's lock."""
     if restart:
@@ -190,6 +214,7 @@ def _run_locked(
     blocks = grid.blocks(chunk)
     code = code_of(scene)
     done = st.verified_blocks(manifest, blocks, code)
+    model_module, model_directory = _model_module(scene)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -199,6 +224,9 @@ def _run_locked(
             path=str(st.block_path(i)),
             campaign_id=cid,
             block=i,
+            max_memory=max_memory,
+            model_module=model_module,
+            model_directory=model_directory,
         )
         for i, rng in enumerate(blocks)
         if i not in done
@@ -226,6 +254,8 @@ def _run_locked(
                 on_done=commit,
                 announce=progress,
             )
+        except DiskFull as exc:  # a block's write (in a worker)
+            raise _resumable(exc, st) from None
         finally:
             if bar is not None:
                 bar.close()
@@ -254,11 +284,43 @@ def _run_locked(
         },
         in_memory,
     )
-    save_run(ds, st.archive)
+    try:
+        save_run(ds, st.archive)
+    except DiskFull as exc:
+        raise _resumable(exc, st) from None
     ds = open_run(st.archive)
     if ds.attrs["failed_points"]:
         _warn_failures(ds, grid)
     return ds
+
+
+def _warn_disk(st: Store, size: float) -> None:
+    """Warn when the file system of the store has less room than the blocks and the archive
+    may take (twice the data, uncompressed: an upper bound)."""
+    directory = st.archive.parent
+    while not directory.exists():
+        directory = directory.parent
+    free = shutil.disk_usage(directory).free
+    if free < 2 * size:
+        warnings.warn(
+            CampaignWarning(
+                f"the campaign's blocks and archive may take up to {format_bytes(2 * size)} "
+                f"(uncompressed), and {str(directory)!r} has {format_bytes(free)} free: it may "
+                "stop on a full disk (its finished blocks are kept; free space and run it again)"
+            ),
+            stacklevel=3,
+        )
+
+
+def _resumable(exc: DiskFull, st: Store) -> DiskFull:
+    """A full disk during a campaign, with where its finished work is and how to resume."""
+    return DiskFull(
+        f"{exc}; the finished blocks are kept in {str(st.blocks_dir)!r}: free some space and "
+        "run the campaign again to compute the rest and assemble the archive",
+        exc.path,
+        exc.needed,
+        exc.free,
+    )
 
 
 def _complete_archive(st: Store, scene: Scene, chunk: int | None) -> xr.Dataset | None:
@@ -301,10 +363,23 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
     )
 
 
-def _bar(total: int, initial: int):
-    from tqdm.auto import tqdm
+def _model_module(scene: Scene) -> tuple[str, str]:
+    """The module that defines a user's model (a worker imports it to know the model) and the
+    directory it lies under, or ('', '') for a model of workbench."""
+    module = type(get_model(scene.model)).__module__
+    if module.split(".")[0] == "workbench":
+        return "", ""
+    file = getattr(sys.modules.get(module), "__file__", None)
+    if not file:
+        return module, ""
+    depth = module.count(".") + (Path(file).name == "__init__.py")
+    return module, str(Path(file).resolve().parents[depth])
 
-    return tqdm(total=total, initial=initial, unit="pt", desc="campaign", smoothing=0.05)
+
+def _bar(total: int, initial: int):
+    from workbench._progress import Progress
+
+    return Progress(total, initial=initial, unit="pt", desc="campaign")
 
 
 def store_paths(store: str | os.PathLike) -> dict[str, Path]:

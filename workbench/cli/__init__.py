@@ -6,7 +6,7 @@ the console helpers (``_console``), the exit codes (``_exit_codes``) and one mod
 ``_verify``, ``_kernel``); nothing else in workbench imports it.
 
 Exit codes: :mod:`workbench.cli._exit_codes` (0 ok, 2 invalid input, 3 max_steps, 4 step_underflow
-or non_finite, 5 model_failure, 130 interrupted).
+or non_finite, 5 model_failure, 130 interrupted, 143 terminated by SIGTERM).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import sys
 from workbench._version import FORMAT_VERSION, __version__
 from workbench.cli._console import one_line_warnings
 from workbench.cli._exit_codes import UsageError, exit_code
+from workbench.cli._signals import Terminated, signals_as_interrupts
 
 
 class _Parser(argparse.ArgumentParser):
@@ -65,8 +66,8 @@ _COMMAND_MODULES: tuple[str, ...] = (
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``workbench`` console script; returns the exit code
     (:func:`workbench.cli._exit_codes.exit_code`: 0 ok, 2 invalid input, 3-5 failed runs, 130
-    interrupted). Expected errors (a scene, an argument, a file, a store) are one line on
-    stderr that names what is wrong; warnings are one line each."""
+    interrupted, 143 SIGTERM). Expected errors (a scene, an argument, a file, a store) are one
+    line on stderr that names what is wrong; warnings are one line each."""
     parser = build_parser()
     args = parser.parse_args(argv)
     from workbench.archive import ArchiveError
@@ -75,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     from workbench.solver import SolverError
 
     try:
-        with one_line_warnings(args.command):
+        with signals_as_interrupts(), one_line_warnings(args.command):
             return args.func(args)
     except (SceneError, SolverError, CampaignError, ArchiveError, UsageError) as exc:
         print(f"workbench {args.command}: error: {exc}", file=sys.stderr)
@@ -84,5 +85,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"workbench {args.command}: error: no such file: {exc.filename!r}", file=sys.stderr)
         return exit_code(exc)
     except KeyboardInterrupt as exc:
-        print(f"workbench {args.command}: interrupted", file=sys.stderr)
+        how = f"terminated by {exc.name}" if isinstance(exc, Terminated) else "interrupted"
+        notes = "".join(f"; {n}" for n in getattr(exc, "__notes__", ()))
+        print(f"workbench {args.command}: {how}{notes}", file=sys.stderr)
         return exit_code(exc)

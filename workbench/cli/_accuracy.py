@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 
 from workbench.cli._console import (
-    announce_compile,
+    add_quiet,
+    compile_kernel,
     float_list,
     output_and_figure,
     positive_float,
@@ -25,16 +26,24 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     tolerances = args.tolerances or DEFAULT_TOLERANCES
     out, figure = output_and_figure(args.output, args.overwrite)
     store = out.with_name(out.name + ".runs")
-    announce_compile(scene)
-    wp = accuracy(
-        scene,
-        methods=methods,
-        tolerances=tolerances,
-        progress=not args.quiet,
-        store=store,
-        restart=args.restart,
+    compile_kernel(scene, quiet=args.quiet)
+    try:
+        wp = accuracy(
+            scene,
+            methods=methods,
+            tolerances=tolerances,
+            progress=not args.quiet,
+            store=store,
+            restart=args.restart,
+        )
+    except KeyboardInterrupt as exc:
+        exc.add_note(
+            f"the finished runs are kept in '{store}/': run the same command again to resume"
+        )
+        raise
+    save_with_figure(
+        wp, out, figure, "work-precision study", work_precision_figure, overwrite=args.overwrite
     )
-    save_with_figure(wp, out, figure, "work-precision study", work_precision_figure)
     try:
         r = recommend(wp, args.target)
         print(
@@ -90,5 +99,5 @@ def register_cli(sub) -> None:
     p.add_argument(
         "--overwrite", action="store_true", help="replace an existing study and its figure"
     )
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
     p.set_defaults(func=_cmd_accuracy)

@@ -9,6 +9,7 @@ from pathlib import Path
 import xarray as xr
 
 from workbench.campaign._block import failed
+from workbench.cli._console import add_quiet
 from workbench.cli._exit_codes import UsageError
 
 __all__ = ["register_cli"]
@@ -97,4 +98,5 @@ def register_cli(sub) -> None:
         metavar="DIM=VALUE",
         help="fix another dim (nearest value), e.g. --at omega=1.2; repeatable",
     )
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_bifurcation)

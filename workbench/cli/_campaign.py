@@ -9,8 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
-from workbench.campaign._block import INVALID, STATUS, failed
-from workbench.cli._console import positive_float, positive_int, report_failures
+from workbench.campaign._block import INVALID, RAISED, STATUS, failed
+from workbench.cli._console import (
+    add_quiet,
+    max_memory_option,
+    positive_float,
+    positive_int,
+    report_failures,
+)
 from workbench.cli._exit_codes import worst_exit_code
 
 __all__ = ["campaign_exit_code", "register_cli"]
@@ -38,7 +44,7 @@ def _client(address: str, timeout: float):
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file
     from workbench.campaign import CampaignError, run_campaign, summary
-    from workbench.cli._console import announce_compile
+    from workbench.cli._console import compile_kernel
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -56,7 +62,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             if args.quiet:  # otherwise run_campaign prints it above its progress bar
                 print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
         else:
-            announce_compile(scene)
+            compile_kernel(scene, quiet=args.quiet)
         with warnings.catch_warnings():  # the summary below lists every failed point
             warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
             ds = run_campaign(
@@ -67,7 +73,14 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                 chunk=args.chunk,
                 restart=args.restart,
                 progress=not args.quiet,
+                max_memory=args.max_memory,
             )
+    except KeyboardInterrupt as exc:
+        exc.add_note(
+            f"the finished blocks are kept in '{args.output}.blocks/': run the same command "
+            "again to compute the rest"
+        )
+        raise
     finally:
         if client is not None:
             client.close()
@@ -87,9 +100,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def campaign_exit_code(flags) -> int:
-    """The largest exit code among a campaign's point flags (a run's Status, or
-    invalid_parameters: invalid input)."""
-    return worst_exit_code(flags, INVALID)
+    """The largest exit code among a campaign's point flags (a run's Status;
+    invalid_parameters: invalid input; error: the point raised an exception)."""
+    return worst_exit_code(flags, INVALID, RAISED)
 
 
 def register_cli(sub) -> None:
@@ -118,5 +131,6 @@ def register_cli(sub) -> None:
     p.add_argument(
         "--restart", action="store_true", help="discard a stored campaign and start afresh"
     )
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
+    max_memory_option(p, "the campaign's archive (or one point's records)")
     p.set_defaults(func=_cmd_campaign)

@@ -6,7 +6,8 @@ code  class                       outcomes
 ====  ==========================  ==============================================================
 0     success                     ``ok``; ``terminated`` (an event stopped the run as the model
                                   intends)
-1     unexpected error            any other exception (a bug or a broken setup; Python's own)
+1     unexpected error            any other exception (a bug or a broken setup; Python's own);
+                                  a campaign point flagged ``error`` (it raised one)
 2     invalid input               a scene error, a refused campaign store (another scene, or
                                   in use by another process), a missing or unreadable file, an
                                   output that exists (without ``--overwrite``) or cannot be
@@ -15,7 +16,8 @@ code  class                       outcomes
 3     solver limit                ``max_steps`` (raise ``solver.max_steps``)
 4     integration failure         ``step_underflow``, ``non_finite``
 5     model failure               ``model_failure`` (a state outside the model's domain)
-130   interrupted                 Ctrl-C
+130   interrupted                 Ctrl-C (SIGINT)
+143   terminated                  SIGTERM (128 + the signal's number, as a shell reports it)
 ====  ==========================  ==============================================================
 
 A run that fails is still written (records before the failure, its status in ``run_status``);
@@ -55,8 +57,8 @@ def exit_code(outcome: Status | BaseException) -> int:
         return _BY_STATUS[outcome]
     if isinstance(outcome, SolverError):
         return _BY_STATUS[outcome.status]
-    if isinstance(outcome, KeyboardInterrupt):
-        return 130
+    if isinstance(outcome, KeyboardInterrupt):  # Ctrl-C, or a Terminated signal
+        return 128 + getattr(outcome, "signum", 2)
     if isinstance(outcome, SceneError | CampaignError | ArchiveError | UsageError):
         return EXIT_INVALID
     if isinstance(outcome, FileNotFoundError):
@@ -64,11 +66,13 @@ def exit_code(outcome: Status | BaseException) -> int:
     return 1
 
 
-def worst_exit_code(flags, invalid: int | None = None) -> int:
-    """The largest exit code among int status flags (a run's :class:`Status`, or ``invalid``,
-    the flag of a point that did not run: invalid input)."""
+def worst_exit_code(flags, invalid: int | None = None, raised: int | None = None) -> int:
+    """The largest exit code among int status flags (a run's :class:`Status`; ``invalid``, the
+    flag of a point that did not run: invalid input; ``raised``, the flag of a point that
+    raised an exception: 1, an unexpected error)."""
+    extra = {invalid: EXIT_INVALID, raised: 1}
     codes = [
-        EXIT_INVALID if invalid is not None and f == invalid else exit_code(Status(int(f)))
+        extra[f] if f in extra else exit_code(Status(f))
         for f in set(int(x) for x in getattr(flags, "flat", flags))
     ]
     return max(codes, default=0)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from workbench.cli._console import add_quiet
+
 __all__ = ["register_cli"]
 
 _PARTS = ("kernel", "steps", "implicit", "jacobian", "tangent")
@@ -54,4 +56,5 @@ def register_cli(sub) -> None:
         "steps, Radau IIA's step (implicit), the Jacobian, or the tangent system's hooks",
     )
     p.add_argument("--path", action="store_true", help="print only the file's path")
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_kernel)

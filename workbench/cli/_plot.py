@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from workbench.cli._console import add_quiet
 from workbench.cli._exit_codes import UsageError
 
 __all__ = ["register_cli"]
@@ -22,7 +23,8 @@ def _cmd_plot(args: argparse.Namespace) -> int:
             f"{args.run!r} has no variables over time: it is not a run or a campaign archive "
             "(write one with 'workbench run' or 'workbench campaign')"
         )
-    names = run_figure_names(ds.attrs.get("model"), len(series), campaign=campaign)
+    strobe = "forcing_period" in ds.attrs and "samples_per_period" in ds.attrs
+    names = run_figure_names(ds.attrs.get("model"), len(series), campaign=campaign, strobe=strobe)
     check_output_directory(args.output, "-o/--output", names, overwrite=args.overwrite)
     for path in run_figures(ds, Path(args.output)):
         print(f"figure: {path}")
@@ -35,10 +37,12 @@ def register_cli(sub) -> None:
         "plot",
         help="figures (PNG) of a stored run or campaign",
         description="Write the standard figures of a stored run as PNG files: its time series "
-        "(up to 8 panels per figure) and the model's overview; of a campaign, every variable "
-        "against the swept parameter.",
+        "(up to 8 panels per figure), phase portraits, stroboscopic Poincaré sections (a forced "
+        "run) and the model's overview; of a campaign, every variable against the swept "
+        "parameter, failed points marked.",
     )
     p.add_argument("run", help="netCDF run or campaign written by 'workbench run | campaign'")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory for the PNGs")
     p.add_argument("--overwrite", action="store_true", help="replace existing figures")
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_plot)

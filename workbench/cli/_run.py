@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from workbench.cli._console import announce_compile
+from workbench.cli._console import add_quiet, compile_kernel, max_memory_option, save_or_keep
 from workbench.cli._exit_codes import exit_code
 
 __all__ = ["register_cli"]
@@ -19,7 +19,11 @@ def _check_outputs(scene, args: argparse.Namespace) -> None:
 
     check_output_file(args.output, "-o/--output", overwrite=args.overwrite)
     if args.figures:
-        names = run_figure_names(scene.model, len(scene.variables))
+        from workbench.models import get_model
+
+        forced = get_model(scene.model).forcing_period(scene.resolved_parameters) is not None
+        strobe = forced and ("cycles" in scene.run or "samples_per_period" in scene.record)
+        names = run_figure_names(scene.model, len(scene.variables), strobe=strobe)
         check_output_directory(args.figures, "--figures", names, overwrite=args.overwrite)
 
 
@@ -37,7 +41,6 @@ def _check_summary(attrs: dict) -> str:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from workbench.archive import save_run
     from workbench.models import get_model
     from workbench.run import run_status, simulate
     from workbench.scene import SceneError, load_scene
@@ -50,14 +53,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
             "sweep with 'workbench campaign SCENE -o OUT.nc', or remove the [sweep] table",
         )
     _check_outputs(scene, args)
-    announce_compile(scene)
-    ds = simulate(scene, progress=not args.quiet, throw=False)
-    out = save_run(ds, args.output)
+    compiled = compile_kernel(scene, quiet=args.quiet)
+    ds = simulate(scene, progress=not args.quiet, throw=False, max_memory=args.max_memory)
+    out = save_or_keep(ds, args.output, overwrite=args.overwrite, what="run")
     a = ds.attrs
     status = run_status(ds)
     simulated = float(ds.time[-1]) if ds.sizes["time"] else float("nan")
+    compile_note = "" if compiled is None else f" (after compiling the kernel in {compiled:.0f} s)"
     print(
-        f"{scene.model}: simulated {simulated:.6g} s in {a['solver_wall_time']:.3g} s wall, "
+        f"{scene.model}: simulated {simulated:.6g} s in {a['solver_wall_time']:.3g} s of "
+        f"integration{compile_note}, "
         f"{a['solver_steps']} steps ({a['solver_rejected_steps']} rejected), "
         f"{a['solver_rhs_evaluations']} rhs evaluations, {a['solver_events']} events, "
         f"status {status.label}{_check_summary(a)}"
@@ -83,6 +88,7 @@ def register_cli(sub) -> None:
     p.add_argument("scene", help="scene file (TOML)")
     p.add_argument("-o", "--output", required=True, help="netCDF file to write (atomically)")
     p.add_argument("--figures", metavar="DIR", help="also write the run's figures (PNG) here")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    max_memory_option(p, "the run's records")
     p.set_defaults(func=_cmd_run)

@@ -5,28 +5,37 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time as _time
+from pathlib import Path
 
-from workbench.cli._console import positive_int, report_failures
-from workbench.cli._exit_codes import worst_exit_code
+from workbench.cli._console import add_quiet, compile_kernel, positive_int, report_failures
+from workbench.cli._exit_codes import UsageError, worst_exit_code
 
 
 def _failed_runs(ds) -> tuple[int, int]:
     """Failed runs of a study (read from its case archives) and their worst exit code."""
     from workbench.archive import open_run
-    from workbench.campaign._block import INVALID, failed
+    from workbench.campaign._block import INVALID, RAISED, failed
 
     n, code = 0, 0
     for archive in json.loads(ds.attrs["archives"]).values():
         status = open_run(archive)["status"].values
         n += int(failed(status).sum())
-        code = max(code, worst_exit_code(status, INVALID))
+        code = max(code, worst_exit_code(status, INVALID, RAISED))
     return n, code
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
-    from workbench.study import available_studies, run_study, write_report
+    from workbench.study import available_studies, load_study, run_study, write_report
 
+    if args.no_progress:
+        print(
+            "workbench study: warning: --no-progress is deprecated; use -q (--quiet), as every "
+            "command does",
+            file=sys.stderr,
+        )
+        args.quiet = True
     if args.name == "report":
         print(f"report: {write_report(args.output)}")
         return 0
@@ -35,16 +44,24 @@ def _cmd_study(args: argparse.Namespace) -> int:
             print(name)
         return 0
     names = available_studies() if args.name == "all" else [args.name]
+    unknown = [n for n in names if n not in available_studies() and not Path(n).is_dir()]
+    if unknown:
+        raise UsageError(
+            f"no study {unknown[0]!r}; available: {', '.join(available_studies())} (or 'all', "
+            "'report', 'list', or the directory of a study)"
+        )
     t_all = _time.perf_counter()
     runs, n_failed, code = 0, 0, 0
     for name in names:
         t0 = _time.perf_counter()
+        for scene in load_study(name).cases.values():  # a cold cache: say so, then compile
+            compile_kernel(scene, quiet=args.quiet)
         ds = run_study(
             name,
             out=args.output,
             quick=args.quick,
             workers=args.workers,
-            progress=not args.no_progress,
+            progress=not args.quiet,
         )
         runs += int(ds.attrs["runs"])
         failed, worst = _failed_runs(ds)
@@ -94,5 +111,7 @@ def register_cli(sub) -> None:
     p.add_argument(
         "--workers", type=positive_int, help="processes for campaign cases (default: all)"
     )
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_quiet(p)
+    # the flag before -q, kept for old scripts (deprecated: says so when used)
+    p.add_argument("--no-progress", action="store_true", help=argparse.SUPPRESS)
     p.set_defaults(func=_cmd_study)

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from workbench.cli._console import float_list, output_and_figure, positive_float, save_with_figure
+from workbench.cli._console import (
+    add_quiet,
+    float_list,
+    output_and_figure,
+    positive_float,
+    save_with_figure,
+)
 from workbench.cli._exit_codes import UsageError
 
 
@@ -74,7 +80,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
         ds = verify(scene, horizon=args.horizon, steps=args.steps, record_dt=args.record_dt)
     except (ValueError, RuntimeError, ImportError) as exc:
         raise UsageError(str(exc)) from None
-    save_with_figure(ds, out, figure, "verification", verification_figure)
+    save_with_figure(ds, out, figure, "verification", verification_figure, overwrite=args.overwrite)
     _print_tables(ds)
     print(
         "\nwall time [s]: "
@@ -107,4 +113,5 @@ def register_cli(sub) -> None:
         "--record-dt", type=positive_float, help="record interval, s (default: coarsest step)"
     )
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_verify)

@@ -1,17 +1,45 @@
-"""Models: the systems a scene can simulate, looked up by name.
+"""Models: the systems a scene can simulate, looked up by name, and how to write your own.
 
 >>> from workbench.models import get_model
 >>> get_model("lorenz").parameter("rho").default
 28.0
+
+A model is a module with compiled hooks and a registered :class:`Model` subclass that declares
+the parameters (:class:`Parameter`, SI units), the state and outputs (:class:`Quantity`) and,
+when the defaults do not fit, builds the solver's :class:`Problem`. Everything it needs is
+public: ``from workbench.models import Model, Parameter, Quantity, register`` (and
+``Problem``, ``Effect``, ``EVENT_INSIDE_STEP``), with :mod:`workbench.models.no_events` for a
+system without events. The guide with worked examples (Rössler with its Lyapunov spectrum, a
+bouncing ball with events): ``docs/own-models.md``.
+
+The hooks, in the model's module, compiled with ``numba.njit(cache=True)``; the integration
+loop imports them by name from the module (``Model.hooks``, default the class's module):
+
+``rhs(t, y, p, ip, aux, work, dydt) -> int``
+    Write dy/dt into ``dydt``; return 0, or a positive model failure code (the step is
+    retried smaller; if it persists the run fails with ``Status.MODEL_FAILURE``).
+``event_values(t, y, p, ip, aux, work, g) -> None``
+    Write the event functions g_k; event k fires where g_k crosses zero in the direction of
+    ``Model.event_directions[k]``.
+``apply_event(k, t, y, p, ip, aux, work) -> int``
+    Apply event k in place (``y``, ``aux``); return 1 to stop the run (status ``terminated``),
+    else 0.
+``jacobian(t, y, p, ip, aux, work, J) -> int`` (optional)
+    Write dF/dy into the n x n array ``J``; without it, central differences of ``rhs``.
+
+``t`` is the time (s), ``y`` the state (state units), ``p`` the float parameters (by default
+the declared parameters in order), ``ip`` integer parameters, ``aux`` the discrete state
+(changed only by events), ``work`` a scratch array of ``Problem.work_size`` floats.
 """
 
 from __future__ import annotations
 
 import importlib
 
-from workbench.models._base import Effect, Model, Parameter, Problem, Quantity
+from workbench.models._base import EVENT_INSIDE_STEP, Effect, Model, Parameter, Problem, Quantity
 
 __all__ = [
+    "EVENT_INSIDE_STEP",
     "Effect",
     "Model",
     "Parameter",
@@ -37,7 +65,14 @@ _BUILTIN = {
 
 
 def register(cls: type[Model]) -> type[Model]:
-    """Class decorator: make a model available to scenes under ``cls.name``."""
+    """Class decorator: make a model available to scenes under ``cls.name`` (a name of a
+    built-in model is refused for any other class; registering a name again replaces it)."""
+    builtin = _BUILTIN.get(cls.name)
+    if builtin is not None and not (cls.__module__ + ".").startswith(builtin + "."):
+        raise ValueError(
+            f"model name {cls.name!r} is taken by the built-in model of {builtin}; choose "
+            f"another name (built-in: {', '.join(sorted(_BUILTIN))})"
+        )
     _REGISTRY[cls.name] = cls
     return cls
 

@@ -3,7 +3,7 @@
 A model is a small object (one per system) that the scene validates against and that builds the
 solver's :class:`~workbench.solver.Problem` for a run. Everything it can put in a dataset is
 declared once as a :class:`Quantity` with units and a description, so that what comes out is
-self-described.
+self-described. The guide to writing one: :mod:`workbench.models` and ``docs/own-models.md``.
 """
 
 from __future__ import annotations
@@ -24,12 +24,16 @@ __all__ = ["EVENT_INSIDE_STEP", "Effect", "Model", "Parameter", "Problem", "Quan
 
 @dataclass(frozen=True)
 class Quantity:
-    """A state or output variable: name, UDUNITS units, long name, extra dims beyond ``time``."""
+    """A state or output variable: name, UDUNITS units, long name, extra dims beyond ``time``,
+    and optionally the name of the variable that holds its rate of change (``rate``, e.g.
+    ``"v"`` for a displacement ``x``): phase portraits and Poincaré sections pair the two, and
+    the dataset says so in the variable's attribute ``rate_variable``."""
 
     name: str
     units: str
     long_name: str
     dims: tuple[str, ...] = ()
+    rate: str | None = None
 
 
 @dataclass(frozen=True)
@@ -77,7 +81,12 @@ class Model:
     """Base class of a model. Subclasses set the class attributes and override the methods.
 
     Adding a model means writing one subclass and its compiled hooks, and registering it with
-    :func:`workbench.models.register`; the solver is never touched.
+    :func:`workbench.models.register`; the solver is never touched. A system whose state,
+    parameters and events are fixed needs no method at all: the default :meth:`problem` passes
+    the parameters to the hooks in their declared order (``p[k]`` is the k-th of
+    :attr:`parameters`), starts from :attr:`initial_values` overridden by the scene's
+    ``[initial]``, and takes the hooks from :attr:`hooks` (default: the module that defines the
+    class); :attr:`forcing_frequency` names the parameter of a periodic forcing.
     """
 
     name: ClassVar[str]
@@ -89,6 +98,19 @@ class Model:
     #: model whose do overrides :meth:`states` and :meth:`outputs` instead)
     fixed_states: ClassVar[tuple[Quantity, ...] | None] = None
     fixed_outputs: ClassVar[tuple[Quantity, ...]] = ()
+    #: module defining the compiled hooks ``rhs``, ``event_values``, ``apply_event`` (and
+    #: optionally ``jacobian``); None: the module that defines the model's class
+    hooks: ClassVar[str | None] = None
+    #: initial value of each state (state units) unless the scene's ``[initial]`` gives one;
+    #: a state not named here starts at 0
+    initial_values: ClassVar[Mapping[str, float]] = {}
+    #: per event function: +1 fires on a rising zero, -1 on a falling one, 0 on both
+    event_directions: ClassVar[tuple[int, ...]] = ()
+    #: initial discrete state ``aux`` (changed only by ``apply_event``; recorded with the run)
+    initial_aux: ClassVar[tuple[float, ...]] = ()
+    #: name of the parameter that is the angular frequency (rad s-1) of a periodic forcing:
+    #: the forcing period is 2 pi / that value; None for an autonomous system
+    forcing_frequency: ClassVar[str | None] = None
 
     # -- declarations -------------------------------------------------------------------------
     def parameter(self, name: str) -> Parameter:
@@ -140,8 +162,11 @@ class Model:
         return ""
 
     def forcing_period(self, params: Mapping[str, float]) -> float | None:
-        """Period of the external forcing, s; None for an autonomous system."""
-        return None
+        """Period of the external forcing, s; None for an autonomous system (default: 2 pi /
+        the parameter :attr:`forcing_frequency`, if the model names one)."""
+        if self.forcing_frequency is None:
+            return None
+        return 2.0 * math.pi / params[self.forcing_frequency]
 
     def validate(self, params: Mapping[str, float], effects: Mapping[str, Any]) -> None:
         """Cross-field checks; raise :class:`workbench.SceneError` naming the key."""
@@ -154,8 +179,33 @@ class Model:
         initial: Mapping[str, float],
         requested: tuple[str, ...],
     ) -> Problem:
-        """The compiled problem for one run."""
-        raise NotImplementedError
+        """The compiled problem for one run.
+
+        The default serves a model with fixed states (:attr:`fixed_states`): the hooks of
+        :attr:`hooks`, ``p`` = the parameters in their declared order, ``y0`` from
+        :attr:`initial_values` and ``initial``, :attr:`event_directions` and
+        :attr:`initial_aux`. Override it to pass other arrays (integer parameters ``ip``, a
+        scratch array ``work``, per-state tolerance scales ``atol_scale``, model failure
+        messages), or a state that depends on the effects.
+        """
+        hooks = self.hooks or type(self).__module__
+        if hooks == "__main__":
+            raise TypeError(
+                f"model {self.name!r} is defined in __main__ (a script run directly or a "
+                "notebook): its compiled hooks must live in an importable module, which the "
+                "generated kernel imports by name; put the model in a file (e.g. "
+                f"{self.name}_model.py) beside the script and import it"
+            )
+        states = self.states(effects)
+        y0 = [float(initial.get(q.name, self.initial_values.get(q.name, 0.0))) for q in states]
+        return Problem(
+            hooks=hooks,
+            states=states,
+            y0=np.array(y0),
+            p=np.array([float(params[p.name]) for p in self.parameters]),
+            aux0=np.array(self.initial_aux, dtype=np.float64),
+            event_direction=np.array(self.event_directions, dtype=np.int64),
+        )
 
     def derive(
         self,

@@ -151,8 +151,12 @@ def joint_outputs(effects: Mapping[str, Any]) -> list[Quantity]:
     """The per-joint output variables (dim ``joint``) of a mechanism with clearances."""
     jd = ("joint",)
     out = [
-        Quantity("clearance_x", "m", "journal centre relative to bearing centre, x", jd),
-        Quantity("clearance_y", "m", "journal centre relative to bearing centre, y", jd),
+        Quantity(
+            "clearance_x", "m", "journal centre relative to bearing centre, x", jd, "clearance_vx"
+        ),
+        Quantity(
+            "clearance_y", "m", "journal centre relative to bearing centre, y", jd, "clearance_vy"
+        ),
         Quantity("clearance_vx", "m s-1", "rate of the clearance vector, x", jd),
         Quantity("clearance_vy", "m s-1", "rate of the clearance vector, y", jd),
         Quantity("eccentricity", "m", "eccentricity of the journal", jd),

@@ -65,7 +65,7 @@ class BouncingBall(Model):
         ),
     )
     fixed_states = (
-        Quantity("h", "m", "height above the floor"),
+        Quantity("h", "m", "height above the floor", rate="v"),
         Quantity("v", "m s-1", "velocity"),
     )
     fixed_outputs = (

@@ -11,9 +11,8 @@ import math
 import numpy as np
 from numba import njit
 
-from workbench.models import register
-from workbench.models._base import Model, Parameter, Problem, Quantity
-from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+from workbench.models import Model, Parameter, Problem, Quantity, register
+from workbench.models.no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
 @njit(cache=True)
@@ -55,7 +54,7 @@ class Duffing(Model):
         Parameter("v0", 0.0, "m s-1", "initial velocity"),
     )
     fixed_states = (
-        Quantity("x", "m", "displacement"),
+        Quantity("x", "m", "displacement", rate="v"),
         Quantity("v", "m s-1", "velocity"),
     )
 

@@ -90,8 +90,8 @@ class FreeJournal(Model):
         Parameter("speed", 0.5, "m s-1", "initial radial speed (along +x from the centre)"),
     )
     fixed_states = (
-        Quantity("x", "m", "journal centre x"),
-        Quantity("y", "m", "journal centre y"),
+        Quantity("x", "m", "journal centre x", rate="vx"),
+        Quantity("y", "m", "journal centre y", rate="vy"),
         Quantity("vx", "m s-1", "journal velocity x"),
         Quantity("vy", "m s-1", "journal velocity y"),
     )

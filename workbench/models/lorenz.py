@@ -9,9 +9,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from workbench.models import register
-from workbench.models._base import Model, Parameter, Problem, Quantity
-from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+from workbench.models import Model, Parameter, Problem, Quantity, register
+from workbench.models.no_events import apply_event, event_values  # noqa: F401 (its hooks)
 
 
 @njit(cache=True)

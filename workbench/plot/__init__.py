@@ -13,7 +13,14 @@ from workbench.plot._analysis import (
     poincare_figure,
     zero_one_figure,
 )
-from workbench.plot._base import register_overview
+from workbench.plot._base import display_scale, register_overview, wrap_title
+from workbench.plot._failures import failure_note, mark_failed, run_status_note
+from workbench.plot._phase import (
+    CoarseSamplingWarning,
+    coarse_sampling,
+    run_phase_figure,
+    run_poincare_figure,
+)
 from workbench.plot._runs import (
     PANELS_PER_FIGURE,
     campaign_figure,
@@ -26,6 +33,15 @@ from workbench.plot._verify import verification_figure
 
 __all__ = [
     "PANELS_PER_FIGURE",
+    "CoarseSamplingWarning",
+    "coarse_sampling",
+    "display_scale",
+    "failure_note",
+    "mark_failed",
+    "run_phase_figure",
+    "run_poincare_figure",
+    "run_status_note",
+    "wrap_title",
     "bifurcation_figure",
     "campaign_figure",
     "embedding_figure",

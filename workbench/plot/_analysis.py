@@ -3,10 +3,14 @@ convergence, 0-1 test and bifurcation diagrams. Axis labels carry the units."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, plt
+from workbench.plot._base import axis_label, display_scale, plain_ticks, plt
+from workbench.plot._failures import mark_failed
+from workbench.plot._phase import COARSE_JUMP, CoarseSamplingWarning, coarse_sampling
 
 __all__ = [
     "phase_figure",
@@ -20,16 +24,34 @@ __all__ = [
 
 def phase_figure(portrait: xr.Dataset, section: xr.Dataset | None = None) -> plt.Figure:
     """Phase portrait (from :func:`workbench.analysis.phase_portrait`), with the stroboscopic
-    points of ``section`` (a Dataset with the same two variables) on top when given."""
+    points of ``section`` (a Dataset with the same two variables) on top when given. A series
+    too coarse for its fast changes (impacts drawn as straight edges) is said in the title and
+    warned about (:class:`workbench.plot.CoarseSamplingWarning`)."""
     fig, ax = plt.subplots(figsize=(5.5, 4.5))
-    ax.plot(portrait.value, portrait.rate, lw=0.3, color="0.4", label="trajectory")
+    fx, ux = display_scale(portrait.value.values, portrait.value.attrs.get("units"))
+    fy, uy = display_scale(portrait.rate.values, portrait.rate.attrs.get("units"))
+    ax.plot(portrait.value * fx, portrait.rate * fy, lw=0.3, color="0.4", label="trajectory")
     if section is not None:
-        ax.plot(section["value"], section["rate"], "r.", ms=3, label="Poincaré section")
+        ax.plot(section["value"] * fx, section["rate"] * fy, "r.", ms=3, label="Poincaré section")
         ax.legend(fontsize=8)
-    ax.set_xlabel(axis_label(portrait.value))
-    ax.set_ylabel(axis_label(portrait.rate))
-    ax.set_title(f"phase portrait of {portrait.attrs.get('variable', '')}", fontsize=9)
+    ax.set_xlabel(axis_label(portrait.value, ux))
+    ax.set_ylabel(axis_label(portrait.rate, uy))
+    title = f"phase portrait of {portrait.attrs.get('variable', '')}"
+    worst, when = coarse_sampling(portrait.value, portrait.rate)
+    if worst > COARSE_JUMP:
+        warnings.warn(
+            CoarseSamplingWarning(
+                f"the phase portrait of {portrait.attrs.get('variable', '')!r} is drawn from "
+                f"records too coarse for its fastest changes: {100 * worst:.0f} % of the range "
+                f"between two records (at t = {when:.4g} s); impacts appear as straight edges: "
+                "record more samples per period"
+            ),
+            stacklevel=2,
+        )
+        title += "\n(coarse records: straight edges hide what happens within a record step)"
+    ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
+    plain_ticks(ax)
     fig.tight_layout()
     return fig
 
@@ -37,13 +59,16 @@ def phase_figure(portrait: xr.Dataset, section: xr.Dataset | None = None) -> plt
 def poincare_figure(value: xr.DataArray, rate: xr.DataArray) -> plt.Figure:
     """Stroboscopic Poincaré map: one point per forcing period."""
     fig, ax = plt.subplots(figsize=(5.5, 4.5))
-    ax.plot(value, rate, ".", ms=3)
-    ax.set_xlabel(axis_label(value))
-    ax.set_ylabel(axis_label(rate))
+    fx, ux = display_scale(value.values, value.attrs.get("units"))
+    fy, uy = display_scale(rate.values, rate.attrs.get("units"))
+    ax.plot(value * fx, rate * fy, ".", ms=3)
+    ax.set_xlabel(axis_label(value, ux))
+    ax.set_ylabel(axis_label(rate, uy))
     ax.set_title(
         f"stroboscopic Poincaré map ({value.sizes.get('strobe', value.size)} periods)", fontsize=9
     )
     ax.grid(alpha=0.3)
+    plain_ticks(ax)
     fig.tight_layout()
     return fig
 
@@ -75,7 +100,7 @@ def embedding_figure(
         axes[2].plot(cao.dimension, cao.E2, "s--", label="E2")
         axes[2].axvline(int(cao.dim), color="r", ls="--", label=f"dim {int(cao.dim)}")
         axes[2].set_xlabel(axis_label(cao.dimension))
-        axes[2].set_ylabel("E1, E2 [1]")
+        axes[2].set_ylabel("E1, E2")
         axes[2].set_title("Cao (1997)", fontsize=8)
     for ax in axes:
         ax.legend(fontsize=7)
@@ -162,19 +187,27 @@ def zero_one_figure(result: xr.Dataset) -> plt.Figure:
 
 def bifurcation_figure(diagram: xr.Dataset, *, scale: float = 1.0, xlabel: str | None = None):
     """The familiar scatter of a bifurcation diagram (from
-    :func:`workbench.analysis.bifurcation_diagram`): strobe samples over the parameter."""
+    :func:`workbench.analysis.bifurcation_diagram`): strobe samples over the parameter. Failed
+    points (the diagram's ``status``) are marked by red crosses on the bottom edge at their
+    parameter values, counted in the legend and named in the title."""
     param = diagram.attrs["diagram_parameter"]
     samples = diagram[diagram.attrs["diagram_variable"]]
     other = [d for d in samples.dims if d != param]
     da = samples.transpose(param, *other)
     x = np.broadcast_to(da[param].values.reshape((-1,) + (1,) * len(other)), da.shape)
-    y = da.values
+    factor, units = display_scale(da.values, da.attrs.get("units"))
+    y = da.values * factor
     keep = np.isfinite(y)
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ax.plot(x[keep] * scale, y[keep], ".", ms=1.5, color="k", alpha=0.6)
+    note = mark_failed(ax, diagram, param, scale=scale)
+    if note:
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0, -0.14))
     ax.set_xlabel(xlabel or axis_label(da[param]))
-    ax.set_ylabel(axis_label(da))
-    ax.set_title(f"bifurcation diagram of {da.name} over {param}", fontsize=9)
+    ax.set_ylabel(axis_label(da, units))
+    title = f"bifurcation diagram of {da.name} over {param}"
+    ax.set_title(f"{title}\n{note}" if note else title, fontsize=9)
     ax.grid(alpha=0.3)
+    plain_ticks(ax)
     fig.tight_layout()
     return fig

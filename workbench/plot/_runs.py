@@ -4,14 +4,23 @@ campaign (every stored variable against the swept parameter)."""
 from __future__ import annotations
 
 import math
-import textwrap
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
-from workbench.plot._base import axis_label, overview, plt
+from workbench.plot._base import (
+    axis_label,
+    display_scale,
+    overview,
+    plain_ticks,
+    plt,
+    units_label,
+    wrap_title,
+)
+from workbench.plot._failures import failure_note, mark_failed, run_status_note
+from workbench.plot._phase import run_phase_figure, run_poincare_figure, strobed
 
 __all__ = [
     "PANELS_PER_FIGURE",
@@ -36,13 +45,21 @@ def _pages(names: list[str]) -> list[list[str]]:
     return [names[i : i + PANELS_PER_FIGURE] for i in range(0, len(names), PANELS_PER_FIGURE)]
 
 
-def run_figure_names(model: str | None, n_series: int, *, campaign: bool = False) -> list[str]:
+def run_figure_names(
+    model: str | None, n_series: int, *, campaign: bool = False, strobe: bool = False
+) -> list[str]:
     """File names :func:`run_figures` writes for a run (or a campaign) of ``model`` with
     ``n_series`` variables over time: known before the run, so that a command can refuse an
-    existing file before it simulates anything."""
+    existing file before it simulates anything. A run with two or more series also gets its
+    phase portraits (``<model>_phase.png``) and, with stroboscopic samples (``strobe``: a
+    forced run), its Poincaré sections (``<model>_poincare.png``)."""
     stem = f"{model or 'run'}_{'campaign' if campaign else 'timeseries'}"
     pages = max(1, math.ceil(n_series / PANELS_PER_FIGURE))
     names = [f"{stem}.png"] + [f"{stem}-{k}.png" for k in range(2, pages + 1)]
+    if not campaign and n_series >= 2:
+        names.append(f"{model or 'run'}_phase.png")
+        if strobe:
+            names.append(f"{model or 'run'}_poincare.png")
     if not campaign and model is not None and overview(model) is not None:
         names.append(f"{model}_overview.png")
     return names
@@ -62,17 +79,62 @@ def _grid(n: int, title: str, width: float = 11.0) -> tuple[plt.Figure, np.ndarr
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     if title:
-        fig.suptitle(textwrap.fill(title, 110 if cols > 1 else 75), fontsize=10)
+        fig.suptitle(wrap_title(title, 110 if cols > 1 else 75), fontsize=10)
     return fig, axes
 
 
 def _panel_title(da: xr.DataArray) -> str:
-    return textwrap.fill(str(da.attrs.get("long_name", da.name)), 60)
+    return wrap_title(str(da.attrs.get("long_name", da.name)), 60)
 
 
-def _short_label(da: xr.DataArray) -> str:
-    units = da.attrs.get("units")
-    return f"{da.name} [{units}]" if units else str(da.name)
+def _short_label(da: xr.DataArray, units: str | None = None) -> str:
+    return f"{da.name}{units_label(units or da.attrs.get('units'))}"
+
+
+def _last_record(ds: xr.Dataset) -> float:
+    """Time (s) of the last record with a finite value (the start when there is none)."""
+    finite = np.zeros(ds.sizes["time"], bool)
+    for name in _series(ds):
+        finite |= np.isfinite(ds[name].values).reshape(ds.sizes["time"], -1).any(axis=1)
+    last = np.flatnonzero(finite)
+    return float(ds.time[last[-1]] if last.size else ds.time[0])
+
+
+def _empty_panel(ax, da: xr.DataArray, status: str) -> None:
+    """Say why a panel has nothing to draw, instead of leaving it blank."""
+    why = f"no finite values: {status}" if status else "no finite values in this record"
+    ax.text(
+        0.5,
+        0.5,
+        wrap_title(why, 45),
+        ha="center",
+        va="center",
+        fontsize=8,
+        color="tab:red",
+        transform=ax.transAxes,
+    )
+
+
+def _proxies(ax) -> list:
+    """Legend handles of a scatter panel: the dots' colours at a visible size, the failed
+    points' cross as drawn."""
+    from matplotlib.lines import Line2D
+
+    out = []
+    for h in ax.get_lines():
+        if h.get_label().startswith("_"):
+            continue
+        if h.get_marker() == ".":
+            h = Line2D(
+                [], [], ls="none", marker="o", ms=4, color=h.get_color(), label=h.get_label()
+            )
+        out.append(h)
+    return out
+
+
+def _legend_outside(ax, **kw) -> None:
+    """A legend to the right of the panel, where it covers no trace."""
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0, **kw)
 
 
 def _lines(da: xr.DataArray, skip: tuple[str, ...]) -> list[tuple[str, xr.DataArray]]:
@@ -99,21 +161,33 @@ def timeseries_figure(
     ds: xr.Dataset, variables: list[str] | None = None, *, title: str | None = None
 ) -> plt.Figure:
     """Variables against time in a grid of panels (up to two columns), each titled with its
-    ``long_name`` and labelled with its name and units; extra dims (e.g. ``joint``) become
-    labelled lines. Give at most :data:`PANELS_PER_FIGURE` variables for a readable figure
-    (:func:`run_figures` pages them)."""
+    ``long_name`` and labelled with its name and units (in a readable SI prefix, e.g. µm);
+    extra dims (e.g. ``joint``) become lines named in a legend beside the panel. A panel
+    without a finite value says so; a failed run's status is in the title, and a dotted red
+    line marks its last record on the whole span asked for. Give at most
+    :data:`PANELS_PER_FIGURE` variables for a readable figure (:func:`run_figures` pages
+    them)."""
     names = variables or _series(ds)
-    fig, axes = _grid(len(names), ds.attrs.get("title", "") if title is None else title)
+    status = run_status_note(ds)
+    text = ds.attrs.get("title", "") if title is None else title
+    fig, axes = _grid(len(names), f"{text}\n{status}" if status else text)
     for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
         da = ds[name]
+        factor, units = display_scale(da.values, da.attrs.get("units"))
+        if not np.isfinite(da.values).any():
+            _empty_panel(ax, da, status)
         for label, line in _lines(da, ("time",)):
-            ax.plot(ds.time, line, lw=0.7, label=label or None)
+            ax.plot(ds.time, line * factor, lw=0.7, label=label or None)
+        if status and ds.sizes["time"] > 1:  # the whole span asked for, and where it ended
+            ax.set_xlim(float(ds.time[0]), float(ds.time[-1]))
+            ax.axvline(_last_record(ds), color="tab:red", ls=":", lw=1.0)
         if len(da.dims) > 1:
-            ax.legend(fontsize=7, loc="upper right")
+            _legend_outside(ax)
         ax.set_title(_panel_title(da), fontsize=8)
-        ax.set_ylabel(_short_label(da), fontsize=8)
+        ax.set_ylabel(_short_label(da, units), fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
+        plain_ticks(ax)
         if k >= len(names) - axes.shape[1]:  # the bottom panel of each column
             ax.set_xlabel(axis_label(ds.time), fontsize=8)
     return fig
@@ -131,25 +205,32 @@ def campaign_figure(
     """Every record of each point against the swept parameter (the dim with the most values,
     axis labelled with its ``long_name`` and units), one panel per variable: a bifurcation
     diagram when the campaign records one sample per forcing period. The other dims (the
-    model's, e.g. ``joint``, and other swept ones) are lines named in the legend; failed points
-    are left out."""
+    model's, e.g. ``joint``, and other swept ones) are lines named in a legend beside the
+    panel. Failed points have no data: each is marked by a red cross on the panel's bottom
+    edge at its parameter value, counted in the legend and named in the title."""
     names = variables or _series(ds)
     param = _campaign_axis(ds)
     text = ds.attrs.get("title", "") if title is None else title
-    fig, axes = _grid(len(names), text)
+    note = failure_note(ds)
+    fig, axes = _grid(len(names), f"{text}\n{note}" if note else text)
     ok = ds["status"] <= 1 if "status" in ds else True  # ok or terminated
     for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
         da = ds[name].where(ok)
+        factor, units = display_scale(da.values, da.attrs.get("units"))
+        if not np.isfinite(da.values).any():
+            _empty_panel(ax, da, note or "")
         for label, line in _lines(da, (param, "time")):
             x = np.broadcast_to(ds[param].values[:, None], line.transpose(param, "time").shape)
-            y = line.transpose(param, "time").values
+            y = line.transpose(param, "time").values * factor
             ax.plot(x.ravel(), y.ravel(), ".", ms=1.5, alpha=0.6, label=label or None)
+        mark_failed(ax, ds, param)  # counted in the title
         if any(d not in (param, "time") for d in da.dims):
-            ax.legend(fontsize=7, loc="upper right", markerscale=5)
+            _legend_outside(ax, handles=_proxies(ax))
         ax.set_title(_panel_title(da), fontsize=8)
-        ax.set_ylabel(_short_label(da), fontsize=8)
+        ax.set_ylabel(_short_label(da, units), fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
+        plain_ticks(ax)
         if k >= len(names) - axes.shape[1]:
             ax.set_xlabel(axis_label(ds[param]), fontsize=8)
     return fig
@@ -159,22 +240,29 @@ def run_figures(ds: xr.Dataset, directory: Path) -> list[Path]:
     """Write the standard figures of a run or a campaign (PNG) into ``directory``; return their
     paths (named as :func:`run_figure_names` says).
 
-    A run: its time series, :data:`PANELS_PER_FIGURE` variables per figure, and the model's
-    overview when it has one. A campaign archive (from :func:`workbench.run_campaign`): every
-    variable against the swept parameter.
+    A run: its time series, :data:`PANELS_PER_FIGURE` variables per figure, its phase portraits
+    and, when forced, its stroboscopic Poincaré sections (:mod:`workbench.plot._phase`), and
+    the model's overview when it has one. A campaign archive (from
+    :func:`workbench.run_campaign`): every variable against the swept parameter, failed points
+    marked.
     """
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     model = ds.attrs.get("model")
     campaign = "campaign_dims" in ds.attrs
-    pages = _pages(_series(ds))
-    names = run_figure_names(model, len(_series(ds)), campaign=campaign)
+    series = _series(ds)
+    pages = _pages(series)
+    names = run_figure_names(model, len(series), campaign=campaign, strobe=strobed(ds))
     draw = campaign_figure if campaign else timeseries_figure
     title = ds.attrs.get("title", "")
     figures = []
     for k, page in enumerate(pages):
         suffix = f" ({k + 1}/{len(pages)})" if len(pages) > 1 else ""
         figures.append(draw(ds, page, title=title + suffix))
+    if not campaign and len(series) >= 2:
+        figures.append(run_phase_figure(ds))
+        if strobed(ds):
+            figures.append(run_poincare_figure(ds))
     if not campaign and overview(model) is not None:
         figures.append(overview(model)(ds))
     written = []

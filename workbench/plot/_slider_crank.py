@@ -6,7 +6,15 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, plt, register_overview, run_parameters
+from workbench.plot._base import (
+    axis_label,
+    plain_ticks,
+    plt,
+    register_overview,
+    run_parameters,
+    wrap_title,
+)
+from workbench.plot._failures import run_status_note
 
 
 def crank_angle_deg(ds: xr.Dataset, params: dict[str, float]) -> np.ndarray:
@@ -20,7 +28,9 @@ def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
     params = run_parameters(ds)
     angle = crank_angle_deg(ds, params)
     has_joint = "clearance_x" in ds
-    fig, axes = plt.subplots(1, 3 if has_joint else 2, figsize=(15 if has_joint else 10, 4.2))
+    fig, axes = plt.subplots(
+        1, 3 if has_joint else 2, figsize=(15 if has_joint else 10, 4.4), layout="constrained"
+    )
     axes[0].plot(angle, ds.slider_acceleration, lw=0.7)
     axes[0].set_ylabel(axis_label(ds.slider_acceleration))
     axes[1].plot(angle, ds.torque.sel(crank="1"), lw=0.7)
@@ -32,13 +42,18 @@ def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
         c = params["clearance"]
         theta = np.linspace(0, 2 * np.pi, 200)
         ax = axes[2]
-        ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.8, label="e = c")
+        ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.8)
         ax.plot(ds.clearance_x.sel(joint="B") / c, ds.clearance_y.sel(joint="B") / c, lw=0.5)
         ax.set_aspect("equal")
-        ax.set_xlabel("x / c [1]")
-        ax.set_ylabel("y / c [1]")
-        ax.set_title(f"journal centre in the slider's bearing (c = {c * 1e3:g} mm)", fontsize=9)
-        ax.legend(fontsize=7, loc="upper right")
-    fig.suptitle(ds.attrs.get("title", "slider-crank run"), fontsize=10)
-    fig.tight_layout()
+        ax.set_xlabel("x / c")
+        ax.set_ylabel("y / c")
+        ax.set_title(
+            f"journal centre in the slider's bearing\n(c = {c * 1e3:g} mm; dashed: e = c)",
+            fontsize=9,
+        )
+    for ax in axes:
+        plain_ticks(ax)
+    status = run_status_note(ds)
+    title = wrap_title(ds.attrs.get("title", "slider-crank run"), 140)
+    fig.suptitle(f"{title}\n{status}" if status else title, fontsize=10)
     return fig

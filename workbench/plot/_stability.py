@@ -61,7 +61,7 @@ def floquet_figure(sweep: xr.Dataset) -> plt.Figure:
         ax.text(value, ax.get_ylim()[1], f" {sweep.attrs['first_loss_kind']} at {value:.4g}",
                 color="C3", va="top", fontsize=8)  # fmt: skip
     ax.set_xlabel(axis_label(x))
-    ax.set_ylabel("|Floquet multiplier| [1]")
+    ax.set_ylabel("|Floquet multiplier|")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     fig.tight_layout()

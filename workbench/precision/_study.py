@@ -110,9 +110,9 @@ def _bar(total: int, initial: int, enabled: bool):
     """A progress bar over runs with an ETA (stderr), or None."""
     if not enabled:
         return None
-    from tqdm.auto import tqdm
+    from workbench._progress import Progress
 
-    return tqdm(total=total, initial=initial, unit="run", desc="accuracy", smoothing=0.1)
+    return Progress(total, initial=initial, unit="run", desc="accuracy")
 
 
 def accuracy(

@@ -28,20 +28,43 @@ from workbench.run._ensemble import (
     perturb_initial_state,
     scene_perturbation,
 )
+from workbench.run._memory import (
+    MEMORY_ENV,
+    MemoryLimitError,
+    check_memory,
+    format_bytes,
+    memory_limit,
+    parse_bytes,
+    record_count,
+    values_per_record,
+    what_to_lower,
+)
+from workbench.run._parameters import PARAMETERS_ATTR, parameter_coords
 from workbench.run._prepare import Prepared, prepare, record_times
 from workbench.run._simulate import check_error, integrate, simulate
 
 __all__ = [
     "DEFAULT_PERTURBATION",
+    "MEMORY_ENV",
+    "MemoryLimitError",
+    "PARAMETERS_ATTR",
     "REALISATION_ATTRS",
     "TIME_ATTRS",
     "Prepared",
     "check_error",
+    "check_memory",
+    "format_bytes",
+    "memory_limit",
+    "parse_bytes",
+    "record_count",
+    "values_per_record",
+    "what_to_lower",
     "perturb_initial_state",
     "scene_perturbation",
     "derive",
     "divergence_time",
     "integrate",
+    "parameter_coords",
     "prepare",
     "provenance",
     "record_times",

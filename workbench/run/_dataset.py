@@ -14,6 +14,8 @@ import xarray as xr
 from workbench._sources import code_digest
 from workbench._version import FORMAT_VERSION, __version__
 from workbench.models import get_model
+from workbench.run._ensemble import REALISATION_ATTRS
+from workbench.run._parameters import PARAMETERS_ATTR, parameter_coords
 from workbench.run._prepare import Prepared
 from workbench.scene import Scene
 from workbench.solver import TEMPLATE_MODULES, RunResult, SolverError, Status
@@ -73,9 +75,12 @@ def _derive_valid(prepared: Prepared, result: RunResult) -> dict[str, np.ndarray
 def to_dataset(prepared: Prepared, result: RunResult, derived: dict[str, np.ndarray]) -> xr.Dataset:
     """Labelled dataset of a run: only the requested variables, with units everywhere.
 
-    Global attributes: :func:`provenance`, the solver's statistics (``solver_*``), the model,
-    ``run_status`` (a :class:`Status` label) and ``run_message`` (empty when ok), the forcing
-    period and the attributes of the record times.
+    Every resolved parameter of the model is a scalar coordinate with its units
+    (:func:`workbench.run.parameter_coords`; their names in the attribute ``model_parameters``),
+    and so is ``realisation`` when the scene asks for one. Global attributes:
+    :func:`provenance`, the solver's statistics (``solver_*``), the model, ``run_status`` (a
+    :class:`Status` label) and ``run_message`` (empty when ok), the forcing period and the
+    attributes of the record times.
     """
     scene, model = prepared.scene, prepared.model
     declared = model.variables(scene.effects)
@@ -87,8 +92,16 @@ def to_dataset(prepared: Prepared, result: RunResult, derived: dict[str, np.ndar
     for name in prepared.variables:
         q = declared[name]
         values = result.Y[:, state_index[name]] if name in state_index else derived[name]
-        data_vars[name] = (("time",) + q.dims, values, {"units": q.units, "long_name": q.long_name})
+        attrs = {"units": q.units, "long_name": q.long_name}
+        if q.rate in prepared.variables:
+            attrs["rate_variable"] = q.rate
+        data_vars[name] = (("time",) + q.dims, values, attrs)
+    params = parameter_coords(model, prepared.parameters, taken=[*coords, *declared])
+    coords.update(params)
+    if "realisation" in scene.run:
+        coords["realisation"] = ((), np.int64(scene.run["realisation"]), dict(REALISATION_ATTRS))
     ds = xr.Dataset(data_vars, coords=coords)
+    ds.attrs[PARAMETERS_ATTR] = " ".join(params)
     ds.attrs.update(provenance(scene))
     ds.attrs.update({f"solver_{k}": v for k, v in result.stats.items()})
     ds.attrs["run_status"] = result.status.label

@@ -10,6 +10,7 @@ import numpy as np
 
 from workbench.models import Model, get_model
 from workbench.run._ensemble import perturb_initial_state, scene_perturbation
+from workbench.run._memory import check_memory, record_count, values_per_record, what_to_lower
 from workbench.scene import Scene, SceneSource, load_scene
 from workbench.solver import Problem
 
@@ -57,7 +58,12 @@ class Prepared:
         return dataclasses.replace(self, problem=problem)
 
 
-def prepare(scene: SceneSource, *, variables: Iterable[str] | None = None) -> Prepared:
+def prepare(
+    scene: SceneSource,
+    *,
+    variables: Iterable[str] | None = None,
+    max_memory: float | str | None = None,
+) -> Prepared:
     """Build the problem of a single-run scene and its record times.
 
     Parameters
@@ -68,6 +74,10 @@ def prepare(scene: SceneSource, *, variables: Iterable[str] | None = None) -> Pr
     variables : iterable of str, optional
         The variables to compute; default the scene's ``record.variables``. Fewer variables
         mean fewer states and outputs (e.g. ``()`` for the bare motion: no energy quadratures).
+    max_memory : float or str, optional
+        Refuse a run whose records would take more memory than this (bytes, or text such as
+        ``"16 GiB"``); default the environment variable ``WORKBENCH_MAX_MEMORY``, else half
+        of this machine's memory (:mod:`workbench.run._memory`).
 
     Returns
     -------
@@ -79,6 +89,9 @@ def prepare(scene: SceneSource, *, variables: Iterable[str] | None = None) -> Pr
         For a scene with a ``[sweep]``.
     SceneError
         When the model rejects the scene's values.
+    MemoryLimitError
+        (a SceneError) When the records would exceed the memory limit; estimated before
+        anything is allocated, the message says what to lower.
 
     Examples
     --------
@@ -100,6 +113,18 @@ def prepare(scene: SceneSource, *, variables: Iterable[str] | None = None) -> Pr
     problem = model.problem(params, scene.effects, scene.initial, variables)
     problem = perturb_initial_state(problem, *scene_perturbation(scene.run))
     period = model.forcing_period(params)
+    count = record_count(scene.run, scene.record, period)
+    states = [q.name for q in problem.states]
+    per_record = values_per_record(model, scene.effects, variables, states) + problem.aux0.size
+    key, lower = what_to_lower(scene.run, scene.record)
+    check_memory(
+        8.0 * count * per_record,
+        what="the records of this run",
+        count=f"{count:.3g} records x {per_record} values x 8 bytes",
+        key=key,
+        lower=lower,
+        max_memory=max_memory,
+    )
     times, attrs = record_times(scene, problem.t0, period)
     return Prepared(scene, model, params, variables, problem, period, times, attrs)
 
@@ -134,7 +159,7 @@ def record_times(scene: Scene, t0: float, period: float | None) -> tuple[np.ndar
         if spp is None:
             spp = max(1, round(period / rec["dt"]))
         k0 = run["transient_cycles"] * spp
-        k = np.arange(k0, k0 + run["cycles"] * spp + 1, dtype=np.float64)
+        k = k0 + np.arange(record_count(run, rec, period), dtype=np.float64)
         t = t0 + k * period / spp
         attrs.update(
             samples_per_period=int(spp),
@@ -147,7 +172,7 @@ def record_times(scene: Scene, t0: float, period: float | None) -> tuple[np.ndar
             attrs["samples_per_period"] = int(rec["samples_per_period"])
         else:
             dt = rec["dt"]
-        n = int(np.floor(run["duration"] / dt * (1 + 1e-12))) + 1
+        n = record_count(run, rec, period)
         t = t0 + run["transient"] + np.arange(n) * dt
         attrs.update(record_dt=dt, transient=run["transient"])
     return t, attrs

@@ -64,7 +64,13 @@ def integrate(
     )
 
 
-def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) -> xr.Dataset:
+def simulate(
+    scene: SceneSource,
+    *,
+    progress: bool = False,
+    throw: bool = True,
+    max_memory: float | str | None = None,
+) -> xr.Dataset:
     """Run one scene and return its records as a labelled dataset.
 
     Parameters
@@ -73,11 +79,16 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
         Loaded with :func:`workbench.load_scene`. A scene with a ``[sweep]`` is a campaign:
         use :func:`workbench.run_campaign`.
     progress : bool
-        Show a progress bar over simulated time.
+        Show progress over simulated time on stderr: a bar on a terminal, a few lines in a
+        log (:class:`workbench._progress.Progress`).
     throw : bool
         Raise :class:`workbench.SolverError` if the run fails (default). With ``throw=False`` a
         failed run returns its dataset: the records before the failure, NaN after it, and the
         failure in ``run_status`` and ``run_message``.
+    max_memory : float or str, optional
+        Refuse, before anything is allocated, a run whose records would take more memory than
+        this (bytes, or text such as ``"16 GiB"``; default: the environment variable
+        ``WORKBENCH_MAX_MEMORY``, else half of this machine's memory).
 
     Returns
     -------
@@ -91,7 +102,10 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
     SolverError
         With ``throw=True``, when the run fails (the error's ``status`` says how).
     SceneError, ValueError
-        For an invalid scene, or a scene with a sweep.
+        For an invalid scene, or a scene with a sweep; :class:`MemoryLimitError` (a
+        SceneError) for records above the memory limit.
+    KeyboardInterrupt
+        Ctrl-C stops the run within about 0.1 s (the compiled loop pauses that often).
 
     Warns
     -----
@@ -106,7 +120,7 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
     >>> ds.x.attrs["units"], ds.sizes["time"], ds.attrs["run_status"]
     ('1', 1001, 'ok')
     """
-    prepared = prepare(scene)
+    prepared = prepare(scene, max_memory=max_memory)
     result = _with_progress_bar(prepared) if progress else integrate(prepared)
     derived, result = derive(prepared, result)
     if throw:
@@ -120,24 +134,14 @@ def simulate(scene: SceneSource, *, progress: bool = False, throw: bool = True) 
 
 
 def _with_progress_bar(prepared: Prepared) -> RunResult:
-    from tqdm.auto import tqdm
+    """Integrate with progress over simulated time (:class:`workbench._progress.Progress`: a
+    bar on a terminal, a few lines in a log)."""
+    from workbench._progress import Progress
 
     t0 = prepared.problem.t0
-    bar = tqdm(
-        total=float(prepared.times[-1] - t0),
-        unit="s",
-        desc="simulated time",
-        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]",
-    )
-
-    def callback(t: float) -> None:
-        bar.n = t - t0
-        bar.refresh()
-
-    try:
-        return integrate(prepared, progress=callback)
-    finally:
-        bar.close()
+    total = float(prepared.times[-1] - t0)
+    with Progress(total, desc="simulated time", unit="s") as bar:
+        return integrate(prepared, progress=lambda t: bar.update_to(t - t0))
 
 
 def check_error(scene: Scene) -> dict[str, float]:

@@ -14,8 +14,10 @@ True
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
+import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -29,7 +31,7 @@ from workbench._errors import SceneError
 from workbench.models import available_models, get_model
 from workbench.scene._tables import (
     RUN_SWEEP_KEYS,
-    number,
+    finite,
     table,
     unknown_keys,
     validate_effects,
@@ -79,6 +81,9 @@ class Scene:
         Solver settings, run length, what and how often to record (defaults filled in).
     sweep : Mapping[str, tuple[float, ...]]
         Parameter name -> the values of that campaign dimension (empty for a single run).
+    model_module : str
+        The module that defines a model of one's own (``[model] module``; imported, and so
+        registered, when the scene is loaded: see ``docs/own-models.md``); '' for a built-in model.
     """
 
     model: str
@@ -91,6 +96,7 @@ class Scene:
     sweep: Mapping[str, tuple[float, ...]] = field(default_factory=lambda: _frozen({}))
     title: str = ""
     description: str = ""
+    model_module: str = ""
 
     # -- derived views --------------------------------------------------------------------------
     @property
@@ -113,6 +119,8 @@ class Scene:
         if self.description:
             d["description"] = self.description
         d["model"] = {"name": self.model}
+        if self.model_module:
+            d["model"]["module"] = self.model_module
         for key in ("effects", "parameters", "initial", "solver", "run", "record"):
             values = {
                 k: (list(v) if isinstance(v, tuple) else v) for k, v in getattr(self, key).items()
@@ -197,7 +205,7 @@ def load_scene(source: SceneSource) -> Scene:
             else ""
         )
         raise SceneError("", f"scene file {str(source)!r} does not exist{hint}")
-    return _parse(path.read_text(), repr(str(path)))
+    return _parse(path.read_text(), repr(str(path)), path.resolve().parent)
 
 
 def scene_from_toml(text: str) -> Scene:
@@ -211,21 +219,50 @@ def scene_from_toml(text: str) -> Scene:
     return _parse(text, "the scene text")
 
 
-def _parse(text: str, where: str) -> Scene:
+def _parse(text: str, where: str, directory: Path | None = None) -> Scene:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError("", f"{where} is not valid TOML: {exc}") from None
-    return _validate(data)
+    return _validate(data, directory)
 
 
-def _validate(data: Mapping[str, Any]) -> Scene:
+def _import_model_module(module: Any, directory: Path | None) -> str:
+    """Import the module of ``[model] module`` (its import registers the model): by name, else
+    from the scene file's directory or the working directory."""
+    if not isinstance(module, str) or not module.strip():
+        raise SceneError(
+            "model.module", f"must be a module name (e.g. 'rossler_model'), got {module!r}"
+        )
+    try:
+        importlib.import_module(module)
+        return module
+    except ModuleNotFoundError as exc:
+        if exc.name != module.split(".")[0]:  # the module itself failed to import something
+            raise SceneError("model.module", f"importing {module!r} failed: {exc}") from None
+    top = module.split(".")[0]
+    for where in (directory, Path.cwd()):
+        if where is None:
+            continue
+        if (where / f"{top}.py").is_file() or (where / top / "__init__.py").is_file():
+            sys.path.insert(0, str(where))
+            importlib.import_module(module)
+            return module
+    raise SceneError(
+        "model.module",
+        f"cannot import {module!r}: put {module.split('.')[0]}.py beside the scene file or in "
+        "the working directory, or on PYTHONPATH",
+    )
+
+
+def _validate(data: Mapping[str, Any], directory: Path | None = None) -> Scene:
     unknown_keys("", data, _TABLES)
     for key in ("title", "description"):
         if key in data and not isinstance(data[key], str):
             raise SceneError(key, f"must be a string, got {data[key]!r}")
     model_t = table(data, "model")
-    unknown_keys("model", model_t, ("name",))
+    unknown_keys("model", model_t, ("name", "module"))
+    module = _import_model_module(model_t["module"], directory) if "module" in model_t else ""
     name = model_t.get("name")
     if name is None:
         raise SceneError(
@@ -246,7 +283,7 @@ def _validate(data: Mapping[str, Any]) -> Scene:
     states = {q.name for q in model.states(effects)}
     initial_t = table(data, "initial")
     unknown_keys("initial", initial_t, states)
-    initial = {k: number(f"initial.{k}", v) for k, v in initial_t.items()}
+    initial = {k: finite(f"initial.{k}", v) for k, v in initial_t.items()}
 
     solver = validate_solver(table(data, "solver"))
     period = model.forcing_period(resolved)
@@ -266,4 +303,5 @@ def _validate(data: Mapping[str, Any]) -> Scene:
         sweep=_frozen(sweep),
         title=data.get("title", ""),
         description=data.get("description", ""),
+        model_module=module,
     )

@@ -15,6 +15,7 @@ from workbench._errors import SceneError
 from workbench.solver import METHODS
 
 __all__ = [
+    "finite",
     "number",
     "table",
     "unknown_keys",
@@ -51,11 +52,24 @@ def number(key: str, value: Any) -> float:
     return float(value)
 
 
+def finite(key: str, value: Any) -> float:
+    """``value`` as a finite float; SceneError naming ``key`` if it is not one."""
+    x = number(key, value)
+    if not math.isfinite(x):
+        raise SceneError(key, f"got {value!r}; must be a finite number")
+    return x
+
+
+#: the largest integer a scene accepts (the compiled loop counts in int64)
+MAX_INTEGER = 2**62
+
+
 def integer(key: str, value: Any, minimum: int) -> int:
+    allowed = f"must be an integer in [{minimum}, 2**62]"
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise SceneError(key, f"must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise SceneError(key, f"must be an integer >= {minimum}, got {value!r}")
+        raise SceneError(key, f"{allowed}, got {value!r}")
+    if not minimum <= value <= MAX_INTEGER:
+        raise SceneError(key, f"{allowed}, got {value!r}")
     return int(value)
 
 
@@ -193,7 +207,7 @@ def validate_run(given: dict, forced: bool) -> dict:
     if "duration" not in given:
         raise SceneError("run.duration", "is required (simulated time to record, s)")
     transient = number("run.transient", given.get("transient", 0.0))
-    if transient < 0 or math.isinf(transient):
+    if not (0 <= transient < math.inf):  # NaN fails it too
         raise SceneError("run.transient", f"must be a finite number >= 0 s, got {transient!r}")
     return {"duration": positive("run.duration", given["duration"]), "transient": transient}
 

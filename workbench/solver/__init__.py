@@ -12,7 +12,7 @@ sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled
 
 from workbench.solver._compile import TEMPLATE_MODULES, generated_source, jacobian_for
 from workbench.solver._copies import copies_problem, split_copies
-from workbench.solver._integrate import COMPILED_METHODS, METHODS, integrate
+from workbench.solver._integrate import COMPILED_METHODS, METHODS, PAUSE_SECONDS, integrate
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, SolverError, Status
 from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem, tangent_state
@@ -21,6 +21,7 @@ __all__ = [
     "COMPILED_METHODS",
     "EVENT_INSIDE_STEP",
     "METHODS",
+    "PAUSE_SECONDS",
     "Problem",
     "RunResult",
     "SolverError",

@@ -51,7 +51,12 @@ from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, Status, solver_stats
 from workbench.solver._tangent import state_scale
 
-__all__ = ["COMPILED_METHODS", "METHODS", "integrate"]
+__all__ = ["COMPILED_METHODS", "METHODS", "PAUSE_SECONDS", "integrate"]
+
+#: Wall time (s) between two returns of the compiled loop to Python, where signals (Ctrl-C)
+#: and the progress callback are seen; the loop's step budget per call is adapted to it.
+PAUSE_SECONDS = 0.1
+_FIRST_BUDGET = 128  # steps of the first call, before the rate is known
 
 _METHOD_IDS = {"dop853": DOP853, "dopri5": DOPRI5, "ark548": ARK548, "radau": RADAU5, "auto": AUTO}
 COMPILED_METHODS = tuple(_METHOD_IDS)
@@ -95,7 +100,8 @@ def integrate(
     max_steps : int
         Accepted steps after which the run stops with :attr:`Status.MAX_STEPS`.
     progress : callable, optional
-        ``progress(t)`` is called between chunks of simulated time (1 % of the run each).
+        ``progress(t)`` is called whenever the compiled loop pauses: after each 1 % of the
+        simulated time and about every :data:`PAUSE_SECONDS` of wall time.
 
     Returns
     -------
@@ -107,17 +113,40 @@ def integrate(
     Raises
     ------
     ValueError
-        For record times before ``t0`` or an unknown method.
+        For record times before ``t0`` or not finite, or an unknown method.
+    KeyboardInterrupt
+        On Ctrl-C (or a signal the caller turns into it) within about :data:`PAUSE_SECONDS`:
+        the compiled loop returns to Python that often, so Python's signal handlers run.
+
+    Notes
+    -----
+    The loop pauses (returns to Python and continues where it stopped, bit-identically) after
+    a number of steps adapted to take about :data:`PAUSE_SECONDS` of wall time, with or without
+    ``progress``: a run of any length stays interruptible, and the pauses cost one comparison
+    per step.
     """
     t_rec = np.ascontiguousarray(t_rec, dtype=np.float64)
-    if t_rec.size == 0 or t_rec[0] < problem.t0:
+    if t_rec.size == 0 or not t_rec[0] >= problem.t0:
         raise ValueError(
             f"record times must be non-empty and start at or after t0={problem.t0!r}; got "
             f"{t_rec.size} times from {t_rec[0] if t_rec.size else None!r}"
         )
+    if not np.isfinite(t_rec[-1]):
+        raise ValueError(
+            f"record times must be finite; got {t_rec.size} times from {t_rec[0]!r} to "
+            f"{t_rec[-1]!r}"
+        )
     atol_arr = atol * problem.atol_scale
+    if not np.all(np.isfinite(problem.y0)):
+        stats0 = solver_stats(method, rtol, atol, max_step)
+        return _refused(problem, t_rec, stats0, "the initial state is not finite")
     if method.startswith("scipy:"):
-        result = _scipy_backend.integrate(problem, t_rec, method[6:], rtol, atol_arr, max_step)
+        why = _scipy_backend.cannot_start(problem, rtol, atol_arr)
+        if why:
+            return _refused(problem, t_rec, solver_stats(method, rtol, atol, max_step), why)
+        result = _scipy_backend.integrate(
+            problem, t_rec, method[6:], rtol, atol_arr, max_step, max_steps
+        )
         result.stats["atol"] = atol
         return result
     if method not in METHODS:
@@ -145,17 +174,31 @@ def integrate(
             problem.t0, state_d, code,
         )  # fmt: skip
     h0 = k.initial_step(mid, problem.t0, t_end, settings, hooks, state)
+    if not (h0 >= 0.0 and math.isfinite(h0)):
+        derivative = ", ".join(f"d{n}/dt={v:.6g}" for n, v in problem.state_dict(state.f).items())
+        return _refused(
+            problem,
+            t_rec,
+            stats0,
+            "the initial step cannot be formed: the state or its derivative overflows its norm "
+            f"scaled by the tolerances (derivative: {derivative})",
+        )
     state.ctrl[CT_T] = problem.t0
     state.ctrl[CT_H] = h0
     chunk = (t_end - problem.t0) / 100.0 if progress is not None else math.inf
     t_pause = problem.t0 + chunk
+    budget = _FIRST_BUDGET
     while True:
-        code = k.advance(t_end, t_pause, settings, hooks, state, implicit)
+        steps0 = int(state.stats[ST_STEPS])
+        c0 = _time.perf_counter()
+        code = k.advance(t_end, t_pause, steps0 + budget, settings, hooks, state, implicit)
+        budget = _next_budget(budget, int(state.stats[ST_STEPS]) - steps0, c0)
         if progress is not None:
             progress(float(state.ctrl[CT_T]))
         if code != PAUSED:
             break
-        t_pause += chunk
+        if state.ctrl[CT_T] >= t_pause:
+            t_pause += chunk
     stats, ctrl, y = state.stats, state.ctrl, state.y
     Y, AUX = state.Yrec, state.AUXrec
     st = solver_stats(
@@ -185,6 +228,32 @@ def integrate(
         status, t_now, where, h=float(ctrl[CT_H]), max_steps=max_steps, explanation=explanation
     )
     return RunResult(t_rec, Y, AUX, st, status, message, n_rec, t_now, where, model_code)
+
+
+def _next_budget(budget: int, steps: int, c0: float) -> int:
+    """Steps until the next pause: about PAUSE_SECONDS at the rate of the last call (at most 8x
+    the last budget, so that a slow stretch after a fast one is not one long call)."""
+    if steps <= 0:
+        return budget
+    per_step = max(_time.perf_counter() - c0, 1e-9) / steps
+    return int(min(8 * budget, max(_FIRST_BUDGET, PAUSE_SECONDS / per_step)))
+
+
+def _refused(problem: Problem, t_rec: np.ndarray, stats0: dict, why: str) -> RunResult:
+    """A run that cannot start (Status.NON_FINITE at t0): no records, ``why`` and the state in
+    its message."""
+    n = problem.y0.size
+    Y = np.full((t_rec.size, n), np.nan)
+    AUX = np.full((t_rec.size, problem.aux0.size), np.nan)
+    state = problem.state_dict(problem.y0)
+    shown = ", ".join(f"{k}={v:.6g}" for k, v in state.items())
+    message = (
+        f"the run cannot start at t = {problem.t0:.9g} s: {why} (state: {shown}); the initial "
+        "state or a parameter lies far outside the model's range"
+    )
+    return RunResult(
+        t_rec, Y, AUX, stats0, Status.NON_FINITE, message, 0, problem.t0, state, 0
+    )  # fmt: skip
 
 
 def failure_message(
@@ -253,4 +322,4 @@ def _compiled(k, problem: Problem, settings: Settings) -> None:
     k.start(t0, hooks, state)
     k.initial_step(settings.method, t0, t0 + 1.0, settings, hooks, state)
     short = settings._replace(max_steps=1, t_rec=np.zeros(0))
-    k.advance(t0, t0, short, hooks, state, _implicit(problem, settings))
+    k.advance(t0, t0, 1, short, hooks, state, _implicit(problem, settings))

@@ -5,6 +5,10 @@ output and event location (Brent's method), so agreement between the two is an i
 Events that change the state stop scipy's integration (``terminal=True``); the update is applied
 and a new ``solve_ivp`` call continues. Rejected steps are not reported by scipy (stored as -1).
 
+``solver.max_steps`` bounds the right-hand side evaluations (``EVALUATIONS_PER_STEP`` per
+step: solve_ivp does not count its steps as it goes), and an initial state whose first step
+cannot be formed is refused (:func:`cannot_start`), as in the compiled loop.
+
 A failed ``solve_ivp`` (status -1: its step size fell below the spacing of floating-point
 numbers near t) ends the run with :attr:`Status.STEP_UNDERFLOW`, or with
 :attr:`Status.MODEL_FAILURE` when the model rejected a trial state beyond the last accepted
@@ -25,6 +29,35 @@ from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, Status, solver_stats
 
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")  # of solve_ivp
+#: solve_ivp does not count its steps as it goes: a run stops after this many right-hand side
+#: evaluations per allowed step (``max_steps``), more than any of its methods spends per step
+EVALUATIONS_PER_STEP = 20
+
+
+class _TooMany(Exception):
+    """Raised inside solve_ivp's right-hand side to stop a run at its evaluation limit."""
+
+
+def cannot_start(problem: Problem, rtol: float, atol: np.ndarray) -> str:
+    """Why no first step can be formed from the problem's initial state ('' if one can): its
+    derivative, or the state itself, overflows its norm scaled by the tolerances (as the
+    compiled loop's initial step tests; scipy would take steps of 1e-323 s forever)."""
+    hooks = importlib.import_module(problem.hooks)
+    f0 = np.empty(problem.y0.size)
+    aux = problem.aux0.copy()
+    work = np.zeros(max(problem.work_size, 1))
+    y0 = np.ascontiguousarray(problem.y0, dtype=np.float64)
+    hooks.rhs(problem.t0, y0, problem.p, problem.ip, aux, work, f0)
+    scale = atol + np.abs(y0) * rtol
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        norms = [np.sqrt(np.mean((v / scale) ** 2)) for v in (y0, f0)]
+    if all(np.isfinite(norms)):
+        return ""
+    shown = ", ".join(f"d{n}/dt={v:.6g}" for n, v in problem.state_dict(f0).items())
+    return (
+        "the initial step cannot be formed: the state or its derivative overflows its norm "
+        f"scaled by the tolerances (derivative: {shown})"
+    )
 
 
 def integrate(
@@ -34,8 +67,10 @@ def integrate(
     rtol: float,
     atol: np.ndarray,
     max_step: float,
+    max_steps: int = 50_000_000,
 ) -> RunResult:
-    """Integrate ``problem`` with ``solve_ivp(method=name)`` and record at ``t_rec`` (s)."""
+    """Integrate ``problem`` with ``solve_ivp(method=name)`` and record at ``t_rec`` (s); stop
+    with :attr:`Status.MAX_STEPS` after ``EVALUATIONS_PER_STEP * max_steps`` evaluations."""
     hooks = importlib.import_module(problem.hooks)
     p, ip = problem.p, problem.ip
     aux = problem.aux0.copy()
@@ -43,9 +78,12 @@ def integrate(
     ne = problem.event_direction.size
     nfev = [0]
     last_failure = [0, 0.0]
+    max_evaluations = EVALUATIONS_PER_STEP * max_steps
 
     def fun(t, y):
         nfev[0] += 1
+        if nfev[0] > max_evaluations:
+            raise _TooMany(t, y.copy())
         dydt = np.empty(y.size)
         code = hooks.rhs(t, np.ascontiguousarray(y, dtype=np.float64), p, ip, aux, work, dydt)
         if code != 0 and code != EVENT_INSIDE_STEP:
@@ -86,17 +124,22 @@ def integrate(
         if t >= t_end:
             break
         evs = [make_event(k, guard.get(k)) for k in range(ne)]
-        sol = solve_ivp(
-            fun,
-            (t, t_end),
-            y,
-            method=name,
-            rtol=rtol,
-            atol=atol,
-            max_step=max_step,
-            dense_output=True,
-            events=evs or None,
-        )
+        try:
+            sol = solve_ivp(
+                fun,
+                (t, t_end),
+                y,
+                method=name,
+                rtol=rtol,
+                atol=atol,
+                max_step=max_step,
+                dense_output=True,
+                events=evs or None,
+            )
+        except _TooMany as exc:
+            status = Status.MAX_STEPS
+            t, y = exc.args  # the last point evaluated
+            break
         steps += len(sol.t) - 1
         if sol.status == -1:
             failure = sol
@@ -138,6 +181,13 @@ def integrate(
     )
     if status is Status.TERMINATED:
         t_rec, Y, AUX = t_rec[:i_rec], Y[:i_rec], AUX[:i_rec]
+    if status is Status.MAX_STEPS:
+        message = (
+            f"scipy:{name} stopped at t = {t:.9g} s at its limit of {max_evaluations} "
+            f"right-hand side evaluations ({EVALUATIONS_PER_STEP} x solver.max_steps = "
+            f"{max_steps}); raise solver.max_steps or loosen solver.rtol"
+        )
+        return RunResult(t_rec, Y, AUX, stats, status, message, i_rec, t, problem.state_dict(y))
     if failure is None:
         return RunResult(t_rec, Y, AUX, stats, status, "", i_rec, t)
     why = failure.message

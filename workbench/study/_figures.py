@@ -22,11 +22,22 @@ A figure without a ``paper`` number is one beyond the paper (file ``extra-<kind>
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from workbench.plot import (
+    CoarseSamplingWarning,
+    coarse_sampling,
+    display_scale,
+    failure_note,
+    mark_failed,
+    wrap_title,
+)
+from workbench.plot._base import plain_ticks
+from workbench.plot._phase import COARSE_JUMP
 from workbench.plot._runs import axis_label, plt
 from workbench.study._claims import _key
 from workbench.study._exponents import reference_exponent
@@ -80,10 +91,17 @@ def study_figures(
     return paths
 
 
-def _title(spec: dict, text: str) -> str:
+def _title(spec: dict, text: str, width: int = 110) -> str:
+    """The figure's title, wrapped between words (never inside "Fig. 28" or "0.1 mm")."""
     if "paper" not in spec:
-        return f"Beyond the paper: {text}"
-    return f"Fig. {spec['paper']} (Chen et al.): {text}"
+        return wrap_title(f"Beyond the paper: {text}", width)
+    return wrap_title(f"Fig. {spec['paper']} (Chen et al.): {text}", width)
+
+
+def _failed_in(ctx, case: str) -> str:
+    """:func:`workbench.plot.failure_note` of a case's campaign ('' when none failed)."""
+    run = ctx["runs"].get(case)
+    return failure_note(run) if run is not None else ""
 
 
 def _first_cycles(ds: xr.Dataset, da: xr.DataArray) -> xr.DataArray:
@@ -108,7 +126,12 @@ def _envelope(da: xr.DataArray, samples_per_period: int) -> tuple[xr.DataArray, 
 
 def _series(spec, ctx):
     fig, (ax, box) = plt.subplots(
-        1, 2, figsize=(10, 4.4), gridspec_kw={"width_ratios": [3, 1.1]}, squeeze=True
+        1,
+        2,
+        figsize=(10, 4.8),
+        gridspec_kw={"width_ratios": [3, 1.1]},
+        squeeze=True,
+        layout="constrained",
     )
     where = spec.get("select", {})
     key = _key(spec)
@@ -139,18 +162,25 @@ def _series(spec, ctx):
     ax.set_xlabel("time from the end of the transient [s]")
     ax.set_ylabel(name)
     ax.grid(alpha=0.3)
-    ax.legend(
+    ax.legend(  # below the panel: inside it would cover the traces
         fontsize=8,
-        title="line: realisation 0\nband: range of the realisations\n(in 1/100-cycle windows)",
+        title="line: realisation 0; band: range of the realisations (in 1/100-cycle windows)",
         title_fontsize=7,
+        loc="upper left",
+        bbox_to_anchor=(0.0, -0.16),
+        ncol=max(1, len(labels)),
     )
     if peaks:
         _peak_boxes(box, labels, peaks, records, paper, da.attrs.get("units", ""))
+    failed = "; ".join(f"{c}: {n}" for c in ctx["runs"] if (n := _failed_in(ctx, c)))
     fig.suptitle(
-        _title(spec, f"{name}{', ' + where_text if where_text else ''}; {_realisations_note(ctx)}"),
+        _title(
+            spec,
+            f"{name}{', ' + where_text if where_text else ''}; {_realisations_note(ctx)}"
+            + (f"; {failed}" if failed else ""),
+        ),
         fontsize=9,
     )
-    fig.tight_layout()
     return fig
 
 
@@ -199,8 +229,8 @@ def _orbit(spec, ctx):
         ax.plot(np.cos(theta), np.sin(theta), "k--", lw=0.7)
         ax.plot(ds.clearance_x.sel(joint=j) / c, ds.clearance_y.sel(joint=j) / c, lw=0.4)
         ax.set_aspect("equal")
-        ax.set_xlabel("x / c [1]")
-        ax.set_ylabel("y / c [1]")
+        ax.set_xlabel("x / c")
+        ax.set_ylabel("y / c")
         ax.set_title(f"{case}: joint {j}", fontsize=8)
     fig.suptitle(_title(spec, "journal centre orbits of realisation 0 (dashed: e = c)"), fontsize=9)
     fig.tight_layout()
@@ -208,8 +238,8 @@ def _orbit(spec, ctx):
 
 
 def _grid4(spec, text):
-    fig, axes = plt.subplots(2, 2, figsize=(9, 7.5))
-    fig.suptitle(_title(spec, text), fontsize=9)
+    fig, axes = plt.subplots(2, 2, figsize=(9, 7.5), layout="constrained")
+    fig.suptitle(_title(spec, text, 100), fontsize=9)
     return fig, axes.ravel()
 
 
@@ -217,25 +247,44 @@ def _first_member(ctx) -> xr.Dataset:
     return next(iter(ctx["members"].values()))
 
 
-def _phase_planes(spec, title: str, ds: xr.Dataset, samples, *fmt, **style):
+def _phase_planes(spec, title: str, ds: xr.Dataset, samples, *fmt, check=False, **style):
     """One panel per clearance coordinate: its rate against it (mm), at the points ``samples``
-    picks from a variable (every record, or the stroboscopic samples)."""
-    fig, axes = _grid4(spec, title)
-    for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
+    picks from a variable (every record, or the stroboscopic samples). ``check``: say in the
+    title (and warn) when the records are too coarse for the impacts the curves draw."""
+    pairs = []
+    for label, (var, where) in CLEARANCE_COORDINATES.items():
         x = samples(select(ds, var, where))
         v = samples(select(ds, var.replace("clearance_", "clearance_v"), where))
-        ax.plot(x.values.ravel() * 1e3, v.values.ravel(), *fmt, **style)
-        ax.set_xlabel(f"{label}: {axis_label(x).replace('[m]', '[mm]')}", fontsize=8)
-        ax.set_ylabel(axis_label(v), fontsize=8)
+        pairs.append((label, x, v))
+    if check:
+        worst, when = coarse_sampling(*(v for _, _, v in pairs), *(x for _, x, _ in pairs))
+        if worst > COARSE_JUMP:
+            spp = ds.attrs.get("samples_per_period")
+            warnings.warn(
+                CoarseSamplingWarning(
+                    f"{_title(spec, 'phase portraits', 1000)}: the records ({spp} per crank "
+                    f"period) are too coarse for the impacts: a clearance rate changes by "
+                    f"{100 * worst:.0f} % of its range between two records (t = {when:.4g} s), "
+                    "drawn as straight edges; record more samples per period to resolve them"
+                ),
+                stacklevel=2,
+            )
+            title += f" - coarse: {spp} samples per crank period draw impacts as straight edges"
+    fig, axes = _grid4(spec, title)
+    for ax, (label, x, v) in zip(axes, pairs, strict=True):
+        fv, uv = display_scale(v.values, v.attrs.get("units"))
+        ax.plot(x.values.ravel() * 1e3, v.values.ravel() * fv, *fmt, **style)
+        ax.set_xlabel(f"{label}: {axis_label(x, 'mm')}", fontsize=8)
+        ax.set_ylabel(axis_label(v, uv), fontsize=8)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
+        plain_ticks(ax)
     return fig
 
 
 def _phase(spec, ctx):
     ds = _first_member(ctx).isel(realisation=0)
     title = "phase portraits of the clearance coordinates (realisation 0)"
-    return _phase_planes(spec, title, ds, lambda da: da, lw=0.2)
+    return _phase_planes(spec, title, ds, lambda da: da, lw=0.2, check=True)
 
 
 def _poincare(spec, ctx):
@@ -282,7 +331,6 @@ def _lle(spec, ctx):
         ax.set_ylabel(f"{label}: LLE [1/s]", fontsize=8)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
     return fig
 
 
@@ -290,11 +338,14 @@ def _bifurcation(spec, ctx):
     ds = next(iter(ctx["runs"].values()))
     scene = next(iter(ctx["study"].cases.values()))
     (param,) = list(parameter_sweep(scene))
+    note = failure_note(ds)
     fig, axes = _grid4(
-        spec, f"bifurcation diagram over {axis_label(ds[param])}; {_realisations_note(ctx)}"
+        spec,
+        f"bifurcation diagram over {axis_label(ds[param])}; {_realisations_note(ctx)}"
+        + (f"; {note} (red crosses)" if note else ""),
     )
     scale = 1e3 if param == "clearance" else (1 / np.pi if param == "omega" else 1.0)
-    xlabel = {"clearance": "clearance [mm]", "omega": "omega / pi [1] (crank 4)"}.get(
+    xlabel = {"clearance": "clearance [mm]", "omega": "omega / pi (crank 4)"}.get(
         param, axis_label(ds[param])
     )
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
@@ -302,10 +353,12 @@ def _bifurcation(spec, ctx):
         y = da.values.reshape(da.shape[0], -1)
         x = np.broadcast_to(ds[param].values[:, None] * scale, y.shape)
         ax.plot(x.ravel(), y.ravel() * 1e3, ".", ms=1.5, color="k", alpha=0.4)
+        if mark_failed(ax, ds, param, scale=scale):
+            ax.legend(fontsize=6, loc="upper right")
         ax.set_xlabel(xlabel, fontsize=8)
-        ax.set_ylabel(f"{label}: {axis_label(da).replace('[m]', '[mm]')}", fontsize=8)
+        ax.set_ylabel(f"{label}: {axis_label(da, 'mm')}", fontsize=8)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
+        plain_ticks(ax)
     return fig
 
 
@@ -324,6 +377,20 @@ def _sweep_parameter(d: xr.Dataset) -> str:
 
 def _case_label(d: xr.Dataset) -> str:
     return f"c = {d.attrs['clearance'] * 1e3:g} mm"
+
+
+def _mark_sweep_failures(ax, ctx) -> None:
+    """Red crosses at the parameter values where a point of a swept case failed."""
+    for case in ctx["sweeps"]:
+        run = ctx["runs"].get(case)
+        if run is not None:
+            mark_failed(ax, run, _sweep_parameter(ctx["sweeps"][case]))
+
+
+def _sweep_failures(ctx) -> str:
+    """'; failed points (red crosses): c_0.1mm: 2 of 112 points failed (...)' or ''."""
+    notes = [f"{case}: {n}" for case in ctx["sweeps"] if (n := _failed_in(ctx, case))]
+    return f"; failed points (red crosses): {'; '.join(notes)}" if notes else ""
 
 
 def _contact_vs_friction(spec, ctx):
@@ -346,7 +413,7 @@ def _contact_vs_friction(spec, ctx):
                     f"{_case_label(d)}, {q:g} %",
                     styles.get(float(q), "-"),
                 )
-        row[0].set_ylabel(f"joint {joint}: fraction of time in contact [1]")
+        row[0].set_ylabel(f"joint {joint}: fraction of time in contact")
         row[0].set_ylim(0, 1.05)
         row[1].set_ylabel(f"joint {joint}: contact force percentile [N]")
         row[1].set_yscale("log")
@@ -361,13 +428,15 @@ def _contact_vs_friction(spec, ctx):
         for ax in row:
             ax.set_xlabel(axis_label(d[param]))
             ax.grid(alpha=0.3, which="both")
+        for ax in row:
+            _mark_sweep_failures(ax, ctx)
         row[0].legend(fontsize=7)
         row[1].legend(fontsize=6, ncol=2)
     fig.suptitle(
         _title(
             spec,
             "contact against the friction coefficient (median and interquartile band over "
-            f"{_realisations_note(ctx)})",
+            f"{_realisations_note(ctx)}){_sweep_failures(ctx)}",
         ),
         fontsize=9,
     )
@@ -386,17 +455,18 @@ def _energy_balance(spec, ctx):
         _band(axes[0], x, e, f"C{i}", f"{_case_label(d)}: dissipated", "--")
         _band(axes[1], x, e / w, f"C{i}", _case_label(d))
     axes[0].set_ylabel("energy per crank cycle [J]")
-    axes[1].set_ylabel("dissipated energy / driver work [1]")
+    axes[1].set_ylabel("dissipated energy / driver work")
     axes[1].axhline(1.0, color="k", lw=0.6)
     for ax in axes:
         ax.set_xlabel(axis_label(d[param]))
         ax.grid(alpha=0.3)
+        _mark_sweep_failures(ax, ctx)
         ax.legend(fontsize=7)
     fig.suptitle(
         _title(
             spec,
             "energy balance per crank cycle (median and interquartile band over "
-            f"{_realisations_note(ctx)})",
+            f"{_realisations_note(ctx)}){_sweep_failures(ctx)}",
         ),
         fontsize=9,
     )

@@ -11,7 +11,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from workbench.archive import write_text_atomic
-from workbench.study._spec import STUDIES_DIR, available_studies
+from workbench.study._spec import available_studies, report_path
 
 __all__ = ["write_report"]
 
@@ -82,11 +82,14 @@ def _section_order(name: str) -> tuple:
 
 
 def write_report(
-    out: str | os.PathLike = "out/studies", path: str | os.PathLike = STUDIES_DIR / "REPORT.md"
+    out: str | os.PathLike = "out/studies", path: str | os.PathLike | None = None
 ) -> Path:
     """Collect ``<out>/<study>/summary.json`` of every study into a Markdown report at ``path``
-    (written atomically). Studies that have not been run are listed as such."""
+    (written atomically; default :func:`workbench.study.report_path`: ``studies/REPORT.md`` in
+    the repository, ``<out>/REPORT.md`` from an installed package). Studies that have not been
+    run are listed as such."""
     out = Path(out)
+    path = report_path(out) if path is None else path
     cpu = platform.processor() or platform.machine()
     body: list[str] = []
     timing_rows = []

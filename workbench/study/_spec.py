@@ -42,10 +42,17 @@ __all__ = [
     "quick_study",
     "quick_scene",
     "parameter_sweep",
+    "REPOSITORY_STUDIES",
     "STUDIES_DIR",
+    "report_path",
 ]
 
-STUDIES_DIR = Path(__file__).resolve().parents[2] / "studies"
+# The scenes of the studies ship inside the package (package data, so that an installed wheel
+# has them); in the repository the directory is a link to the top-level ``studies/``, the one
+# place they are edited.
+STUDIES_DIR = Path(__file__).resolve().parent / "scenes"
+#: the repository's ``studies/`` (absent from an installed package), where REPORT.md lives
+REPOSITORY_STUDIES = Path(__file__).resolve().parents[2] / "studies"
 FIGURE_KINDS = (
     "series",
     "orbit",
@@ -106,6 +113,15 @@ class Study:
             v = self.views[name]
             return self.cases[v["case"]].with_parameters(**v["select"])
         return self.cases[name]
+
+
+def report_path(out: str | Path) -> Path:
+    """Where the report goes by default: ``studies/REPORT.md`` in the repository (beside the
+    studies it reports on), else ``<out>/REPORT.md`` (an installed package is no place to
+    write)."""
+    if STUDIES_DIR.resolve() == REPOSITORY_STUDIES.resolve():
+        return REPOSITORY_STUDIES / "REPORT.md"
+    return Path(out) / "REPORT.md"
 
 
 def available_studies(root: Path = STUDIES_DIR) -> list[str]:

@@ -231,7 +231,9 @@ def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
     h = 0.0
     t_new = t
     while True:
-        if h_abs < h_min:
+        if not h_abs >= h_min:  # written so that a NaN step fails it too
+            if h_abs != h_abs:
+                ctrl[CT_NONFINITE] = 1.0
             return True, last_code, t_new, h, h_abs, False
         t_new, h = trial_step(t, t_end, h_abs)
         code, inside_stage, inside_end = _rk_step(method, t, h, m, st, w)

@@ -153,7 +153,8 @@ def start(t, m, st):
 @njit(cache=True)
 def initial_step(method, t0, t_end, s, m, st):
     """Initial step size (Hairer et al. 1993, Sec. II.4, "starting step size") from the point
-    (t0, st.y) with derivative st.f, s."""
+    (t0, st.y) with derivative st.f, s; NaN where none can be formed (the state or its
+    derivative overflows its norm scaled by the tolerances, e.g. a state of 1e50)."""
     p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
     y0 = st.y
     f0 = st.f
@@ -165,11 +166,15 @@ def initial_step(method, t0, t_end, s, m, st):
     if method == RADAU5:
         order = 3
     d0, d1 = initial_norms(y0, f0, s.rtol, s.atol)
+    if not (np.isfinite(d0) and np.isfinite(d1)):
+        return np.nan  # the state or its derivative overflows its scaled norm: no step
     if d0 < 1e-5 or d1 < 1e-5:
         h0 = 1e-6
     else:
         h0 = 0.01 * d0 / d1
     h0 = min(h0, interval)
+    if not h0 > 0.0:  # d0 / d1 underflowed (NaN fails this test too)
+        return np.nan
     y1 = np.empty(n)
     f1 = np.empty(n)
     for i in range(n):
@@ -216,8 +221,9 @@ def _switch(current, h, h_next, s, st, im, K, before):
 
 
 @njit(cache=True)
-def advance(t_end, t_pause, s, m, st, im):
-    """Integrate from st.ctrl[CT_T] until t_end (or the first step ending at or after t_pause).
+def advance(t_end, t_pause, step_pause, s, m, st, im):
+    """Integrate from st.ctrl[CT_T] until t_end (or the first step ending at or after t_pause,
+    or until st.stats[ST_STEPS] reaches ``step_pause``: the caller's chance to see signals).
 
     ``s``, ``m``, ``st``, ``im``: the run's :class:`~workbench.solver._loop_types.Settings`, the
     model's :class:`~workbench.solver._loop_types.Hooks`, the loop's
@@ -271,6 +277,8 @@ def advance(t_end, t_pause, s, m, st, im):
     f_inside = ctrl[CT_F_INSIDE] > 0.0
     i_rec = stats[ST_RECORDED]
     status = DONE
+    # one test per step for both limits: the run's max_steps and the pause the caller asked for
+    step_limit = min(s.max_steps, step_pause)
     while i_rec < nrec and t_rec[i_rec] <= t:
         Yrec[i_rec, :] = y
         AUXrec[i_rec, :] = aux
@@ -282,8 +290,8 @@ def advance(t_end, t_pause, s, m, st, im):
         if t >= t_pause:
             status = PAUSED
             break
-        if stats[ST_STEPS] >= s.max_steps:
-            status = MAX_STEPS
+        if stats[ST_STEPS] >= step_limit:
+            status = MAX_STEPS if stats[ST_STEPS] >= s.max_steps else PAUSED
             break
         h_min = min_step(t)
         if h_abs > s.max_step:

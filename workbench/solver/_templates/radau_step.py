@@ -179,7 +179,9 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
     h = 0.0
     t_new = t
     while True:
-        if h_abs < h_min:
+        if not h_abs >= h_min:  # written so that a NaN step fails it too
+            if h_abs != h_abs:
+                st.ctrl[CT_NONFINITE] = 1.0
             return True, last_code, t_new, h, h_abs, False
         t_new, h = trial_step(t, t_end, h_abs)
         if rc[RC_JAC] == 0.0:
