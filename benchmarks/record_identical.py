@@ -14,6 +14,7 @@ friction, 5000 rpm) and the same with Coulomb and with LuGre friction (c_f = 0.0
 variable and coordinate of each run is compared with ``np.array_equal`` (NaN equal to NaN).
 """
 
+import subprocess
 import sys
 import time
 import tomllib
@@ -66,14 +67,31 @@ def arrays() -> dict[str, np.ndarray]:
     return out
 
 
+def code_version() -> str:
+    """The commit of the ``workbench`` package that runs (``-dirty`` if its files differ from
+    it) and its directory: the baseline says which code recorded it."""
+    root = Path(workbench.__file__).resolve().parents[1]
+
+    def git(*args: str) -> str:
+        out = subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True)
+        return out.stdout.strip()
+
+    sha = git("rev-parse", "--short", "HEAD") or "unknown"
+    dirty = git("status", "--porcelain", "--untracked-files=no", "--", "workbench")
+    return f"{sha}{'-dirty' if dirty else ''} ({root})"
+
+
 def main(mode: str, path: str) -> int:
+    version = code_version()
+    print(f"workbench {version}")
     new = arrays()
     if mode == "record":
-        np.savez(path, **new)
+        np.savez(path, **new, _recorded_by=np.array(version))
         print(f"recorded {len(new)} arrays in {path}")
         return 0
     with np.load(path) as f:
         old = {k: f[k] for k in f.files}
+    print(f"baseline {path}: workbench {old.pop('_recorded_by', 'unknown')}")
     bad = sorted(set(old) ^ set(new))
     for k in sorted(set(old) & set(new)):
         a, b = old[k], new[k]
