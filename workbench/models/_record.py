@@ -155,7 +155,7 @@ def assemble(J, gam, pos, vel, mass, inertia, gx, gy, M, h, Q):
 
 
 @njit(cache=True)
-def clearance_joint(Q, kin, joint, jp, fp, friction, hg):
+def clearance_joint(Q, J, pos, vel, joint, jp, fp, friction, hg):
     """:func:`joint_forces` of a clearance joint, with their generalised forces added to Q (the
     forces act at the material contact points, so friction also exerts moments on both bodies).
 
@@ -163,8 +163,11 @@ def clearance_joint(Q, kin, joint, jp, fp, friction, hg):
     ----------
     Q : float64 array [n_q] (in/out)
         Generalised forces, N or N m.
-    kin : ~workbench.models._record_types.Kinematics
-        The kinematics at q, qd (J, pos and vel are read).
+    J, pos, vel : float64 arrays
+        Of the kinematics at q, qd (:class:`~workbench.models._record_types.Kinematics`): the
+        bodies' Jacobian [n_bodies, 3, n_q], positions (m, rad) and velocities (m s-1,
+        rad s-1) [n_bodies, 3]; passed as arrays, not in the tuple (an access of an array in a
+        numba tuple costs a pair of reference-count operations, per joint and evaluation).
     joint : ~workbench.models._record_types.JointState
         The joint's bodies, bearing centre, clearance vector and contact state.
     jp, fp : tuples of float
@@ -180,7 +183,6 @@ def clearance_joint(Q, kin, joint, jp, fp, friction, hg):
     tuple of float
         (e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay) as :func:`joint_forces`.
     """
-    J, pos, vel = kin.J, kin.pos, kin.vel
     vj = body_velocity(vel, pos, joint.journal)
     vb = body_velocity(vel, pos, joint.bearing)
     e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy = joint_forces(
@@ -298,7 +300,7 @@ def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
             z=y[iz] if iz >= 0 else 0.0,
         )
         e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay = clearance_joint(
-            Q, kin, joint, joint_parameters(p, jb), fp, friction, work[W.hg]
+            Q, J, pos, vel, joint, joint_parameters(p, jb), fp, friction, work[W.hg]
         )
         if iz >= 0:
             y[iz] = z  # solved in an implicit stage (unchanged otherwise)
