@@ -48,7 +48,7 @@ class Kinematics(NamedTuple):
     qd: np.ndarray  # [n_q] their rates (rad s-1, m s-1)
     pos: np.ndarray  # [n_bodies, 3] per body: centroid x, y (m), angle (rad)
     pts: np.ndarray  # [n_points, 2] per point: x, y (m)
-    J: np.ndarray  # [n_bodies, 3, n_q] d pos / d q (m per coordinate unit, rad per ...)
+    J: np.ndarray  # [n_bodies, 3, n_q] d pos / d q_k: m or rad per unit of q_k (rad or m)
     Jp: np.ndarray  # [n_points, 2, n_q] d pts / d q
     gam: np.ndarray  # [n_bodies, 3] bias accelerations (at qdd = 0): m s-2, rad s-2
     gamp: np.ndarray  # [n_points, 2] of the points: m s-2
