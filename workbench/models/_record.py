@@ -3,7 +3,12 @@ kinematics passes stored into arrays, the full mass matrix, bias and generalised
 bodies, every clearance joint's forces and record, the free accelerations, the driving
 torques, the slider's motion and the energies (:func:`evaluate_mechanism`); and the
 right-hand side a record gives (:func:`rates_from_record`), the reference the lean
-right-hand sides (:mod:`workbench.models._reduced`) are tested against. Units: SI."""
+right-hand sides (:mod:`workbench.models._reduced`) are tested against. Units: SI.
+
+As the solver's loop, the evaluation takes its inputs besides the model's flat arrays in named
+tuples (:mod:`workbench.models._record_types`); it takes the arrays out of them once (an access
+of an array in a numba tuple costs a pair of reference-count operations).
+"""
 
 from __future__ import annotations
 
@@ -19,6 +24,7 @@ from workbench.models._mechanism_layouts import (
     JOINT,
     JOINT_RECORD,
 )
+from workbench.models._record_types import JointState, Kinematics
 from workbench.models._reduced import (
     body_product,
     dissipated_power,
@@ -64,11 +70,12 @@ def store_column(values, J, Jp, k):
 
 @njit(cache=True)
 def kinematic_arrays(work, W, n_q, n_bodies, n_points):
-    """Views into ``work`` (layout W, fields of :func:`work_fields`) of q, qd and the
-    kinematics arrays: (q, qd, pos, pts, J, Jp, gam, gamp, vel, velp) with pos, gam, vel
-    [n_bodies, 3], pts, gamp, velp [n_points, 2], J [n_bodies, 3, n_q], Jp [n_points, 2, n_q]."""
+    """The :class:`~workbench.models._record_types.Kinematics` of views into ``work`` (layout W,
+    fields of :func:`workbench.models._mechanism_layouts.work_fields`): q, qd [n_q], pos, gam,
+    vel [n_bodies, 3], pts, gamp, velp [n_points, 2], J [n_bodies, 3, n_q], Jp [n_points, 2,
+    n_q]."""
     nb, npt, nq = n_bodies, n_points, n_q
-    return (
+    return Kinematics(
         work[W.q : W.q + nq],
         work[W.qd : W.qd + nq],
         work[W.pos : W.pos + 3 * nb].reshape((nb, 3)),
@@ -148,24 +155,43 @@ def assemble(J, gam, pos, vel, mass, inertia, gx, gy, M, h, Q):
 
 
 @njit(cache=True)
-def clearance_joint(
-    Q, J, pos, vel, bj, bb, bcx, bcy, x, y, vx, vy, onset, p, jb, fb, friction, z, hg
-):  # fmt: skip
-    """:func:`joint_forces` of a joint whose journal is body ``bj`` and bearing body ``bb``
-    (rows of J and pos), with their generalised forces added to Q (the forces act at the
-    material contact points, so friction also exerts moments on both bodies).
+def clearance_joint(Q, J, pos, vel, joint, jp, fp, friction, hg):
+    """:func:`joint_forces` of a clearance joint, with their generalised forces added to Q (the
+    forces act at the material contact points, so friction also exerts moments on both bodies).
 
-    Returns (e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay) as :func:`joint_forces`.
+    Parameters
+    ----------
+    Q : float64 array [n_q] (in/out)
+        Generalised forces, N or N m.
+    J, pos, vel : float64 arrays
+        Of the kinematics at q, qd (:class:`~workbench.models._record_types.Kinematics`): the
+        bodies' Jacobian [n_bodies, 3, n_q], positions (m, rad) and velocities (m s-1,
+        rad s-1) [n_bodies, 3]; passed as arrays, not in the tuple (an access of an array in a
+        numba tuple costs a pair of reference-count operations, per joint and evaluation).
+    joint : ~workbench.models._record_types.JointState
+        The joint's bodies, bearing centre, clearance vector and contact state.
+    jp, fp : tuples of float
+        The joint's parameters (JOINT layout: :func:`joint_parameters`) and the friction
+        parameters (FRICTION layout: :func:`friction_parameters`).
+    friction : int
+        The friction law (FRICTION_* of :mod:`workbench.models._mechanism_layouts`).
+    hg : float
+        h gamma (s) of an implicit ARK548 stage, else 0 (see :func:`joint_forces`).
+
+    Returns
+    -------
+    tuple of float
+        (e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay) as :func:`joint_forces`.
     """
-    vj = body_velocity(vel, pos, bj)
-    vb = body_velocity(vel, pos, bb)
+    vj = body_velocity(vel, pos, joint.journal)
+    vb = body_velocity(vel, pos, joint.bearing)
     e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy = joint_forces(
-        x, y, vx, vy, onset, bcx, bcy, vj, vb, joint_parameters(p, jb),
-        friction_parameters(p, fb), friction, z, hg,
+        joint.x, joint.y, joint.vx, joint.vy, joint.onset, joint.bcx, joint.bcy, vj, vb, jp, fp,
+        friction, joint.z, hg,
     )  # fmt: skip
     if delta > 0.0 and e > 0.0:
-        generalised_force(Q, J, pos, bj, jx, jy, fx, fy)
-        generalised_force(Q, J, pos, bb, bx, by, -fx, -fy)
+        generalised_force(Q, J, pos, joint.journal, jx, jy, fx, fy)
+        generalised_force(Q, J, pos, joint.bearing, bx, by, -fx, -fy)
     return e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay
 
 
@@ -212,41 +238,37 @@ def solve_free(M, h, Q, free, nf, qdd):
 
 
 @njit(cache=True)
-def evaluate_mechanism(
-    y, p, ip, aux, work, P, IP, W, RECORD, pos, pts, J, gam, vel, journal, bearing,
-    bearing_point, slider_body, slider_sign, slider_offset,
-):  # fmt: skip
-    """The record-time evaluation of a mechanism whose kinematics are in the arrays.
+def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
+    """The record-time evaluation of a mechanism whose kinematics at (q, qd) are in ``kin``.
 
     Parameters
     ----------
     y, p, ip, aux : float64 and int64 arrays
-        State, parameters, integer parameters and discrete state of the model (layouts P, IP).
+        State, parameters, integer parameters and discrete state of the model (layouts
+        mech.P, mech.IP).
     work : float64 array (in/out)
-        Workspace of layout W: q, qd (filled), the scratch M, h, Q, the solver's hg; the
-        record (layout RECORD, at its head) is filled.
-    P, IP, W, RECORD : Layout
-        The model's layouts; P has the fields mass, inertia, gx, gy, joint, friction; W the
-        record fields (:func:`record_fields`) and q, qd, M, h, Q, hg.
-    pos, pts, J, gam, vel : float64 arrays
-        Kinematics at q, qd: pos[nb, 3], pts[np, 2], J[nb, 3, nq], gam[nb, 3] and the bodies'
-        velocities vel[nb, 3] from the velocity pass.
-    journal, bearing, bearing_point : tuples of int
-        Per joint: the journal's and the bearing's body (rows of pos) and the bearing centre
-        (row of pts).
-    slider_body, slider_sign, slider_offset : int, float, float
-        The slider's record is offset + sign x of that body's centroid (m), and its rates.
+        Workspace of layout mech.W: the scratch M, h, Q, the solver's hg; the record (layout
+        mech.RECORD, at its head) is filled.
+    mech : ~workbench.models._record_types.MechanismLayout
+        The model's layouts and the bodies and points of its clearance joints.
+    kin : ~workbench.models._record_types.Kinematics
+        Kinematics at q, qd (views into ``work``); q, qd, pos, pts, J, gam and vel are read.
+    slider : ~workbench.models._record_types.Slider
+        The slider's record is slider.offset + slider.sign x of that body's centroid (m), and
+        its rates.
 
     Returns
     -------
     int
         0 or a failure code CODE_* (penetration, singular mass matrix, non-finite values).
     """
+    P, IP, W, RECORD = mech.P, mech.IP, mech.W, mech.RECORD
+    journal, bearing, bearing_point = mech.journal, mech.bearing, mech.bearing_point
+    # the arrays taken out of the tuple once (an access costs a pair of reference-count updates)
+    q, qd, pos, pts, J, gam, vel = kin.q, kin.qd, kin.pos, kin.pts, kin.J, kin.gam, kin.vel
     nq = J.shape[2]
     nb = J.shape[0]
     nd = nq - 2 * len(journal)  # the driven coordinates come first
-    q = work[W.q : W.q + nq]
-    qd = work[W.qd : W.qd + nq]
     M = work[W.M : W.M + nq * nq].reshape((nq, nq))
     h = work[W.h : W.h + nq]
     Q = work[W.Q : W.Q + nq]
@@ -257,6 +279,7 @@ def evaluate_mechanism(
         p[P.gy], M, h, Q,
     )  # fmt: skip
     friction = ip[IP.friction]
+    fp = friction_parameters(p, P.friction)
     p_diss = 0.0
     for j in range(len(journal)):
         if ip[IP.has + j] == 0:
@@ -264,12 +287,21 @@ def evaluate_mechanism(
         jb = P.joint + j * JOINT.size
         ix = nd + 2 * j
         iz = ip[IP.z + j]
-        z = y[iz] if iz >= 0 else 0.0
+        joint = JointState(
+            journal=journal[j],
+            bearing=bearing[j],
+            bcx=pts[bearing_point[j], 0],
+            bcy=pts[bearing_point[j], 1],
+            x=q[ix],
+            y=q[ix + 1],
+            vx=qd[ix],
+            vy=qd[ix + 1],
+            onset=aux[j],
+            z=y[iz] if iz >= 0 else 0.0,
+        )
         e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay = clearance_joint(
-            Q, J, pos, vel, journal[j], bearing[j], pts[bearing_point[j], 0],
-            pts[bearing_point[j], 1], q[ix], q[ix + 1], qd[ix], qd[ix + 1], aux[j], p, jb,
-            P.friction, friction, z, work[W.hg],
-        )  # fmt: skip
+            Q, J, pos, vel, joint, joint_parameters(p, jb), fp, friction, work[W.hg]
+        )
         if iz >= 0:
             y[iz] = z  # solved in an implicit stage (unchanged otherwise)
         pd = dissipated_power(fdamp, ddot, ft, vt)
@@ -285,7 +317,7 @@ def evaluate_mechanism(
         work[wb + JOINT_RECORD.fn] = fn
         work[wb + JOINT_RECORD.ft] = ft
         work[wb + JOINT_RECORD.mu] = mu
-        above, beyond = friction_excess(mu, vt, friction_parameters(p, P.friction))
+        above, beyond = friction_excess(mu, vt, fp)
         work[wb + JOINT_RECORD.above] = above
         work[wb + JOINT_RECORD.beyond] = beyond
         work[wb + JOINT_RECORD.vt] = vt
@@ -309,13 +341,14 @@ def evaluate_mechanism(
             s += M[d, k] * qdd[k]
         work[W.tau + d] = s
         p_drive += s * qd[d]
-    b = slider_body
+    b = slider.body
+    sign = slider.sign
     a = gam[b, 0]
     for k in range(nq):
         a += J[b, 0, k] * qdd[k]
-    work[W.slider] = slider_offset + slider_sign * pos[b, 0]
-    work[W.slider + 1] = slider_sign * vel[b, 0]
-    work[W.slider + 2] = slider_sign * a
+    work[W.slider] = slider.offset + sign * pos[b, 0]
+    work[W.slider + 1] = sign * vel[b, 0]
+    work[W.slider + 2] = sign * a
     work[W.ke] = ke
     work[W.pe] = pe
     work[W.pdrive] = p_drive
@@ -326,9 +359,13 @@ def evaluate_mechanism(
 
 
 @njit(cache=True)
-def rates_from_record(y, ip, aux, work, dydt, IP, W, n_joints):
-    """dy/dt from a record of :func:`evaluate_mechanism` (hook protocol of ``rhs``: returns 0
-    or EVENT_INSIDE_STEP where a joint is in contact whose onset was not located)."""
+def rates_from_record(y, ip, aux, work, dydt, mech):
+    """dy/dt from a record of :func:`evaluate_mechanism` in ``work`` (hook protocol of ``rhs``:
+    returns 0 or EVENT_INSIDE_STEP where a joint is in contact whose onset was not located);
+    ``mech`` the model's
+    :class:`~workbench.models._record_types.MechanismLayout`."""
+    IP, W = mech.IP, mech.W
+    n_joints = len(mech.journal)
     nf = ip[IP.nf]
     for i in range(nf):
         dydt[i] = y[nf + i]

@@ -55,6 +55,7 @@ from workbench.models._mechanism_layouts import (
     work_fields,
 )
 from workbench.models._record import evaluate_mechanism, kinematic_arrays, rates_from_record
+from workbench.models._record_types import MechanismLayout, Slider
 from workbench.models._reduced import (
     column_force,
     dissipated_power,
@@ -119,6 +120,16 @@ WORK_SIZE = W.size
 BEARING_BODY = (CRANK1, CRANK4)  # crank 1 carries bearing A, crank 4 bearing B
 JOURNAL_BODY = (LINK2, LINK3)  # link 2 carries journal A, link 3 journal B
 BEARING_POINT = (PT_A, PT_B)
+# what the record-time evaluation (workbench.models._record) knows of the model
+MECHANISM = MechanismLayout(
+    P=P,
+    IP=IP,
+    W=W,
+    RECORD=RECORD,
+    journal=JOURNAL_BODY,
+    bearing=BEARING_BODY,
+    bearing_point=BEARING_POINT,
+)
 _G_S0 = GEOMETRY_FIELDS.index("S0")
 _G_O6X = GEOMETRY_FIELDS.index("O6x")
 
@@ -135,9 +146,8 @@ def evaluate(t, y, p, ip, aux, work):
     """
     omega = p[P.omega]
     nf = ip[IP.nf]
-    q, qd, pos, pts, J, Jp, gam, gamp, vel, velp = kinematic_arrays(
-        work, W, N_Q, N_BODIES, N_POINTS
-    )
+    kin = kinematic_arrays(work, W, N_Q, N_BODIES, N_POINTS)
+    q, qd, pos, pts, J, Jp, gam, gamp, vel, velp = kin
     q[:] = 0.0
     qd[:] = 0.0
     q[0] = p[P.theta10] - omega * t
@@ -150,11 +160,8 @@ def evaluate(t, y, p, ip, aux, work):
     if kinematics(q, qd, p, pos, pts, J, Jp, gam, gamp, vel, velp) != 0:
         return CODE_ASSEMBLY
     # slider: S9 = S0 - (x_E - x_O6); body SLIDER9 moves with E
-    return evaluate_mechanism(
-        y, p, ip, aux, work, P, IP, W, RECORD, pos, pts, J, gam, vel, JOURNAL_BODY,
-        BEARING_BODY,
-        BEARING_POINT, SLIDER9, -1.0, p[_G_S0] + p[_G_O6X],
-    )  # fmt: skip
+    slider = Slider(body=SLIDER9, sign=-1.0, offset=p[_G_S0] + p[_G_O6X])
+    return evaluate_mechanism(y, p, ip, aux, work, MECHANISM, kin, slider)
 
 
 @njit(cache=True)
@@ -164,7 +171,7 @@ def rhs_reference(t, y, p, ip, aux, work, dydt):
     code = evaluate(t, y, p, ip, aux, work)
     if code != 0:
         return code
-    return rates_from_record(y, ip, aux, work, dydt, IP, W, N_JOINTS)
+    return rates_from_record(y, ip, aux, work, dydt, MECHANISM)
 
 
 @njit(cache=True)

@@ -37,6 +37,7 @@ from workbench.models._mechanism_layouts import (
     work_fields,
 )
 from workbench.models._record import evaluate_mechanism, kinematic_arrays, rates_from_record
+from workbench.models._record_types import MechanismLayout, Slider
 from workbench.models._reduced import (
     column_force,
     dissipated_power,
@@ -91,6 +92,16 @@ WORK_SIZE = W.size
 JOURNAL_BODY = (ROD,)  # the rod's end B' is the journal
 BEARING_BODY = (SLIDER,)  # the slider carries the bearing
 BEARING_POINT = (PT_B,)
+# what the record-time evaluation (workbench.models._record) knows of the model
+MECHANISM = MechanismLayout(
+    P=P,
+    IP=IP,
+    W=W,
+    RECORD=RECORD,
+    journal=JOURNAL_BODY,
+    bearing=BEARING_BODY,
+    bearing_point=BEARING_POINT,
+)
 _ZERO_PASS = (0.0,) * (3 * N_BODIES + 2 * N_POINTS)
 
 
@@ -102,9 +113,8 @@ def evaluate(t, y, p, ip, aux, work):
     """Accelerations, torque, forces and energies at (t, y) into ``work[:RECORD.size]``
     (layout RECORD); returns 0 or a failure code (CODE_*)."""
     omega = p[P.omega]
-    q, qd, pos, pts, J, Jp, gam, gamp, vel, velp = kinematic_arrays(
-        work, W, N_Q, N_BODIES, N_POINTS
-    )
+    kin = kinematic_arrays(work, W, N_Q, N_BODIES, N_POINTS)
+    q, qd, pos, pts, J, Jp, gam, gamp, vel, velp = kin
     q[:] = 0.0
     qd[:] = 0.0
     q[0] = p[P.theta10] + omega * t
@@ -113,11 +123,8 @@ def evaluate(t, y, p, ip, aux, work):
         q[1], q[2], qd[1], qd[2] = y[0], y[1], y[2], y[3]
     if kinematics(q, qd, p, pos, pts, J, Jp, gam, gamp, vel, velp) != 0:
         return CODE_ASSEMBLY
-    return evaluate_mechanism(
-        y, p, ip, aux, work, P, IP, W, RECORD, pos, pts, J, gam, vel, JOURNAL_BODY,
-        BEARING_BODY,
-        BEARING_POINT, SLIDER, 1.0, 0.0,
-    )  # fmt: skip
+    slider = Slider(body=SLIDER, sign=1.0, offset=0.0)
+    return evaluate_mechanism(y, p, ip, aux, work, MECHANISM, kin, slider)
 
 
 @njit(cache=True)
@@ -127,7 +134,7 @@ def rhs_reference(t, y, p, ip, aux, work, dydt):
     code = evaluate(t, y, p, ip, aux, work)
     if code != 0:
         return code
-    return rates_from_record(y, ip, aux, work, dydt, IP, W, N_JOINTS)
+    return rates_from_record(y, ip, aux, work, dydt, MECHANISM)
 
 
 @njit(cache=True)
