@@ -10,7 +10,9 @@ the type, parameter and multipliers of every bifurcation; and the largest Lyapun
 few values. ``[route]`` keys: ``case`` (default the swept one), ``segments``,
 ``transient_cycles`` (per continued point), ``cycles`` (recorded; >= 100 for the 0-1 test),
 ``method`` (solver), ``branch_start``, ``branch_stop`` (the orbit's range; no branch without
-them), ``exponents`` (how many values of the sweep get an exponent, default 0).
+them), ``branch_points`` (the most points of the branch, default 300: it ends there, and says
+so, which bounds the study's cost), ``exponents`` (how many values of the sweep get an
+exponent, default 0).
 """
 
 from __future__ import annotations
@@ -157,7 +159,14 @@ def _branch(scene, param: str, spec: dict, path: Path) -> dict:
 
     start, stop = float(spec["branch_start"]), float(spec["branch_stop"])
     point = scene.replace(sweep={}).with_parameters(**{param: start})
-    branch = continue_orbit(point, param, stop=stop, rtol=1e-8, tolerance=1e-6)
+    branch = continue_orbit(
+        point,
+        param,
+        stop=stop,
+        rtol=1e-8,
+        tolerance=1e-6,
+        max_points=int(spec.get("branch_points", 300)),
+    )
     save_run(branch, path)
     names = branch.label.attrs["flag_meanings"].split()
     stable = branch.stable.values

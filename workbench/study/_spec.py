@@ -77,6 +77,7 @@ ROUTE_KEYS = (
     "method",
     "branch_start",
     "branch_stop",
+    "branch_points",
     "exponents",
 )
 QUICK_REALISATIONS = 4  # the fewest for which the two-sample rank test can reach p < 0.05
