@@ -19,7 +19,12 @@ import workbench
 from workbench._cache import cache_root
 from workbench.campaign import jobqueue_cluster, store_paths
 
-pytest.importorskip("dask_jobqueue")
+try:  # dask-jobqueue's import replaces the process's SIGINT handler: imported as workbench does
+    from workbench.campaign._jobqueue import _import_dask_jobqueue
+
+    _import_dask_jobqueue()
+except ImportError:
+    pytest.skip("the 'cluster' extra (dask-jobqueue) is not installed", allow_module_level=True)
 
 GUIDE = Path(__file__).resolve().parents[1] / "docs" / "cluster.md"
 SCENE = """\
@@ -260,3 +265,20 @@ def test_the_guides_lazy_analysis_runs_on_a_small_fig32_archive(tmp_path, monkey
     k = K.K.compute()
     assert k.dims == ("omega",) and k.sizes["omega"] == 3
     assert k.attrs["units"] == "1" and bool(((k > -0.5) & (k < 1.5)).all())
+
+
+def test_importing_dask_jobqueue_keeps_ctrl_c():
+    """dask-jobqueue 0.9's SLURM module sets SIGINT to sys.exit in the importing process: after
+    the import workbench does, Ctrl-C still raises KeyboardInterrupt (it raised SystemExit in
+    every later test of the suite)."""
+    import importlib
+    import signal
+
+    from workbench.campaign._jobqueue import _import_dask_jobqueue
+
+    before = signal.getsignal(signal.SIGINT)
+    for name in [m for m in sys.modules if m.startswith("dask_jobqueue")]:
+        del sys.modules[name]  # imported afresh, as in a new session
+    _import_dask_jobqueue()
+    assert signal.getsignal(signal.SIGINT) is before
+    assert importlib.import_module("dask_jobqueue.runner")  # the module that sets it, loaded

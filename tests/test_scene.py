@@ -109,3 +109,20 @@ def test_every_variable_and_coordinate_has_units():
 def test_simulate_refuses_a_sweep():
     with pytest.raises(ValueError, match="run_campaign"):
         workbench.simulate({**GOOD, "sweep": {"gamma": [0.2, 0.3]}})
+
+
+@pytest.mark.parametrize("friction", ["none", "coulomb", "lugre"])
+@pytest.mark.parametrize("model", ["ninebar", "slider_crank"])
+def test_no_recorded_variable_is_named_like_a_parameter(model, friction):
+    """A variable named like a parameter hides one of the two once the parameters are stored as
+    coordinates: LuGre's |F_t|/F_n was recorded as ``friction_coefficient``, the name of the
+    Coulomb coefficient, and the friction study read c_f for it."""
+    from workbench.models import get_model
+
+    m = get_model(model)
+    clearance = ["A", "B"] if model == "ninebar" else ["B"]
+    scene = load_scene(
+        {"model": {"name": model}, "effects": {"clearance": clearance, "friction": friction}}
+    )
+    clash = set(m.variables(scene.effects)) & {p.name for p in m.parameters}
+    assert not clash, f"{model} with {friction} friction records {sorted(clash)}"

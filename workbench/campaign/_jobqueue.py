@@ -121,13 +121,7 @@ def jobqueue_cluster(
             f"cache_dir={str(cache_dir)!r} must be an absolute path on storage that every node "
             "mounts (the workers' WORKBENCH_CACHE_DIR)"
         )
-    try:
-        import dask_jobqueue
-    except ImportError as exc:
-        raise ImportError(
-            "jobqueue_cluster needs dask-jobqueue: pip install 'workbench[cluster]' (or "
-            "dask-jobqueue)"
-        ) from exc
+    dask_jobqueue = _import_dask_jobqueue()
     import dask
 
     prologue = [f"export WORKBENCH_CACHE_DIR={shlex.quote(str(cache))}"]
@@ -147,6 +141,29 @@ def jobqueue_cluster(
             job_script_prologue=prologue,
             **options,
         )
+
+
+def _import_dask_jobqueue():
+    """Import dask-jobqueue, keeping this process's Ctrl-C: its SLURM module imports
+    ``dask_jobqueue.runner``, which replaces the SIGINT handler of whatever process imports it
+    with ``sys.exit`` (dask-jobqueue 0.9), so that a KeyboardInterrupt became a SystemExit in
+    every later computation of the session."""
+    import signal
+    import threading
+
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGINT) if main else None
+    try:
+        import dask_jobqueue
+    except ImportError as exc:
+        raise ImportError(
+            "jobqueue_cluster needs dask-jobqueue: pip install 'workbench[cluster]' (or "
+            "dask-jobqueue)"
+        ) from exc
+    finally:
+        if main and previous is not None:
+            signal.signal(signal.SIGINT, previous)
+    return dask_jobqueue
 
 
 def _env_name(key: str) -> str:

@@ -8,7 +8,7 @@ import math
 import warnings
 from pathlib import Path
 
-from workbench.cli._console import positive_int
+from workbench.cli._console import add_quiet, positive_int
 
 __all__ = ["register_cli"]
 
@@ -17,7 +17,7 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file
     from workbench.campaign import summary
     from workbench.cli._campaign import campaign_exit_code
-    from workbench.cli._console import announce_compile
+    from workbench.cli._console import compile_kernel
     from workbench.continuation import chaos_map
     from workbench.scene import load_scene
 
@@ -25,7 +25,7 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
     check_output_file(args.output, "-o/--output", overwrite=True)
     if args.figure:
         check_output_file(args.figure, "--figure", overwrite=True)
-    announce_compile(scene)
+    compile_kernel(scene, quiet=args.quiet)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
         ds = chaos_map(
@@ -61,5 +61,5 @@ def register_cli(sub) -> None:
     p.add_argument("--workers", type=positive_int, help="processes (default: CPUs)")
     p.add_argument("--figure", metavar="PNG", help="draw the maps (two swept dims)")
     p.add_argument("--restart", action="store_true", help="discard a stored map")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_quiet(p)
     p.set_defaults(func=_cmd_chaos_map)

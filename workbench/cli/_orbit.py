@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from workbench.cli._console import positive_float, positive_int
+from workbench.cli._console import add_quiet, positive_float, positive_int
 from workbench.cli._exit_codes import UsageError
 
 __all__ = ["register_cli"]
@@ -29,7 +29,7 @@ def _range(scene, param: str, start: float | None, stop: float | None) -> tuple[
 
 def _cmd_orbit(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file, open_run, save_run
-    from workbench.cli._console import announce_compile
+    from workbench.cli._console import compile_kernel
     from workbench.continuation import continue_orbit
     from workbench.scene import load_scene
 
@@ -43,7 +43,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
         raise UsageError("--diagram needs --figure and --var (the sweep's variable, e.g. x)")
     start, stop = _range(scene, args.param, args.start, args.stop)
     single = scene.replace(sweep={}) if scene.sweep else scene
-    announce_compile(single)
+    compile_kernel(single, quiet=args.quiet)
     try:
         branch = continue_orbit(
             single,
@@ -139,4 +139,5 @@ def register_cli(sub) -> None:
         help="fix another dim of the sweep, e.g. --at joint=A; repeatable",
     )
     p.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    add_quiet(p)
     p.set_defaults(func=_cmd_orbit)
