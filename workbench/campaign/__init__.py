@@ -99,6 +99,7 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 from workbench.campaign._assemble import assemble_blocks, summary
 from workbench.campaign._block import (
     block_dataset,
+    block_summary,
     failed,
     invalid_outcome,
     run_outcome,
@@ -126,6 +127,7 @@ __all__ = [
     "assemble_blocks",
     "available_workers",
     "block_dataset",
+    "block_summary",
     "campaign_id",
     "code_of",
     "execute",

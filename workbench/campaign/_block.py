@@ -36,6 +36,7 @@ __all__ = [
     "STATUS",
     "STATS",
     "block_dataset",
+    "block_summary",
     "failed",
     "invalid_outcome",
     "run_block",
@@ -227,10 +228,18 @@ def run_block(task: BlockTask) -> dict:
         block_wall_time=time.perf_counter() - wall0,
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
+    return block_summary(task, ds, runs, code, wall0, keep=ds.nbytes <= RETURN_LIMIT)
+
+
+def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: float, *,
+                  keep: bool = True) -> dict:  # fmt: skip
+    """What a worker returns for the block it wrote to ``task.path`` (a campaign's block or a
+    continued sweep's segment): see :func:`run_block`; ``keep``: return the dataset itself,
+    ``wall0``: :func:`time.perf_counter` when the block started (s)."""
     return {
         "sha256": sha256_file(task.path),
         "code_digest": code,
-        "dataset": ds if ds.nbytes <= RETURN_LIMIT else None,
+        "dataset": ds if keep else None,
         "block": task.block,
         "points": len(task.flat),
         "failures": [

@@ -30,7 +30,7 @@ def _range(scene, param: str, start: float | None, stop: float | None) -> tuple[
 def _cmd_orbit(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file, open_run, save_run
     from workbench.cli._console import compile_kernel
-    from workbench.continuation import continue_orbit
+    from workbench.continuation import branch_bifurcations, continue_orbit
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -59,16 +59,10 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     out = save_run(branch, args.output)
-    names = branch.label.attrs["flag_meanings"].split()
     found = [
-        f"{names[int(k)]} at {args.param} = {p:.8g} (multiplier {re:+.4f}{im:+.4f}i)"
-        for k, p, re, im in zip(
-            branch.bifurcation_label.values,
-            branch.bifurcation_parameter.values,
-            branch.critical_real.values,
-            branch.critical_imag.values,
-            strict=True,
-        )
+        f"{b['type']} at {args.param} = {b['value']:.8g} (multiplier "
+        f"{b['critical'].real:+.4f}{b['critical'].imag:+.4f}i)"
+        for b in branch_bifurcations(branch, args.param)
     ]
     print(
         f"{branch.sizes['point']} orbits on {int(branch.branch.max()) + 1} branch(es), "

@@ -15,7 +15,7 @@ from workbench.continuation._indicators import (
     strobe_period,
     strobe_zero_one,
 )
-from workbench.continuation._orbits import continue_orbit, periodic_orbit
+from workbench.continuation._orbits import branch_bifurcations, continue_orbit, periodic_orbit
 from workbench.continuation._seams import attractor_distance
 from workbench.continuation._strobe import StrobeMap
 from workbench.continuation._sweep import continued_sweep
@@ -23,6 +23,7 @@ from workbench.continuation._sweep import continued_sweep
 __all__ = [
     "StrobeMap",
     "attractor_distance",
+    "branch_bifurcations",
     "chaos_indicators",
     "chaos_map",
     "continue_orbit",

@@ -349,3 +349,27 @@ def _dataset(
         max_points=max_points,
     )
     return ds
+
+
+def branch_bifurcations(branch: xr.Dataset, parameter: str) -> list[dict]:
+    """The bifurcations located on a branch of :func:`continue_orbit`, in order: per
+    bifurcation its ``type`` (the label's meaning, e.g. ``period_doubling``), ``value`` (the
+    parameter there, in its units), ``critical`` (the critical Floquet multiplier, complex) and
+    ``index`` (the branch point nearest to it)."""
+    names = branch.label.attrs["flag_meanings"].split()
+    values = branch[parameter].values
+    return [
+        {
+            "type": names[int(k)],
+            "value": float(p),
+            "critical": complex(re, im),
+            "index": int(np.argmin(np.abs(values - p))),
+        }
+        for k, p, re, im in zip(
+            branch.bifurcation_label.values,
+            branch.bifurcation_parameter.values,
+            branch.critical_real.values,
+            branch.critical_imag.values,
+            strict=True,
+        )
+    ]

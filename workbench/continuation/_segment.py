@@ -19,8 +19,14 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from workbench.archive import save_run, sha256_file
-from workbench.campaign import block_dataset, code_of, failed, invalid_outcome, run_outcome
+from workbench.archive import save_run
+from workbench.campaign import (
+    block_dataset,
+    block_summary,
+    code_of,
+    invalid_outcome,
+    run_outcome,
+)
 from workbench.run import derive, integrate, prepare, to_dataset
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
@@ -167,19 +173,7 @@ def run_segment(task: SegmentTask) -> dict:
         block_cpu_time=time.process_time() - cpu0,
     )
     save_run(ds, task.path, classic=True)
-    return {
-        "sha256": sha256_file(task.path),
-        "code_digest": code,
-        "dataset": ds,
-        "block": task.block,
-        "points": len(task.flat),
-        "failures": [
-            (f, r["failure"]) for f, r in zip(task.flat, runs, strict=True) if failed(r["status"])
-        ],
-        "wall": time.perf_counter() - wall0,
-        "solver_wall": float(np.nansum(ds["solver_wall_time"].values)),
-        "pid": os.getpid(),
-    }
+    return block_summary(task, ds, runs, code, wall0)
 
 
 def _finals(runs: list[dict], seeds: list[int]) -> xr.Dataset:

@@ -155,7 +155,7 @@ def _hysteresis(clouds: dict, values: list[float]) -> dict:
 
 def _branch(scene, param: str, spec: dict, path: Path) -> dict:
     """The period-1 orbit continued from ``branch_start`` towards ``branch_stop``."""
-    from workbench.continuation import continue_orbit
+    from workbench.continuation import branch_bifurcations, continue_orbit
 
     start, stop = float(spec["branch_start"]), float(spec["branch_stop"])
     point = scene.replace(sweep={}).with_parameters(**{param: start})
@@ -168,24 +168,17 @@ def _branch(scene, param: str, spec: dict, path: Path) -> dict:
         max_points=int(spec.get("branch_points", 300)),
     )
     save_run(branch, path)
-    names = branch.label.attrs["flag_meanings"].split()
     stable = branch.stable.values
     bifurcations = []
-    for k, p, re, im in zip(
-        branch.bifurcation_label.values,
-        branch.bifurcation_parameter.values,
-        branch.critical_real.values,
-        branch.critical_imag.values,
-        strict=True,
-    ):
-        i = int(np.flatnonzero(np.isclose(branch[param].values, p))[0])
+    for b in branch_bifurcations(branch, param):
+        i = b["index"]
         mu = branch.multiplier_real.values[i] + 1j * branch.multiplier_imag.values[i]
         mu = mu[np.isfinite(mu)]
         bifurcations.append(
             {
-                "type": names[int(k)],
-                "value": float(p),
-                "critical": [float(re), float(im)],
+                "type": b["type"],
+                "value": b["value"],
+                "critical": [b["critical"].real, b["critical"].imag],
                 "multipliers": [[float(z.real), float(z.imag)] for z in mu[:4]],
                 "stable_before": bool(stable[max(i - 1, 0)]),
                 "stable_after": bool(stable[min(i + 1, stable.size - 1)]),
