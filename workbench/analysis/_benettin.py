@@ -349,9 +349,7 @@ def _dataset(
             "starts": info["starts"],
             key: info["starts"] * elapsed[-1] / unit,
             f"{key}_per_start": elapsed[-1] / unit,
-            **{
-                f"solver_{k}": sum(r["stats"][k] for r in runs) for k in runs[0]["stats"]
-            },
+            **{f"solver_{k}": sum(r["stats"][k] for r in runs) for k in runs[0]["stats"]},
         },
     )
     if tight is not None:
