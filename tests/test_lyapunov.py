@@ -2,8 +2,10 @@
 largest exponent (issue: Lyapunov exponents that converge)."""
 
 import dataclasses
+import json
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -473,3 +475,44 @@ def test_two_trajectory_estimate_that_misses_its_targets_says_which():
         r = lle_from_equations(scene, budget=30.0, separation=1e-7)
     assert not bool(r.converged) and "error target" in r.attrs["failed"]
     assert r.lle_tight.attrs["units"] == "s-1"
+
+
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+
+
+def lle_doc_tables() -> tuple[str, str]:
+    """The tables docs/analysis.md quotes, from what `benchmarks/lle.py --scan` and `--chaos`
+    measured (benchmarks/results/lle_separation_scan.json, lle_chaos.json)."""
+    scan = json.loads((RESULTS / "lle_separation_scan.json").read_text())["scan"]
+    first = next(iter(scan.values()))
+    rows = ["| rtol | " + " | ".join(f"d0 {d:.0e}" for d in first["separations"]) + " |"]
+    rows.append("|---" * (1 + len(first["separations"])) + "|")
+    for rtol, e in scan.items():
+        cells = [
+            f"{m:+.2f} +/- {s:.2f}"
+            for m, s in zip(e["mean_difference"], e["stderr_difference"], strict=True)
+        ]
+        rows.append(f"| {rtol} (4 x {e['cycles_per_start']} cycles) | " + " | ".join(cells) + " |")
+    chaos = json.loads((RESULTS / "lle_chaos.json").read_text())
+    out = [
+        "| rtol | two trajectories [1/s] | cycles | converged | variational, same "
+        "trajectories [1/s] | difference [1/s] | at rtol/100 [1/s] | CPU [s] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for rtol, e in chaos.items():
+        out.append(
+            f"| {rtol} | {e['lle']:.2f} +/- {e['stderr']:.2f} | {e['starts']} x "
+            f"{e['cycles'] / e['starts']:g} | {'yes' if e['converged'] else 'no'} | "
+            f"{e['lle_variational']:.2f} +/- {e['stderr_variational']:.2f} | "
+            f"{e['difference']:+.2f} +/- {e['stderr_difference']:.2f} | "
+            f"{e['lle_tight']:.2f} +/- {e['stderr_tight']:.2f} | {e['cpu_s']:.0f} |"
+        )
+    return "\n".join(rows), "\n".join(out)
+
+
+def test_the_lyapunov_page_quotes_the_benchmark():
+    """docs/analysis.md's separation scan and default calls on the chaos case are the numbers
+    benchmarks/lle.py wrote (rerun it and paste lle_doc_tables() when they change)."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "analysis.md").read_text()
+    for table in lle_doc_tables():
+        assert table in page
