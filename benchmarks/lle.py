@@ -20,7 +20,8 @@ chaos case (studies/chaos/chaos.toml, 4 transient + 3 crank cycles) the same two
 ``--scan``: the bias of the two-trajectory estimate on the chaos case (issue 24, item 2): on
 four independent starts (realisations 0-3 after 20 transient cycles) copies at scaled
 separations d0 = 1e-10 .. 1e-4 and the variational equations ride one fiducial trajectory, at
-rtol 1e-6 (10 cycles per start) and 1e-10 (5 cycles); printed per d0: each start's estimate
+rtol 1e-6 (10 cycles per start) and 1e-10 (5 cycles) by default (``--scan-configs
+RTOL:CYCLES ...``, ``--max-step`` S to cap the steps); printed per d0: each start's estimate
 minus the variational exponent on the same trajectory, their mean and its standard error
 (``benchmarks/results/lle_separation_scan.json``).
 
@@ -35,6 +36,7 @@ Run: ``python benchmarks/lle.py [--skip-ninebar | --scan | --chaos 1e-6 1e-10]``
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -126,17 +128,20 @@ def _save(name: str, key: str, entry: dict) -> None:
         json.dump(data, f, indent=1)
 
 
-def scan() -> None:
+def scan(configs: list[tuple[float, int]], max_step: float | None = None) -> None:
     """Two-trajectory estimate minus the variational exponent on the same trajectory, per
-    separation and tolerance, over four independent starts."""
+    separation and tolerance (``configs``: rtol and cycles per start), over four independent
+    starts, optionally with the step capped at ``max_step`` (s)."""
     seps = 10.0 ** np.arange(-10, -3)
     base = workbench.load_scene(CHAOS)
     out = {}
-    for rtol, cycles in ((1e-6, 10), (1e-10, 5)):
+    for rtol, cycles in configs:
         diffs, rates, cpu = [], [], 0.0
         for k in range(4):
             scene = base.replace(run={"cycles": cycles, "transient_cycles": 20, "realisation": k})
             prep = measurement_window(scene)
+            if max_step is not None:
+                prep = dataclasses.replace(prep, max_step=max_step)
             t0 = time.process_time()
             run = follow_copies(
                 prep, seps, np.full(seps.size, math.log(10)), prep.length, rtol, k,
@@ -167,7 +172,7 @@ def scan() -> None:
         for d, m, e in zip(seps, mean, se, strict=True):
             print(f"  d0 {d:.0e}: {m:+.3f} +/- {e:.3f}")
         print(f"  ({cpu:.0f} s CPU)")
-        out[f"{rtol:g}"] = {
+        out[f"{rtol:g}" + ("" if max_step is None else f", max_step {max_step:g} s")] = {
             "separations": seps.tolist(),
             "cycles_per_start": cycles,
             "rates_variational_then_copies": np.array(rates).tolist(),
@@ -175,7 +180,11 @@ def scan() -> None:
             "stderr_difference": se.tolist(),
             "cpu_s": cpu,
         }
-    _save("lle_separation_scan.json", "scan", out)
+    path = os.path.join(RESULTS_DIR, "lle_separation_scan.json")
+    data = json.load(open(path)) if os.path.exists(path) else {}
+    data.setdefault("scan", {}).update(out)
+    with open(path, "w") as f:
+        json.dump(data, f, indent=1)
 
 
 def chaos_calls(rtols: list[float]) -> None:
@@ -229,10 +238,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-ninebar", action="store_true", help="leave out the nine-bar")
     parser.add_argument("--scan", action="store_true", help="only the separation scan")
+    parser.add_argument(
+        "--scan-configs", nargs="+", default=["1e-6:10", "1e-10:5"],
+        help="rtol:cycles per start of the scan (default 1e-6:10 1e-10:5)",
+    )  # fmt: skip
+    parser.add_argument("--max-step", type=float, help="cap the scan's steps (s)")
     parser.add_argument("--chaos", type=float, nargs="+", help="only the default call at RTOLs")
     args = parser.parse_args()
     if args.scan:
-        return scan()
+        configs = [(float(c.split(":")[0]), int(c.split(":")[1])) for c in args.scan_configs]
+        return scan(configs, args.max_step)
     if args.chaos:
         return chaos_calls(args.chaos)
     ds = workbench.simulate(
