@@ -25,14 +25,13 @@ __all__ = ["lle_from_equations"]
 
 #: default scaled separation of the copies: sqrt(machine epsilon), the step of a forward
 #: difference that balances round-off (relative error eps / d) against the neglected curvature
-#: (relative error ~d). On the chaos case (studies/chaos/chaos.toml; `benchmarks/lle.py
-#: --scan`, benchmarks/results/lle_separation_scan.json) the copies' estimate minus the
-#: variational exponent on the same trajectory, mean over 4 starts, per decade of d0 from 1e-10
-#: to 1e-4, was +6.6, +1.1, +0.9, +1.6, +1.8, +1.9, +1.6 1/s at rtol 1e-6 (10 cycles each;
-#: errors 0.4-0.8) and +6.8, +1.2, -0.1, 0.0, 0.0, 0.0, 0.0 at rtol 1e-10 (5 cycles; errors
-#: 0.2-0.6 up to 1e-8, below 0.04 above), the exponent ~27 1/s: below ~1e-9 a noise floor at
-#: both tolerances; from 1e-8 up at rtol 1e-6 single contacts that lift some windows by 1-3
-#: 1/s. sqrt(eps) is the least biased decade at rtol 1e-6 and unbiased at 1e-10.
+#: (relative error ~d). On the chaos case (`benchmarks/lle.py --scan`, benchmarks/results/
+#: lle_separation_scan.json, docs/analysis.md) the copies' estimate minus the variational
+#: exponent on the same trajectory, mean over 4 starts, per decade of d0 from 1e-10 to 1e-4,
+#: was +6.6, +1.1, +0.9, +1.6, +1.8, +1.9, +1.6 1/s at rtol 1e-6, +6.2, +1.1, +0.1, -0.1,
+#: 0.0, +0.4, +0.2 at 1e-8 and +6.8, +1.2, -0.1, 0.0, 0.0, 0.0, 0.0 at 1e-10 (exponent ~27
+#: 1/s): below ~1e-9 a noise floor at every tolerance; above it a heavy-tailed lift of some
+#: windows that sets in at smaller d0 the looser the tolerance (and the longer the steps).
 SEPARATION = math.sqrt(np.finfo(float).eps)
 #: default log growth of a copy's separation that triggers its renormalisation (a factor 10)
 GROWTH = math.log(10.0)
