@@ -17,12 +17,29 @@ variational exponent on the same trajectory) and ``lyapunov_spectrum`` (QR); on 
 chaos case (studies/chaos/chaos.toml, 4 transient + 3 crank cycles) the same two
 (``--skip-ninebar`` leaves it out: several minutes).
 
-Run: ``python benchmarks/lle.py [--skip-ninebar]``.
+``--scan``: the bias of the two-trajectory estimate on the chaos case (issue 24, item 2): on
+four independent starts (realisations 0-3 after 20 transient cycles) copies at scaled
+separations d0 = 1e-10 .. 1e-4 and the variational equations ride one fiducial trajectory, at
+rtol 1e-6 (10 cycles per start) and 1e-10 (5 cycles) by default (``--scan-configs
+RTOL:CYCLES ...``, ``--max-step`` S to cap the steps); printed per d0: each start's estimate
+minus the variational exponent on the same trajectory, their mean and its standard error
+(``benchmarks/results/lle_separation_scan.json``).
+
+``--chaos RTOL [RTOL ...]``: the default call ``lle_from_equations(chaos, cycles=40,
+budget=80, rtol=RTOL)`` (four starts), its value +/- error, cycles, verdict, the variational
+exponent on the same trajectories +/- error, the difference, CPU time and load
+(``benchmarks/results/lle_chaos.json``, one entry per tolerance).
+
+Run: ``python benchmarks/lle.py [--skip-ninebar | --scan | --chaos 1e-6 1e-10]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
+import math
+import os
 import time
 import tracemalloc
 import warnings
@@ -32,7 +49,13 @@ import numpy as np
 from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
 
 import workbench
-from workbench.analysis import lle_from_equations, lyapunov_spectrum, wolf_lle
+from workbench.analysis import ConvergenceWarning, lle_from_equations, lyapunov_spectrum, wolf_lle
+from workbench.analysis._convergence import batch_error
+from workbench.analysis._copies_run import follow_copies
+from workbench.analysis._window import measurement_window
+
+CHAOS = "studies/chaos/chaos.toml"
+RESULTS_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
 
 TRUE = 0.9056  # 1/s
 DT = 0.01
@@ -94,10 +117,139 @@ def equations(label: str, scene, lyapunov_exponents: int | None) -> None:
     )
 
 
+def _save(name: str, key: str, entry: dict) -> None:
+    path = os.path.join(RESULTS_DIR, name)
+    data = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            data = json.load(f)
+    data[key] = entry
+    with open(path, "w") as f:
+        json.dump(data, f, indent=1)
+
+
+def scan(configs: list[tuple[float, int]], max_step: float | None = None) -> None:
+    """Two-trajectory estimate minus the variational exponent on the same trajectory, per
+    separation and tolerance (``configs``: rtol and cycles per start), over four independent
+    starts, optionally with the step capped at ``max_step`` (s)."""
+    seps = 10.0 ** np.arange(-10, -3)
+    base = workbench.load_scene(CHAOS)
+    out = {}
+    for rtol, cycles in configs:
+        diffs, rates, cpu = [], [], 0.0
+        for k in range(4):
+            scene = base.replace(run={"cycles": cycles, "transient_cycles": 20, "realisation": k})
+            prep = measurement_window(scene)
+            if max_step is not None:
+                prep = dataclasses.replace(prep, max_step=max_step)
+            t0 = time.process_time()
+            run = follow_copies(
+                prep, seps, np.full(seps.size, math.log(10)), prep.length, rtol, k,
+                variational=True,
+            )  # fmt: skip
+            cpu += time.process_time() - t0
+            T = run["times"][-1] - run["times"][0]
+            lv = run["variational"][-1] / T
+            rates.append([lv, *(run["total"][-1] / T)])
+            diffs.append(run["total"][-1] / T - lv)
+            errs = [
+                batch_error(
+                    run["times"][1:], np.diff(run["total"][:, c] - run["variational"])[:, None],
+                    run["times"][0],
+                )[0]
+                for c in range(seps.size)
+            ]  # fmt: skip
+            print(
+                f"rtol {rtol:g}, start {k}, {cycles} cycles: variational {lv:.3f} 1/s; minus it "
+                + ", ".join(
+                    f"{d:.0e}: {x:+.3f}+/-{e:.2f}"
+                    for d, x, e in zip(seps, diffs[-1], errs, strict=True)
+                )
+            )
+        diffs = np.array(diffs)
+        mean, se = diffs.mean(axis=0), diffs.std(axis=0, ddof=1) / 2.0
+        print(f"rtol {rtol:g}, mean over 4 starts of (two trajectories - variational), 1/s:")
+        for d, m, e in zip(seps, mean, se, strict=True):
+            print(f"  d0 {d:.0e}: {m:+.3f} +/- {e:.3f}")
+        print(f"  ({cpu:.0f} s CPU)")
+        out[f"{rtol:g}" + ("" if max_step is None else f", max_step {max_step:g} s")] = {
+            "separations": seps.tolist(),
+            "cycles_per_start": cycles,
+            "rates_variational_then_copies": np.array(rates).tolist(),
+            "mean_difference": mean.tolist(),
+            "stderr_difference": se.tolist(),
+            "cpu_s": cpu,
+        }
+    path = os.path.join(RESULTS_DIR, "lle_separation_scan.json")
+    data = json.load(open(path)) if os.path.exists(path) else {}
+    data.setdefault("scan", {}).update(out)
+    with open(path, "w") as f:
+        json.dump(data, f, indent=1)
+
+
+def chaos_calls(rtols: list[float]) -> None:
+    """The default call on the chaos case at each tolerance."""
+    base = workbench.load_scene(CHAOS).replace(run={"cycles": 40, "transient_cycles": 20})
+    for rtol in rtols:
+        load0 = os.getloadavg()[0]
+        t0, w0 = time.process_time(), time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            r = lle_from_equations(base, budget=80, rtol=rtol)
+        cpu, wall = time.process_time() - t0, time.perf_counter() - w0
+        load1 = os.getloadavg()[0]
+        print(
+            f"rtol {rtol:g}: two trajectories {float(r.lle):.2f} +/- {float(r.stderr):.2f} 1/s "
+            f"(starts {float(r.stderr_starts):.2f}, batches {float(r.stderr_batches):.2f}) over "
+            f"{r.attrs['starts']} x {r.attrs['cycles_per_start']:g} cycles, converged "
+            f"{bool(r.converged)}; variational (same trajectories) "
+            f"{float(r.lle_variational):.2f} +/- {float(r.stderr_variational):.2f}; difference "
+            f"{float(r.difference):+.3f} +/- {float(r.stderr_difference):.3f}; at rtol "
+            f"{max(rtol / 100, 1e-11):g}: {float(r.lle_tight):.2f} +/- "
+            f"{float(r.stderr_tight):.2f}; "
+            f"variants {np.round(r.estimate.values, 2).tolist()}; starts "
+            f"{np.round(r.start_lle.values, 2).tolist()}; {cpu:.0f} s CPU, {wall:.0f} s wall, "
+            f"load {load0:.1f} -> {load1:.1f}, {r.attrs['solver_steps']} steps"
+        )
+        for line in r.attrs["failed"].splitlines():
+            print(f"    failed: {line}")
+        _save(
+            "lle_chaos.json",
+            f"{rtol:g}",
+            {
+                "lle": float(r.lle), "stderr": float(r.stderr),
+                "stderr_starts": float(r.stderr_starts),
+                "stderr_batches": float(r.stderr_batches),
+                "start_lle": r.start_lle.values.tolist(),
+                "cycles": r.attrs["cycles"], "starts": r.attrs["starts"],
+                "converged": bool(r.converged), "failed": r.attrs["failed"],
+                "lle_variational": float(r.lle_variational),
+                "stderr_variational": float(r.stderr_variational),
+                "difference": float(r.difference),
+                "stderr_difference": float(r.stderr_difference),
+                "lle_tight": float(r.lle_tight), "stderr_tight": float(r.stderr_tight),
+                "estimates": r.estimate.values.tolist(), "rtol_used": r.attrs["rtol"],
+                "cpu_s": cpu, "wall_s": wall, "load": [load0, load1],
+            },
+        )  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-ninebar", action="store_true", help="leave out the nine-bar")
+    parser.add_argument("--scan", action="store_true", help="only the separation scan")
+    parser.add_argument(
+        "--scan-configs", nargs="+", default=["1e-6:10", "1e-10:5"],
+        help="rtol:cycles per start of the scan (default 1e-6:10 1e-10:5)",
+    )  # fmt: skip
+    parser.add_argument("--max-step", type=float, help="cap the scan's steps (s)")
+    parser.add_argument("--chaos", type=float, nargs="+", help="only the default call at RTOLs")
     args = parser.parse_args()
+    if args.scan:
+        configs = [(float(c.split(":")[0]), int(c.split(":")[1])) for c in args.scan_configs]
+        return scan(configs, args.max_step)
+    if args.chaos:
+        return chaos_calls(args.chaos)
     ds = workbench.simulate(
         {
             "model": {"name": "lorenz"},

@@ -7,7 +7,8 @@ batch means (the window cut into ``BATCHES`` consecutive blocks whose mean rates
 as independent samples; e.g. Flyvbjerg & Petersen 1989), the estimators grow their window
 until it meets a relative error target within a budget, and an estimate is ``converged`` only
 where every condition holds; otherwise the estimate names the ones that failed and warns
-(:class:`ConvergenceWarning`).
+(:class:`ConvergenceWarning`). Estimates from several independent starts (realisations of the
+same window) are pooled by :func:`pooled`, whose error is also the starts' spread.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ __all__ = [
     "agree",
     "batch_error",
     "judge",
+    "pooled",
 ]
 
 #: batch means of the standard error
@@ -60,6 +62,28 @@ def batch_error(times: np.ndarray, contributions: np.ndarray, start: float) -> n
     if lam.shape[0] < 2:
         return np.full(contributions.shape[1:], np.nan)
     return lam.std(axis=0, ddof=1) / math.sqrt(lam.shape[0])
+
+
+def pooled(rates: np.ndarray, errors: np.ndarray) -> tuple[float, float, float, float]:
+    """Pool the rates of independent starts over windows of equal length (``rates``, one per
+    start, e.g. s-1) with their own batch-means standard ``errors``: ``(mean, stderr,
+    stderr_starts, stderr_batches)``. ``stderr_starts`` is the spread across the starts, std
+    (ddof 1) / sqrt(S), free of any correlation between a start's batches but itself noisy
+    with few starts (NaN for one); ``stderr_batches`` is sqrt(sum of errors^2) / S, the starts'
+    batch means combined; ``stderr`` is the larger of the two (the batch means alone where
+    there is one start).
+
+    >>> m, e, es, eb = pooled(np.array([1.0, 3.0]), np.array([0.1, 0.1]))
+    >>> m, round(e, 3), round(es, 3), round(eb, 3)
+    (2.0, 1.0, 1.0, 0.071)
+    """
+    rates = np.asarray(rates, dtype=float)
+    errors = np.asarray(errors, dtype=float)
+    s = rates.size
+    mean = float(rates.mean())
+    batches = float(math.sqrt(np.sum(errors**2)) / s)
+    starts = float(rates.std(ddof=1) / math.sqrt(s)) if s > 1 else math.nan
+    return mean, (batches if s == 1 else max(starts, batches)), starts, batches
 
 
 def agree(a, b, err_a, err_b, *, sigmas: float = 2.0):

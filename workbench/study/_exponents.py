@@ -45,13 +45,14 @@ def exponent_table(
     Rows (dim ``method``):
 
     - ``two trajectories``: :func:`workbench.analysis.lle_from_equations` with its defaults
-      from ``cycles`` cycles after ``transient_cycles``, grown to at most ``budget_cycles``
-      (default twice ``cycles``) until its standard error is 3 % of it (trusted: converged,
-      i.e. that error target met, five separation and renormalisation variants within 5 %, a
-      run at rtol/100 and the variational exponent within two standard errors);
+      (four independent starts, realisations 0-3, sharing the length) from ``cycles`` cycles
+      after ``transient_cycles``, grown to at most ``budget_cycles`` (default twice
+      ``cycles``) until its standard error is 3 % of it (trusted: converged, i.e. that error
+      target met, five separation and renormalisation variants within 5 % and two standard
+      errors, runs at rtol/100 and the variational exponent within two standard errors);
     - ``variational, same trajectory``: the variational equations with saltation carried by
-      that run's fiducial trajectory (the reference: trusted where the two-trajectory estimate
-      converged);
+      those runs' fiducial trajectories (the reference: trusted where the two-trajectory
+      estimate converged), with its own pooled standard error;
     - ``variational spectrum``: the ``spectrum_exponents`` largest exponents by
       :func:`workbench.analysis.lyapunov_spectrum` from ``spectrum_cycles`` (default
       ``cycles``; its own run: every exponent needs its own tangent vector), each with its
@@ -79,6 +80,7 @@ def exponent_table(
         warnings.simplefilter("ignore", analysis.ConvergenceWarning)
         bench, wall = _timed(analysis.lle_from_equations, window, budget=budget)
     used = bench.attrs["cycles"]
+    starts = f"{bench.attrs['starts']} starts x {bench.attrs['cycles_per_start']:g} cycles"
     failed = _failed(bench.attrs["failed"])
     rows.append(
         _row(
@@ -86,10 +88,12 @@ def exponent_table(
             float(bench.lle),
             float(bench.stderr),
             bool(bench.converged),
-            f"{used:g} cycles; five variants within {100 * float(bench.spread):.2g} %; "
-            f"separation {float(bench.separation[0]):.2g} of each state's size; rtol "
-            f"{float(bench.attempt_rtol[-1]):g}; at rtol/100: {float(bench.lle_tight):.4g} "
-            f"1/s{failed}",
+            f"{used:g} cycles ({starts}; error the larger of the starts' spread, "
+            f"{float(bench.stderr_starts):.2g}, and their batch means, "
+            f"{float(bench.stderr_batches):.2g}); five variants within "
+            f"{100 * float(bench.spread):.2g} %; separation {float(bench.separation[0]):.2g} "
+            f"of each state's size; rtol {float(bench.attempt_rtol[-1]):g}; at rtol/100: "
+            f"{float(bench.lle_tight):.4g} +/- {float(bench.stderr_tight):.2g} 1/s{failed}",
             wall,
         )
     )
@@ -97,10 +101,10 @@ def exponent_table(
         _row(
             "variational, same trajectory",
             float(bench.lle_variational),
-            float(bench.stderr),
+            float(bench.stderr_variational),
             bool(bench.converged),
-            f"{used:g} cycles; differs from the two-trajectory estimate by "
-            f"{100 * float(bench.method_difference):.2g} %",
+            f"{used:g} cycles ({starts}); the two-trajectory estimate minus it: "
+            f"{float(bench.difference):+.3g} +/- {float(bench.stderr_difference):.2g} 1/s",
             0.0,
         )
     )

@@ -145,7 +145,8 @@ def _chaos_measures(ds: xr.Dataset, scene: Scene) -> dict:
 
 #: measured crank cycles of the exponents from the equations (at least; grown to twice that
 #: until their standard error is 3 %: over 6 cycles the chaos case read 28.4 +/- 7.9 1/s, three
-#: 40-cycle windows 25.2-29.5, issue 24), and of the stroboscopic map
+#: 40-cycle windows 25.2-29.5, issue 24; the two-trajectory estimate shares them among four
+#: independent starts), and of the stroboscopic map
 EXPONENT_CYCLES = 40
 STROBE_CYCLES = 400
 _EXPONENT_VARS = ("lle", "lle_per_cycle", "stderr", "trusted", "note", "wall_time")

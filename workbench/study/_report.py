@@ -323,13 +323,14 @@ def _exponent_table(e: dict | None) -> list[str]:
         return []
     T = e.get("forcing_period") or 1.0
     lines = [
-        f"The largest Lyapunov exponent of realisation 0 by every method ({e.get('cycles')} "
-        f"crank cycles after {e.get('transient_cycles')} for the equations; Wolf on "
-        f"{e.get('coordinate')}; the equations' windows grow until the standard error is 3 % "
-        "of the estimate). *trusted*: converged (the equations' estimates: error target met, "
-        "halved and doubled knobs within 5 %, a run at rtol/100 and the variational exponent "
-        "within two standard errors) or not flagged (Wolf's own sampling, length and noise "
-        "checks).",
+        f"The largest Lyapunov exponent by every method ({e.get('cycles')} crank cycles after "
+        f"{e.get('transient_cycles')} for the equations, shared among independent starts, "
+        "realisations 0-3, for the two-trajectory estimate; realisation 0 for the others; "
+        f"Wolf on {e.get('coordinate')}; the equations' windows grow until the standard error "
+        "is 3 % of the estimate). *trusted*: converged (the equations' estimates: error target "
+        "met, halved and doubled knobs within 5 % and two standard errors, runs at rtol/100 "
+        "and the variational exponent within two standard errors) or not flagged (Wolf's own "
+        "sampling, length and noise checks).",
         "",
         "| method | LLE [1/s] | per crank cycle | standard error [1/s] | trusted | evidence |",
         "|---|---|---|---|---|---|",
