@@ -5,6 +5,7 @@ bifurcation in closed form; and the continued sweep's own guarantees (hysteresis
 the same numbers whatever the workers, seams chained where they disagree, resumable)."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ from workbench.models.stop_oscillator import grazing_amplitude
 # x'' + 0.05 x' + x + 0.1 x^3 = 0.1 cos(omega t): a hysteresis window omega ~ 1.076 .. 1.116
 HARDENING = {"alpha": 1.0, "beta": 0.1, "delta": 0.05, "gamma": 0.1}
 FEIGENBAUM = 4.669201609102990  # Feigenbaum (1978)
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def hardening(**tables):
@@ -345,3 +347,50 @@ def test_detection_rules_of_the_branch():
     assert _detect(base, dict(base, events=2)) == ["grazing"]
     assert _detect(base, dict(base, turn=-0.5)) == ["nonsmooth_fold"]  # no multiplier at +1
     assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
+
+
+@pytest.mark.slow
+def test_a_contracting_nine_bar_orbit_gets_its_floquet_exponent():
+    """The nine-bar at omega = 0.5 pi, c = 20 um (studies/chaos_maps/omega_clearance.toml) is on
+    a strongly contracting period-1 orbit (largest multiplier ~2.5e-5 per 4 s cycle). The
+    two-trajectory method read it as +3.34e4 +- 53 1/s: its copies shrink onto the orbit down
+    to the integration's noise, and the noise's rate is what it measured. The map's exponent is
+    ln |mu_max| / T of the orbit's multipliers by copies of the map; the check is independent:
+    the monodromy matrix of the variational equations with saltation (analysis.floquet)."""
+    from workbench.analysis import floquet
+    from workbench.continuation import chaos_indicators
+
+    scene = workbench.load_scene(ROOT / "studies" / "chaos_maps" / "omega_clearance.toml")
+    point = scene.replace(
+        sweep={},
+        run={"cycles": 10, "transient_cycles": 20},
+        solver=dict(scene.solver, method="dop853"),  # the old code's trajectory path
+    ).with_parameters(omega=0.5 * math.pi, clearance=2e-5)
+    ind = chaos_indicators(point, workbench.simulate(point))
+    assert int(ind.strobe_period) == 1 and int(ind.lle_status) == 0
+    assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "floquet"
+    reference = floquet(point, rtol=1e-8)
+    expected = math.log(float(reference.modulus[0])) / 4.0
+    assert -4.0 < expected < -2.0
+    assert abs(float(ind.lle) - expected) <= 3 * float(ind.lle_stderr) + 0.05 * abs(expected)
+
+
+def test_an_implicit_scene_method_still_gets_an_exponent():
+    """A chaos map of a scene solved by an implicit method (radau, auto) measures its exponent
+    with DOP853 (the estimators refuse an implicit method, whose stages use the model's
+    Jacobian, not the tangent system's): before, every such point failed (lle_status 1)."""
+    from workbench.continuation import chaos_indicators
+
+    point = workbench.load_scene(
+        {
+            "model": {"name": "duffing"},
+            "parameters": {"gamma": 0.5},
+            "solver": {"method": "radau", "rtol": 1e-8, "atol": 1e-8},
+            "run": {"cycles": 100, "transient_cycles": 50},
+            "record": {"samples_per_period": 1},
+        }
+    )
+    ind = chaos_indicators(point, workbench.simulate(point))
+    assert int(ind.strobe_period) == 0 and int(ind.lle_status) == 0
+    assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "variational"
+    assert float(ind.lle) > 3 * float(ind.lle_stderr) > 0
