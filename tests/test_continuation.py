@@ -349,15 +349,15 @@ def test_detection_rules_of_the_branch():
     assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
 
 
-@pytest.mark.slow
-def test_a_contracting_nine_bar_orbit_gets_its_floquet_exponent():
+def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
     """The nine-bar at omega = 0.5 pi, c = 20 um (studies/chaos_maps/omega_clearance.toml) is on
-    a strongly contracting period-1 orbit (largest multiplier ~2.5e-5 per 4 s cycle). The
-    two-trajectory method read it as +3.34e4 +- 53 1/s: its copies shrink onto the orbit down
-    to the integration's noise, and the noise's rate is what it measured. The map's exponent is
-    ln |mu_max| / T of the orbit's multipliers by copies of the map; the check is independent:
-    the monodromy matrix of the variational equations with saltation (analysis.floquet)."""
-    from workbench.analysis import floquet
+    a period-1 orbit that contracts beyond what differences resolve. The two-trajectory method
+    read it as +3.34e4 +- 53 1/s: its copies shrink onto the orbit down to the integration's
+    noise, and the noise's rate is what it measured. The copies' monodromy at step 1e-6 is
+    noise too (largest multiplier ~1.7e-5; at step 1e-4 it falls ~70x, as noise / step does):
+    the map says so (lle_status upper_bound) and gives the bound from the larger step. The
+    variational monodromy (workbench.analysis.floquet(point, rtol=1e-8), run once: 3.5 min of
+    CPU, too long for the suite) puts ln |mu_max| / T at -75.93 1/s, below the bound."""
     from workbench.continuation import chaos_indicators
 
     scene = workbench.load_scene(ROOT / "studies" / "chaos_maps" / "omega_clearance.toml")
@@ -367,12 +367,12 @@ def test_a_contracting_nine_bar_orbit_gets_its_floquet_exponent():
         solver=dict(scene.solver, method="dop853"),  # the old code's trajectory path
     ).with_parameters(omega=0.5 * math.pi, clearance=2e-5)
     ind = chaos_indicators(point, workbench.simulate(point))
-    assert int(ind.strobe_period) == 1 and int(ind.lle_status) == 0
+    assert int(ind.strobe_period) == 1
     assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "floquet"
-    reference = floquet(point, rtol=1e-8)
-    expected = math.log(float(reference.modulus[0])) / 4.0
-    assert -4.0 < expected < -2.0
-    assert abs(float(ind.lle) - expected) <= 3 * float(ind.lle_stderr) + 0.05 * abs(expected)
+    assert ind.lle_status.attrs["flag_meanings"].split()[int(ind.lle_status)] == "upper_bound"
+    # docs/continuation.md quotes the bound, -3.8 1/s
+    assert float(ind.lle) == pytest.approx(-3.8, abs=0.05) and np.isnan(float(ind.lle_stderr))
+    assert -75.93 < float(ind.lle)
 
 
 def test_an_implicit_scene_method_still_gets_an_exponent():

@@ -7,21 +7,29 @@ the multipliers come from the monodromy matrix of the orbit found by Newton's me
 (:func:`workbench.continuation.periodic_orbit`'s machinery), exactly and cheaply. A trajectory
 method cannot measure it on a strongly contracting orbit: the two-trajectory method
 (:func:`workbench.analysis.lle_from_equations`) renormalises a copy only when its separation
-*grows*, so on an orbit that contracts (the nine-bar at omega = 0.5 pi, c = 20 um: largest
-multiplier 2.4e-5 per 4 s cycle, exponent -2.66 1/s) every copy shrinks onto the orbit until its
-separation is the integration's noise, after which it reads the noise's rate, not the orbit's:
-there its pilot copies (1e-11 .. 1e-4, scaled) read +2.2e4 .. -0.39 1/s over 5 cycles, no two
-agree, the smallest separation is taken and the point read 3.34e4 +- 53 1/s (193 168
-renormalisations of that copy in 5 cycles, all of them noise).
+*grows*, so on an orbit that contracts every copy shrinks onto the orbit until its separation
+is the integration's noise, after which it reads the noise's rate, not the orbit's. At the
+nine-bar's omega = 0.5 pi, c = 20 um its pilot copies (1e-11 .. 1e-4, scaled) read
++2.2e4 .. -0.39 1/s over 5 cycles, no two agree, the smallest separation is taken and the point
+read 3.34e4 +- 53 1/s (193 168 renormalisations of that copy in 5 cycles, all of them noise).
 
 So where the strobe samples repeat with period k (:func:`workbench.continuation.strobe_period`)
-the exponent is Floquet's, its error the change of that value when the orbit and its monodromy
-are computed again at a 100x tighter tolerance; elsewhere (no period up to 16: chaotic,
-quasi-periodic or a long period) it is the variational exponent for a model with an analytic
-Jacobian (:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the
-mechanisms, whose tangent system is costly: :mod:`workbench.continuation._strobe`), with its
-batch-means standard error. Their runs use DOP853 where the scene's method is implicit or
-``auto``: those solve with the model's Jacobian, not the derived system's.
+the exponent is Floquet's. Its check: with the monodromy by copies (the mechanisms), the
+matrix again with a 100x larger difference step, which leaves a true multiplier unchanged
+(the copies stay in the linear range) and divides the differences' noise by 100 (it goes as
+1 / step); with the tangent system, the orbit again at a 100x tighter tolerance. The change is
+the error. Where the largest multiplier falls by more than 10x with the larger step it was the
+noise floor of the differences, and the exponent is only bounded: ``ln |mu_max| / (k T)`` at
+the larger step is an upper bound (``bound``). The nine-bar's point above is such an orbit:
+the copies' Jacobian there is noise (entries ~1e-5 of no structure at step 1e-6), and the
+variational monodromy of :func:`workbench.analysis.floquet` puts its exponent at -76 1/s.
+
+Elsewhere (no period up to 16: chaotic, quasi-periodic or a long period) the exponent is the
+variational one for a model with an analytic Jacobian
+(:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms, whose
+tangent system is costly: :mod:`workbench.continuation._strobe`), with its batch-means standard
+error. Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve
+with the model's Jacobian, not the derived system's.
 """
 
 from __future__ import annotations
@@ -44,7 +52,8 @@ __all__ = ["PointExponent", "exponent_method", "point_exponent"]
 METHODS = {
     "floquet": "ln |largest Floquet multiplier| / (k T) of the period-k orbit found by Newton's "
     "method from the settled state (workbench.continuation.periodic_orbit); error: its change "
-    "at a 100x tighter tolerance",
+    "with a 100x larger copies' step (tangent system: at a 100x tighter tolerance); an upper "
+    "bound where the multipliers are below the differences' noise",
     "variational": "variational equations with saltation, QR (workbench.analysis."
     "lyapunov_spectrum); error: batch means",
     "copies": "linearised two-trajectory method, copies in one step sequence (workbench."
@@ -52,22 +61,28 @@ METHODS = {
 }
 #: Newton's tolerance for the orbit (scaled residual)
 ORBIT_TOLERANCE = 1e-8
-#: the tighter tolerance of the Floquet exponent's error is the map's divided by this
-TIGHTER = 100.0
+#: the Floquet exponent's check: the tolerance divided (tangent system) or the copies' step
+#: multiplied (copies) by this
+CHECK_FACTOR = 100.0
+#: a largest multiplier that falls by more than this factor when the copies' step grows by
+#: CHECK_FACTOR was the differences' noise
+NOISE_DROP = 10.0
 
 
 @dataclass(frozen=True)
 class PointExponent:
     """The largest exponent of one point: ``value`` and ``error`` (s-1), ``method`` (a key of
-    :data:`METHODS`), ``failed`` (no estimate: the runs failed; value NaN), ``detail`` (why
-    Floquet's value was not taken, what failed, or the trajectory method's unmet
-    convergence conditions)."""
+    :data:`METHODS`), ``failed`` (no estimate: the runs failed; value NaN), ``bound`` (the
+    value is only an upper bound: the multipliers are below the noise of the differences;
+    error NaN), ``detail`` (why Floquet's value was not taken, what failed, or the
+    trajectory method's unmet convergence conditions)."""
 
     value: float
     error: float
     method: str
     failed: bool = False
     detail: str = ""
+    bound: bool = False
 
 
 def exponent_method(scene: Scene) -> str:
@@ -82,10 +97,9 @@ def _explicit(scene: Scene) -> str | None:
     return None if method in ("dop853", "dopri5") else "dop853"
 
 
-def _floquet(smap: StrobeMap, y, aux, span: float) -> tuple[float, np.ndarray, np.ndarray]:
-    pt = orbit_at(smap, y, aux, math.nan, tolerance=ORBIT_TOLERANCE)
-    modulus = float(np.max(np.abs(pt.multipliers)))
-    return math.log(modulus) / span, pt.y, pt.aux
+def _largest(M: np.ndarray, span: float) -> tuple[float, float]:
+    modulus = float(np.max(np.abs(np.linalg.eigvals(M))))
+    return modulus, math.log(modulus) / span
 
 
 def floquet_exponent(
@@ -93,8 +107,8 @@ def floquet_exponent(
 ) -> PointExponent:
     """``ln |mu_max| / (k T)`` of the period-``k`` orbit Newton finds from ``state`` (state
     units; default the state after ``start_cycles`` forcing periods of the scene, default its
-    transient), with the change of that value at a 100x tighter tolerance as its error.
-    Raises :class:`~workbench.continuation.NewtonFailure` where Newton does not converge."""
+    transient), checked as the module docstring says (error, or an upper bound). Raises
+    :class:`~workbench.continuation.NewtonFailure` where Newton does not converge."""
     smap = StrobeMap(scene, None, periods=period)
     if state is None:
         y, aux = smap.initial(math.nan, start_cycles)
@@ -104,12 +118,27 @@ def floquet_exponent(
         if discrete_state is not None:
             aux = np.asarray(discrete_state, dtype=float)
     span = period * smap.prepared(math.nan).period
-    lam, y, aux = _floquet(smap, y, aux, span)
-    tight = StrobeMap(scene, None, periods=period, rtol=smap.rtol / TIGHTER)
-    lam_t, _, _ = _floquet(tight, y, aux, span)
-    if not (math.isfinite(lam) and math.isfinite(lam_t)):
-        raise FloatingPointError(f"Floquet exponents {lam!r}, {lam_t!r}: a multiplier is 0")
-    return PointExponent(lam, abs(lam - lam_t), "floquet")
+    pt = orbit_at(smap, y, aux, math.nan, tolerance=ORBIT_TOLERANCE)
+    mu, lam = _largest(pt.value.M, span)
+    if smap.monodromy == "copies":
+        coarse = StrobeMap(scene, None, periods=period, step=smap.step * CHECK_FACTOR)
+        mu_c, lam_c = _largest(coarse(pt.y, pt.aux, math.nan).M, span)
+        if mu_c < mu / NOISE_DROP:
+            return PointExponent(
+                lam_c,
+                math.nan,
+                "floquet",
+                bound=True,
+                detail=f"largest multiplier {mu:.3g} at step {smap.step:g}, {mu_c:.3g} at "
+                f"{coarse.step:g}: below the differences' noise; the exponent is at most "
+                f"{lam_c:.4g} 1/s",
+            )
+    else:
+        tight = StrobeMap(scene, None, periods=period, rtol=smap.rtol / CHECK_FACTOR)
+        lam_c = _largest(
+            orbit_at(tight, pt.y, pt.aux, math.nan, tolerance=ORBIT_TOLERANCE).value.M, span
+        )[1]
+    return PointExponent(lam, abs(lam - lam_c), "floquet")
 
 
 def point_exponent(

@@ -40,10 +40,12 @@ MAX_PERIOD = 16
 #: largest magnitude of their variable
 PERIOD_TOLERANCE = 1e-4
 LLE_STATUS = {
-    "long_name": "outcome of the exponent's tangent run",
+    "long_name": "outcome of the exponent's runs",
     "units": "1",
-    "flag_values": np.array([0, 1], np.int8),
-    "flag_meanings": "ok failed",
+    "flag_values": np.array([0, 1, 2], np.int8),
+    "flag_meanings": "ok failed upper_bound",
+    "comment": "upper_bound: lle is an upper bound (the Floquet multipliers are below the noise "
+    "of the copies' differences; lle_stderr NaN)",
 }
 LLE_METHOD = {
     "long_name": "how the largest Lyapunov exponent was measured",
@@ -145,7 +147,7 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
         exp.error,
         {
             "long_name": "error of the largest Lyapunov exponent (batch means; floquet: its "
-            "change at a 100x tighter tolerance)",
+            "change with the copies' step or the tolerance, see lle_method)",
             "units": "s-1",
         },
     )
@@ -155,7 +157,8 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
         {"long_name": "largest Lyapunov exponent per forcing period", "units": "1"},
     )
     out["lle_method"] = ((), np.int8(list(METHODS).index(exp.method)), LLE_METHOD)
-    out["lle_status"] = ((), np.int8(exp.failed), LLE_STATUS)
+    status = 1 if exp.failed else 2 if exp.bound else 0
+    out["lle_status"] = ((), np.int8(status), LLE_STATUS)
     return xr.Dataset(out)
 
 

@@ -135,7 +135,7 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
             if e.failed:  # a failed run is a finding, not a crash of the study
                 row["error"] = e.detail[:200]
             else:
-                row.update(lle=e.value, stderr=e.error)
+                row.update(lle=e.value, stderr=e.error, bound=e.bound)
             out["exponents"].append(row)
         out["wall_time"]["exponents"] = time.perf_counter() - t0
     return out

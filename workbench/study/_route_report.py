@@ -78,6 +78,8 @@ def route_section(r: dict) -> list[str]:
             e = exps.get(v)
             if e is None:
                 row += " |"
+            elif e.get("bound"):
+                row += f" <= {e['lle']:.3g} (Floquet bound) |"
             elif "lle" in e:
                 how = {"floquet": " (Floquet)"}.get(e.get("method", "copies"), "")
                 row += f" {e['lle']:.3g} +- {e['stderr']:.2g}{how} |"
@@ -170,8 +172,8 @@ def _agreement(r: dict) -> list[str]:
             )
     exps = [e for e in r.get("exponents", []) if "lle" in e]
     if exps:
-        pos = [e for e in exps if e["lle"] > 2 * e["stderr"]]
-        neg = [e for e in exps if e["lle"] < -2 * e["stderr"]]
+        pos = [e for e in exps if not e.get("bound") and e["lle"] > 2 * e["stderr"]]
+        neg = [e for e in exps if e["lle"] < 0 and (e.get("bound") or e["lle"] < -2 * e["stderr"])]
         floq = sum(e.get("method") == "floquet" for e in exps)
         text.append(
             f"The largest exponent ({len(exps)} values: {floq} from the Floquet multipliers of "
