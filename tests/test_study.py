@@ -639,4 +639,7 @@ def test_route_with_a_branch_and_exponents_at_small_size(tmp_path):
     text = "\n".join(route_section(r))
     assert "The periodic orbit does not lose stability on the continued range" in text
     assert "monodromy matrix by copies, pseudo-arclength from 1 pi towards 1.05 pi" in text
-    assert "The largest exponent (two-trajectory method, 2 values)" in text
+    # periodic strobes: the exponents are Floquet's (the orbit from the continued sweep's state)
+    assert [e["method"] for e in r["exponents"]] == ["floquet", "floquet"]
+    assert all(e["lle"] < 0 for e in r["exponents"])
+    assert "The largest exponent (2 values: 2 from the Floquet multipliers" in text
