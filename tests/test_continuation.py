@@ -5,6 +5,7 @@ bifurcation in closed form; and the continued sweep's own guarantees (hysteresis
 the same numbers whatever the workers, seams chained where they disagree, resumable)."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ from workbench.models.stop_oscillator import grazing_amplitude
 # x'' + 0.05 x' + x + 0.1 x^3 = 0.1 cos(omega t): a hysteresis window omega ~ 1.076 .. 1.116
 HARDENING = {"alpha": 1.0, "beta": 0.1, "delta": 0.05, "gamma": 0.1}
 FEIGENBAUM = 4.669201609102990  # Feigenbaum (1978)
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def hardening(**tables):
@@ -345,3 +347,50 @@ def test_detection_rules_of_the_branch():
     assert _detect(base, dict(base, events=2)) == ["grazing"]
     assert _detect(base, dict(base, turn=-0.5)) == ["nonsmooth_fold"]  # no multiplier at +1
     assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
+
+
+def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
+    """The nine-bar at omega = 0.5 pi, c = 20 um (studies/chaos_maps/omega_clearance.toml) is on
+    a period-1 orbit that contracts beyond what differences resolve. The two-trajectory method
+    read it as +3.34e4 +- 53 1/s: its copies shrink onto the orbit down to the integration's
+    noise, and the noise's rate is what it measured. The copies' monodromy at step 1e-6 is
+    noise too (largest multiplier ~1.7e-5; at step 1e-4 it falls ~70x, as noise / step does):
+    the map says so (lle_status upper_bound) and gives the bound from the larger step. The
+    variational monodromy (workbench.analysis.floquet(point, rtol=1e-8), run once: 3.5 min of
+    CPU, too long for the suite) puts ln |mu_max| / T at -75.93 1/s, below the bound."""
+    from workbench.continuation import chaos_indicators
+
+    scene = workbench.load_scene(ROOT / "studies" / "chaos_maps" / "omega_clearance.toml")
+    point = scene.replace(
+        sweep={},
+        run={"cycles": 10, "transient_cycles": 20},
+        solver=dict(scene.solver, method="dop853"),  # the old code's trajectory path
+    ).with_parameters(omega=0.5 * math.pi, clearance=2e-5)
+    ind = chaos_indicators(point, workbench.simulate(point))
+    assert int(ind.strobe_period) == 1
+    assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "floquet"
+    assert ind.lle_status.attrs["flag_meanings"].split()[int(ind.lle_status)] == "upper_bound"
+    # docs/continuation.md quotes the bound, -3.8 1/s
+    assert float(ind.lle) == pytest.approx(-3.8, abs=0.05) and np.isnan(float(ind.lle_stderr))
+    assert -75.93 < float(ind.lle)
+
+
+def test_an_implicit_scene_method_still_gets_an_exponent():
+    """A chaos map of a scene solved by an implicit method (radau, auto) measures its exponent
+    with DOP853 (the estimators refuse an implicit method, whose stages use the model's
+    Jacobian, not the tangent system's): before, every such point failed (lle_status 1)."""
+    from workbench.continuation import chaos_indicators
+
+    point = workbench.load_scene(
+        {
+            "model": {"name": "duffing"},
+            "parameters": {"gamma": 0.5},
+            "solver": {"method": "radau", "rtol": 1e-8, "atol": 1e-8},
+            "run": {"cycles": 100, "transient_cycles": 50},
+            "record": {"samples_per_period": 1},
+        }
+    )
+    ind = chaos_indicators(point, workbench.simulate(point))
+    assert int(ind.strobe_period) == 0 and int(ind.lle_status) == 0
+    assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "variational"
+    assert float(ind.lle) > 3 * float(ind.lle_stderr) > 0

@@ -561,8 +561,9 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
             ],
         },
         "exponents": [
-            {"value": 1.0 * pi, "lle": -3.0, "stderr": 0.5},
-            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0},
+            {"value": 1.0 * pi, "lle": -3.0, "stderr": 0.5, "method": "floquet"},
+            {"value": 1.5 * pi, "lle": -4.0, "stderr": None, "method": "floquet", "bound": True},
+            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0, "method": "copies"},
         ],
     }
     text = "\n".join(route_section(route))
@@ -571,7 +572,10 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
     assert "different attractors at 1 of 4 values (1.5 pi" in text
     assert "both directions are period-1 at 2 of 4 values (1 pi .. 1.5 pi)" in text
     assert "K > 0.5 both ways at 2 (2 pi .. 2.5 pi)" in text
-    assert "positive beyond two standard errors at 2.5 pi, negative at 1 pi" in text
+    assert "(3 values: 2 from the Floquet multipliers" in text
+    assert "positive beyond two errors at 2.5 pi, negative at 1 pi, 1.5 pi" in text
+    assert "| 1.5 pi | 1/1 | 0 / 0.1 | 0 / 0 | <= -4 (Floquet bound) |" in text
+    assert "| 1 pi | 1/1 | 0 / 0 | 0 / 0 | -3 +- 0.5 (Floquet) |" in text
     assert "the nearest continued orbit is stable at 2" in text
     assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 |" in text
 
@@ -635,4 +639,7 @@ def test_route_with_a_branch_and_exponents_at_small_size(tmp_path):
     text = "\n".join(route_section(r))
     assert "The periodic orbit does not lose stability on the continued range" in text
     assert "monodromy matrix by copies, pseudo-arclength from 1 pi towards 1.05 pi" in text
-    assert "The largest exponent (two-trajectory method, 2 values)" in text
+    # periodic strobes: the exponents are Floquet's (the orbit from the continued sweep's state)
+    assert [e["method"] for e in r["exponents"]] == ["floquet", "floquet"]
+    assert all(e["lle"] < 0 for e in r["exponents"])
+    assert "The largest exponent (2 values: 2 from the Floquet multipliers" in text

@@ -32,9 +32,14 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
             scene, args.output, workers=args.workers, restart=args.restart, progress=not args.quiet
         )
     print(summary(ds))
-    failed = int(ds["lle_status"].sum()) if "lle_status" in ds else 0
-    if failed:
-        print(f"  {failed} exponents failed (lle_status = 1, lle NaN)")
+    status = ds["lle_status"].values if "lle_status" in ds else None
+    if status is not None and (status == 1).any():
+        print(f"  {int((status == 1).sum())} exponents failed (lle_status = 1, lle NaN)")
+    if status is not None and (status == 2).any():
+        print(
+            f"  {int((status == 2).sum())} exponents are upper bounds (lle_status = 2: the Floquet "
+            "multipliers are below the noise of the copies' differences)"
+        )
     if args.figure:
         from workbench.plot import chaos_map_figure
 
@@ -53,8 +58,9 @@ def register_cli(sub) -> None:
         "chaos-map",
         help="chaos indicators (strobe period, 0-1 test K, largest exponent) over a campaign",
         description="Run a scene's [sweep] as a campaign whose workers measure each point's "
-        "strobe period, 0-1 test K and largest Lyapunov exponent (variational equations) "
-        "with its error; resumable like 'workbench campaign'.",
+        "strobe period, 0-1 test K and largest Lyapunov exponent with its error (the "
+        "Floquet multipliers' where the strobe is periodic, else the variational equations "
+        "or the two-trajectory method); resumable like 'workbench campaign'.",
     )
     p.add_argument("scene", help="scene file (TOML) with a [sweep], recorded per period")
     p.add_argument("-o", "--output", required=True, help="campaign netCDF file to write")

@@ -7,10 +7,10 @@ Above the run and analysis layers, beside campaign (whose store, executors and b
 uses for its parallel parts).
 """
 
+from workbench.continuation._exponent import PointExponent, exponent_method, point_exponent
 from workbench.continuation._indicators import (
     chaos_indicators,
     chaos_map,
-    exponent_method,
     lle_cycles,
     strobe_period,
     strobe_zero_one,
@@ -21,6 +21,7 @@ from workbench.continuation._strobe import StrobeMap
 from workbench.continuation._sweep import continued_sweep
 
 __all__ = [
+    "PointExponent",
     "StrobeMap",
     "attractor_distance",
     "branch_bifurcations",
@@ -31,6 +32,7 @@ __all__ = [
     "exponent_method",
     "lle_cycles",
     "periodic_orbit",
+    "point_exponent",
     "strobe_period",
     "strobe_zero_one",
 ]

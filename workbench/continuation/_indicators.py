@@ -4,15 +4,15 @@ over parameters.
 Per point: the **period of the strobe** (the least k with x(t + kT) = x(t) over the recorded
 strobe samples, 0 when none up to :data:`MAX_PERIOD`: quasi-periodic or chaotic), the **0-1
 test's K** (Gottwald & Melbourne 2004, 2009) on the strobe samples of every recorded variable,
-and the **largest Lyapunov exponent** with its batch-means standard error, measured over
-:func:`lle_cycles` forcing periods after the scene's transient: from the variational equations
-with saltation (:func:`workbench.analysis.lyapunov_spectrum`) for a model with an analytic
-Jacobian, else by the linearised two-trajectory method (:func:`workbench.analysis.
-lle_from_equations`: copies in one step sequence, renormalised before they leave the linear
-range), because the tangent system of a mechanism carries central differences of the rhs along
-its column and took 50x the bare model's steps on a nine-bar orbit in lasting contact
-(:mod:`workbench.continuation._strobe`). A failure of the exponent's run is recorded
-(``lle_status``), not raised, so one hard point does not stop a map.
+and the **largest Lyapunov exponent** with its error (:func:`workbench.continuation.
+point_exponent`): where the strobe has a period k, ``ln |mu_max| / (k T)`` of the period-k
+orbit Newton finds from the state where the run ended (a trajectory method cannot measure a
+strongly contracting orbit: :mod:`workbench.continuation._exponent`), else over
+:func:`lle_cycles` forcing periods after the scene's transient from the variational equations
+with saltation for a model with an analytic Jacobian, or by the linearised two-trajectory method
+(the mechanisms, whose tangent system took 50x the bare model's steps on a nine-bar orbit in
+lasting contact, :mod:`workbench.continuation._strobe`). A failure of the exponent's runs is
+recorded (``lle_status``), not raised, so one hard point does not stop a map.
 """
 
 from __future__ import annotations
@@ -20,22 +20,15 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.analysis import (
-    lle_from_equations,
-    lyapunov_spectrum,
-    poincare_section,
-    zero_one_test,
-)
+from workbench.analysis import poincare_section, zero_one_test
 from workbench.campaign import run_campaign
-from workbench.run import prepare
+from workbench.continuation._exponent import METHODS, point_exponent
 from workbench.scene import Scene, SceneSource, load_scene
-from workbench.solver import SolverError, jacobian_for
 
 __all__ = [
     "MAX_PERIOD",
     "chaos_indicators",
     "chaos_map",
-    "exponent_method",
     "lle_cycles",
     "strobe_period",
     "strobe_zero_one",
@@ -47,10 +40,19 @@ MAX_PERIOD = 16
 #: largest magnitude of their variable
 PERIOD_TOLERANCE = 1e-4
 LLE_STATUS = {
-    "long_name": "outcome of the exponent's tangent run",
+    "long_name": "outcome of the exponent's runs",
     "units": "1",
-    "flag_values": np.array([0, 1], np.int8),
-    "flag_meanings": "ok failed",
+    "flag_values": np.array([0, 1, 2], np.int8),
+    "flag_meanings": "ok failed upper_bound",
+    "comment": "upper_bound: lle is an upper bound (the Floquet multipliers are below the noise "
+    "of the copies' differences; lle_stderr NaN)",
+}
+LLE_METHOD = {
+    "long_name": "how the largest Lyapunov exponent was measured",
+    "units": "1",
+    "flag_values": np.arange(len(METHODS), dtype=np.int8),
+    "flag_meanings": " ".join(METHODS),
+    **{f"method_{k}": v for k, v in METHODS.items()},
 }
 
 
@@ -75,20 +77,6 @@ def strobe_period(samples: np.ndarray, tolerance: float = PERIOD_TOLERANCE) -> i
     return 0
 
 
-METHODS = {
-    "variational": "variational equations with saltation, QR (workbench.analysis."
-    "lyapunov_spectrum)",
-    "copies": "linearised two-trajectory method, copies in one step sequence (workbench."
-    "analysis.lle_from_equations)",
-}
-
-
-def exponent_method(scene: Scene) -> str:
-    """``"variational"`` for a model with an analytic Jacobian, else ``"copies"``."""
-    hooks = prepare(scene.replace(sweep={}) if scene.sweep else scene, variables=()).problem.hooks
-    return "variational" if jacobian_for(hooks).HAS_ANALYTIC else "copies"
-
-
 def lle_cycles(scene: Scene) -> int:
     """Forcing periods over which a map point's exponent is measured: a fifth of the recorded
     cycles, at least 10 (the exponent's batch-means error needs ten batches)."""
@@ -99,7 +87,8 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
     """The chaos indicators of one point (a campaign's ``per_point``): ``strobe_period``,
     ``zero_one_K`` (median over the recorded variables' components) and ``zero_one_K_<var>``
     (per variable, over its model dims), ``lle`` and ``lle_stderr`` (s-1), ``lle_per_period``
-    (1) and ``lle_status``.
+    (1), ``lle_method`` (floquet, variational or copies: :func:`workbench.continuation.
+    point_exponent`) and ``lle_status``.
 
     Parameters
     ----------
@@ -141,35 +130,34 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
         float(np.nanmedian(ks)) if np.isfinite(ks).any() else np.nan,
         {"long_name": "0-1 test K, median over the recorded variables", "units": "1"},
     )
-    lam, err, status = np.nan, np.nan, 0
-    method = exponent_method(scene)
-    try:
-        if method == "variational":
-            spec = lyapunov_spectrum(scene, exponents=1, cycles=lle_cycles(scene), check=False)
-            lam, err = float(spec.exponent[0]), float(spec.stderr[0])
-        else:
-            spec = lle_from_equations(
-                scene, cycles=lle_cycles(scene), tighten=False, variational=False
-            )
-            lam, err = float(spec.lle), float(spec.stderr)
-    except (SolverError, FloatingPointError, ValueError):
-        status = 1
+    exp = point_exponent(
+        scene,
+        period=period,
+        cycles=lle_cycles(scene),
+        start_cycles=scene.run["transient_cycles"] + scene.run["cycles"],
+    )
     period_s = float(run.attrs["forcing_period"])
     out["lle"] = (
         (),
-        lam,
-        {"long_name": "largest Lyapunov exponent", "units": "s-1", "method": METHODS[method]},
+        exp.value,
+        {"long_name": "largest Lyapunov exponent", "units": "s-1"},
     )
     out["lle_stderr"] = (
         (),
-        err,
-        {"long_name": "standard error of the largest Lyapunov exponent", "units": "s-1"},
+        exp.error,
+        {
+            "long_name": "error of the largest Lyapunov exponent (batch means; floquet: its "
+            "change with the copies' step or the tolerance, see lle_method)",
+            "units": "s-1",
+        },
     )
     out["lle_per_period"] = (
         (),
-        lam * period_s,
+        exp.value * period_s,
         {"long_name": "largest Lyapunov exponent per forcing period", "units": "1"},
     )
+    out["lle_method"] = ((), np.int8(list(METHODS).index(exp.method)), LLE_METHOD)
+    status = 1 if exp.failed else 2 if exp.bound else 0
     out["lle_status"] = ((), np.int8(status), LLE_STATUS)
     return xr.Dataset(out)
 

@@ -86,9 +86,11 @@ class StrobeMap:
         Integration tolerance (default ``min(scene rtol, 1e-9)``; ``atol`` scales with it).
     monodromy : str
         ``"tangent"``, ``"copies"`` or ``"auto"`` (see the module docstring).
+    step : float
+        Central-difference step of the copies (scaled units; discrete states: relative).
     """
 
-    #: central-difference step of the copies (scaled units; discrete states: relative)
+    #: default central-difference step of the copies (scaled units; discrete states: relative)
     COPIES_STEP = 1e-6
 
     def __init__(
@@ -99,8 +101,12 @@ class StrobeMap:
         periods: int = 1,
         rtol: float | None = None,
         monodromy: str = "auto",
+        step: float = COPIES_STEP,
     ) -> None:
         scene = load_scene(scene)
+        if not 0 < step < 1:
+            raise ValueError(f"step={step!r}: must be a scaled step in (0, 1)")
+        self.step = float(step)
         self.scene: Scene = scene.replace(sweep={}) if scene.sweep else scene
         self.parameter = parameter
         if parameter is not None and parameter not in self.scene.resolved_parameters:
@@ -143,7 +149,12 @@ class StrobeMap:
     def with_periods(self, periods: int) -> StrobeMap:
         """The same map over another number of periods."""
         return StrobeMap(
-            self.scene, self.parameter, periods=periods, rtol=self.rtol, monodromy=self.monodromy
+            self.scene,
+            self.parameter,
+            periods=periods,
+            rtol=self.rtol,
+            monodromy=self.monodromy,
+            step=self.step,
         )
 
     def scale(self) -> np.ndarray:
@@ -227,7 +238,7 @@ class StrobeMap:
         one step sequence."""
         n, na = start.y0.size, start.aux0.size
         s = state_scale(start)
-        h = self.COPIES_STEP
+        h = self.step
         rows_y = [start.y0]
         rows_a = [start.aux0]
         steps = []

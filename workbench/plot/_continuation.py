@@ -137,7 +137,8 @@ def chaos_map_figure(
     """Maps of chaos indicators over the two parameter dims of a campaign (from
     :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
     x axis. ``scales`` multiplies a dim's values (e.g. ``{"omega": 1 / pi}``), ``labels``
-    names its axis."""
+    names its axis. On the exponent's map, "<=" marks an upper bound (``lle_status`` 2) and
+    "x" a failed exponent."""
     scales = dict(scales or {})
     labels = dict(labels or {})
     dims = maps.attrs["campaign_dims"].split()
@@ -172,6 +173,11 @@ def chaos_map_figure(
                 kw = {"vmin": -lim, "vmax": lim}
             im = ax.pcolormesh(x, y, da.values, cmap=cmap, shading="nearest", **kw)
             fig.colorbar(im, ax=ax)
+            if name == "lle" and "lle_status" in maps:  # mark upper bounds and failures
+                status = maps["lle_status"].transpose(yd, xd).values
+                for (i, j), st in np.ndenumerate(status):
+                    if st in (1, 2):
+                        ax.text(x[j], y[i], "<=" if st == 2 else "x", ha="center", va="center")
         ax.set_xlabel(labels.get(xd, axis_label(maps[xd])))
         ax.set_ylabel(labels.get(yd, axis_label(maps[yd])))
         units = maps[name].attrs.get("units", "1")

@@ -7,12 +7,14 @@ and hysteresis show; per point and direction the strobe spread, period and 0-1 t
 the two directions sit on different attractors; optionally the period-1 orbit continued over
 the parameter (:func:`workbench.continuation.continue_orbit`) until it loses stability, with
 the type, parameter and multipliers of every bifurcation; and the largest Lyapunov exponent at a
-few values. ``[route]`` keys: ``case`` (default the swept one), ``segments``,
-``transient_cycles`` (per continued point), ``cycles`` (recorded; >= 100 for the 0-1 test),
-``method`` (solver), ``branch_start``, ``branch_stop`` (the orbit's range; no branch without
-them), ``branch_points`` (the most points of the branch, default 300: it ends there, and says
-so, which bounds the study's cost), ``exponents`` (how many values of the sweep get an
-exponent, default 0).
+few values (:func:`workbench.continuation.point_exponent`: from the Floquet multipliers of the
+orbit Newton finds from the continued sweep's settled state where the strobe is periodic, else
+by the two-trajectory method over 20 cycles). ``[route]`` keys: ``case`` (default the swept
+one), ``segments``, ``transient_cycles`` (per continued point), ``cycles`` (recorded; >= 100
+for the 0-1 test), ``method`` (solver), ``branch_start``, ``branch_stop`` (the orbit's range;
+no branch without them), ``branch_points`` (the most points of the branch, default 300: it
+ends there, and says so, which bounds the study's cost), ``exponents`` (how many values of the
+sweep get an exponent, default 0).
 """
 
 from __future__ import annotations
@@ -71,9 +73,9 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
     branch's bifurcations, exponents, the files written and the wall time of each part)."""
     if not study.route:
         return None
-    from workbench.analysis import lle_from_equations
     from workbench.continuation import (
         continued_sweep,
+        point_exponent,
         strobe_period,
         strobe_zero_one,
     )
@@ -118,19 +120,42 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
         t0 = time.perf_counter()
         picks = np.unique(np.linspace(0, len(values) - 1, n_exp).round().astype(int))
         out["exponents"] = []
+        up = ds.sel(direction="up")
         for i in picks:
             point = scene.with_parameters(**{param: values[i]})
-            try:
-                r = lle_from_equations(
-                    point, cycles=EXPONENT_CYCLES, tighten=False, variational=False
-                )
-                out["exponents"].append(
-                    {"value": values[i], "lle": float(r.lle), "stderr": float(r.stderr)}
-                )
-            except Exception as exc:  # a failed run is a finding, not a crash of the study
-                out["exponents"].append({"value": values[i], "error": str(exc)[:200]})
+            y, aux = _settled(up, point, param, values[i])
+            e = point_exponent(
+                point,
+                period=max(per["up"]["period"][i], 0),
+                cycles=EXPONENT_CYCLES,
+                state=y,
+                discrete_state=aux,
+            )
+            row = {"value": values[i], "method": e.method, "note": e.detail[:300]}
+            if e.failed:  # a failed run is a finding, not a crash of the study
+                row["error"] = e.detail[:200]
+            else:
+                row.update(lle=e.value, stderr=e.error, bound=e.bound)
+            out["exponents"].append(row)
         out["wall_time"]["exponents"] = time.perf_counter() - t0
     return out
+
+
+def _settled(part: xr.Dataset, point, param: str, value: float):
+    """(state, discrete state) a continued point ended in (at forcing phase 0), or (None,
+    None) where its run failed."""
+    from workbench.run import prepare
+
+    pb = prepare(point, variables=()).problem
+    p = part.sel({param: value})
+    y = np.array(
+        [float(p[f"final_{q.name}"]) if f"final_{q.name}" in p else 0.0 for q in pb.states]
+    )
+    aux = p["final_discrete_state"].values if "final_discrete_state" in p else pb.aux0
+    aux = np.asarray(aux, dtype=float)
+    if not (np.isfinite(y).all() and np.isfinite(aux).all()):
+        return None, None
+    return y, aux
 
 
 def _hysteresis(clouds: dict, values: list[float]) -> dict:

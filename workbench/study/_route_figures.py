@@ -125,8 +125,18 @@ def _indicators(r: dict, path: Path, param: str, scale: float, xlabel: str) -> P
             )
             ax.axhline(1.0, color="0.5", lw=0.6)
         if r.get("exponents"):
-            ok = [e for e in r["exponents"] if "lle" in e]
+            ok = [e for e in r["exponents"] if "lle" in e and not e.get("bound")]
+            bounds = [e for e in r["exponents"] if e.get("bound")]
             twin = ax.twinx()
+            if bounds:
+                twin.plot(
+                    [e["value"] * scale for e in bounds],
+                    [e["lle"] for e in bounds],
+                    "v",
+                    color="tab:red",
+                    ms=5,
+                    label="upper bound (Floquet, below the differences' noise)",
+                )
             twin.errorbar(
                 [e["value"] * scale for e in ok],
                 [e["lle"] for e in ok],

@@ -78,8 +78,11 @@ def route_section(r: dict) -> list[str]:
             e = exps.get(v)
             if e is None:
                 row += " |"
+            elif e.get("bound"):
+                row += f" <= {e['lle']:.3g} (Floquet bound) |"
             elif "lle" in e:
-                row += f" {e['lle']:.3g} +- {e['stderr']:.2g} |"
+                how = {"floquet": " (Floquet)"}.get(e.get("method", "copies"), "")
+                row += f" {e['lle']:.3g} +- {e['stderr']:.2g}{how} |"
             else:
                 row += " failed |"
         lines.append(row)
@@ -169,11 +172,13 @@ def _agreement(r: dict) -> list[str]:
             )
     exps = [e for e in r.get("exponents", []) if "lle" in e]
     if exps:
-        pos = [e for e in exps if e["lle"] > 2 * e["stderr"]]
-        neg = [e for e in exps if e["lle"] < -2 * e["stderr"]]
+        pos = [e for e in exps if not e.get("bound") and e["lle"] > 2 * e["stderr"]]
+        neg = [e for e in exps if e["lle"] < 0 and (e.get("bound") or e["lle"] < -2 * e["stderr"])]
+        floq = sum(e.get("method") == "floquet" for e in exps)
         text.append(
-            f"The largest exponent (two-trajectory method, {len(exps)} values) is positive "
-            f"beyond two standard errors at "
+            f"The largest exponent ({len(exps)} values: {floq} from the Floquet multipliers of "
+            f"the period-k orbit where the strobe is periodic, {len(exps) - floq} by the "
+            f"two-trajectory method) is positive beyond two errors at "
             + (", ".join(_v(e["value"], p) for e in pos) or "none")
             + ", negative at "
             + (", ".join(_v(e["value"], p) for e in neg) or "none")

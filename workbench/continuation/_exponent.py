@@ -1,0 +1,205 @@
+"""The largest Lyapunov exponent of one point of a chaos map or a route to chaos: from the
+Floquet multipliers where the motion is periodic, from a trajectory method where it is not.
+
+On a period-k orbit the largest exponent *is* ``ln |mu_max| / (k T)`` (``mu_max`` the Floquet
+multiplier of largest modulus, ``T`` the forcing period; e.g. Parker & Chua 1989, Sec. 3.2), and
+the multipliers come from the monodromy matrix of the orbit found by Newton's method
+(:func:`workbench.continuation.periodic_orbit`'s machinery), exactly and cheaply. A trajectory
+method cannot measure it on a strongly contracting orbit: the two-trajectory method
+(:func:`workbench.analysis.lle_from_equations`) renormalises a copy only when its separation
+*grows*, so on an orbit that contracts every copy shrinks onto the orbit until its separation
+is the integration's noise, after which it reads the noise's rate, not the orbit's. At the
+nine-bar's omega = 0.5 pi, c = 20 um its pilot copies (1e-11 .. 1e-4, scaled) read
++2.2e4 .. -0.39 1/s over 5 cycles, no two agree, the smallest separation is taken and the point
+read 3.34e4 +- 53 1/s (193 168 renormalisations of that copy in 5 cycles, all of them noise).
+
+So where the strobe samples repeat with period k (:func:`workbench.continuation.strobe_period`)
+the exponent is Floquet's. Its check: with the monodromy by copies (the mechanisms), the
+matrix again with a 100x larger difference step, which leaves a true multiplier unchanged
+(the copies stay in the linear range) and divides the differences' noise by 100 (it goes as
+1 / step); with the tangent system, the orbit again at a 100x tighter tolerance. The change is
+the error. Where the largest multiplier falls by more than 10x with the larger step it was the
+noise floor of the differences, and the exponent is only bounded: ``ln |mu_max| / (k T)`` at
+the larger step is an upper bound (``bound``). The nine-bar's point above is such an orbit:
+the copies' Jacobian there is noise (entries ~1e-5 of no structure at step 1e-6), and the
+variational monodromy of :func:`workbench.analysis.floquet` puts its exponent at -76 1/s.
+
+Elsewhere (no period up to 16: chaotic, quasi-periodic or a long period) the exponent is the
+variational one for a model with an analytic Jacobian
+(:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms, whose
+tangent system is costly: :mod:`workbench.continuation._strobe`), with its batch-means standard
+error. Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve
+with the model's Jacobian, not the derived system's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from workbench.analysis import lle_from_equations, lyapunov_spectrum
+from workbench.continuation._newton import NewtonFailure, orbit_at
+from workbench.continuation._strobe import StrobeMap
+from workbench.run import prepare
+from workbench.scene import Scene
+from workbench.solver import SolverError, jacobian_for
+
+__all__ = ["PointExponent", "exponent_method", "point_exponent"]
+
+#: how a point's exponent was measured (the flag values of ``lle_method``)
+METHODS = {
+    "floquet": "ln |largest Floquet multiplier| / (k T) of the period-k orbit found by Newton's "
+    "method from the settled state (workbench.continuation.periodic_orbit); error: its change "
+    "with a 100x larger copies' step (tangent system: at a 100x tighter tolerance); an upper "
+    "bound where the multipliers are below the differences' noise",
+    "variational": "variational equations with saltation, QR (workbench.analysis."
+    "lyapunov_spectrum); error: batch means",
+    "copies": "linearised two-trajectory method, copies in one step sequence (workbench."
+    "analysis.lle_from_equations); error: batch means",
+}
+#: Newton's tolerance for the orbit (scaled residual)
+ORBIT_TOLERANCE = 1e-8
+#: the Floquet exponent's check: the tolerance divided (tangent system) or the copies' step
+#: multiplied (copies) by this
+CHECK_FACTOR = 100.0
+#: a largest multiplier that falls by more than this factor when the copies' step grows by
+#: CHECK_FACTOR was the differences' noise
+NOISE_DROP = 10.0
+
+
+@dataclass(frozen=True)
+class PointExponent:
+    """The largest exponent of one point: ``value`` and ``error`` (s-1), ``method`` (a key of
+    :data:`METHODS`), ``failed`` (no estimate: the runs failed; value NaN), ``bound`` (the
+    value is only an upper bound: the multipliers are below the noise of the differences;
+    error NaN), ``detail`` (why Floquet's value was not taken, what failed, or the
+    trajectory method's unmet convergence conditions)."""
+
+    value: float
+    error: float
+    method: str
+    failed: bool = False
+    detail: str = ""
+    bound: bool = False
+
+
+def exponent_method(scene: Scene) -> str:
+    """The trajectory method for a scene: ``"variational"`` for a model with an analytic
+    Jacobian, else ``"copies"``."""
+    hooks = prepare(scene.replace(sweep={}) if scene.sweep else scene, variables=()).problem.hooks
+    return "variational" if jacobian_for(hooks).HAS_ANALYTIC else "copies"
+
+
+def _explicit(scene: Scene) -> str | None:
+    method = scene.solver["method"]
+    return None if method in ("dop853", "dopri5") else "dop853"
+
+
+def _largest(M: np.ndarray, span: float) -> tuple[float, float]:
+    modulus = float(np.max(np.abs(np.linalg.eigvals(M))))
+    return modulus, math.log(modulus) / span
+
+
+def floquet_exponent(
+    scene: Scene, *, period: int, state=None, discrete_state=None, start_cycles: int | None = None
+) -> PointExponent:
+    """``ln |mu_max| / (k T)`` of the period-``k`` orbit Newton finds from ``state`` (state
+    units; default the state after ``start_cycles`` forcing periods of the scene, default its
+    transient), checked as the module docstring says (error, or an upper bound). Raises
+    :class:`~workbench.continuation.NewtonFailure` where Newton does not converge."""
+    smap = StrobeMap(scene, None, periods=period)
+    if state is None:
+        y, aux = smap.initial(math.nan, start_cycles)
+    else:
+        y = np.asarray(state, dtype=float)
+        aux = smap.prepared(math.nan).problem.aux0.copy()
+        if discrete_state is not None:
+            aux = np.asarray(discrete_state, dtype=float)
+    span = period * smap.prepared(math.nan).period
+    pt = orbit_at(smap, y, aux, math.nan, tolerance=ORBIT_TOLERANCE)
+    mu, lam = _largest(pt.value.M, span)
+    if smap.monodromy == "copies":
+        coarse = StrobeMap(scene, None, periods=period, step=smap.step * CHECK_FACTOR)
+        mu_c, lam_c = _largest(coarse(pt.y, pt.aux, math.nan).M, span)
+        if mu_c < mu / NOISE_DROP:
+            return PointExponent(
+                lam_c,
+                math.nan,
+                "floquet",
+                bound=True,
+                detail=f"largest multiplier {mu:.3g} at step {smap.step:g}, {mu_c:.3g} at "
+                f"{coarse.step:g}: below the differences' noise; the exponent is at most "
+                f"{lam_c:.4g} 1/s",
+            )
+    else:
+        tight = StrobeMap(scene, None, periods=period, rtol=smap.rtol / CHECK_FACTOR)
+        lam_c = _largest(
+            orbit_at(tight, pt.y, pt.aux, math.nan, tolerance=ORBIT_TOLERANCE).value.M, span
+        )[1]
+    return PointExponent(lam, abs(lam - lam_c), "floquet")
+
+
+def point_exponent(
+    scene: Scene,
+    *,
+    period: int,
+    cycles: int,
+    state=None,
+    discrete_state=None,
+    start_cycles: int | None = None,
+) -> PointExponent:
+    """The largest Lyapunov exponent of one point of a forced scene (see the module docstring):
+    Floquet's where ``period`` (the strobe's period in forcing periods, 0 for none) is at least
+    1 and Newton converges, else the trajectory method over ``cycles`` forcing periods after
+    the scene's transient. A failed run gives ``failed`` and a NaN value, never an exception
+    (one hard point must not stop a map).
+
+    Parameters
+    ----------
+    scene : Scene
+        One point (single run) of a forced model.
+    period : int
+        The period of its strobe samples (:func:`workbench.continuation.strobe_period`).
+    cycles : int
+        Forcing periods of the trajectory method's window.
+    state, discrete_state : array, optional
+        Where Newton starts (a settled state of the point, state units).
+    start_cycles : int, optional
+        Without ``state``: Newton starts after this many forcing periods from the scene's
+        initial state (default its transient).
+    """
+    notes = ""
+    if period >= 1:
+        try:
+            return floquet_exponent(
+                scene,
+                period=period,
+                state=state,
+                discrete_state=discrete_state,
+                start_cycles=start_cycles,
+            )
+        except (NewtonFailure, SolverError, FloatingPointError, ValueError) as exc:
+            notes = f"no period-{period} orbit by Newton ({str(exc)[:160]}); "
+    method = exponent_method(scene)
+    try:
+        if method == "variational":
+            spec = lyapunov_spectrum(
+                scene, exponents=1, cycles=cycles, check=False, method=_explicit(scene)
+            )
+            value, error = float(spec.exponent[0]), float(spec.stderr[0])
+            unmet = spec.attrs["failed"]
+        else:
+            r = lle_from_equations(
+                scene,
+                cycles=cycles,
+                tighten=False,
+                variational=False,
+                method=_explicit(scene),
+            )
+            value, error = float(r.lle), float(r.stderr)
+            unmet = r.attrs["failed"]
+    except (SolverError, FloatingPointError, ValueError) as exc:
+        return PointExponent(math.nan, math.nan, method, True, notes + str(exc)[:200])
+    return PointExponent(value, error, method, False, notes + unmet)
