@@ -99,23 +99,44 @@ def defect(Y, n, nx, m, w):
 
 
 @njit(cache=True, nogil=True)
-def gram_schmidt(Y, n, nx, m, w, il):
-    """Re-orthonormalise the m columns in place (modified Gram-Schmidt: ``V <- V R^-1``) and add
-    ``log R_kk`` to the log sizes ``Y[il + k]``: the vectors ``V = U diag(e^l)`` then hold
-    Benettin's accumulators in ``l``, span the same nested subspaces and the same volume."""
+def gram_schmidt(Y, n, nx, m, w, il, R):
+    """Re-orthonormalise the m columns in place (modified Gram-Schmidt: ``U = Q R``, ``U <- Q =
+    U R^-1``) and add ``log R_kk`` to the log sizes ``Y[il + k]``: the vectors ``V = U
+    diag(e^l)`` then hold Benettin's accumulators in ``l``, span the same nested subspaces and
+    the same volume. ``R`` (m x m, written): the upper triangular factor (a column of zero size
+    is left as it is, with ``R_kk = 1`` and no projection on it)."""
+    for k in range(m):
+        for c in range(m):
+            R[k, c] = 1.0 if c == k else 0.0
     for k in range(m):
         bk = n + k * nx
         r = math.sqrt(column_dot(Y, bk, bk, nx, w))
         if not (r > 0.0 and math.isfinite(r)):
             continue
+        R[k, k] = r
         for j in range(nx):
             Y[bk + j] /= r
         Y[il + k] += math.log(r)
         for c in range(k + 1, m):
             bc = n + c * nx
             d = column_dot(Y, bk, bc, nx, w)
+            R[k, c] = d
             for j in range(nx):
                 Y[bc + j] -= d * Y[bk + j]
+
+
+@njit(cache=True, nogil=True)
+def transform_rates(L, R):
+    """``L <- L R^-1`` in place for the factor ``R`` of :func:`gram_schmidt` (nx x m, upper
+    triangular m x m): the rates of a linear system's columns after the change of basis ``U <-
+    U R^-1`` (column c of the result: ``(L_c - sum_{k<c} L_k R_kc) / R_cc``)."""
+    nx, m = L.shape
+    for c in range(m):
+        for i in range(nx):
+            acc = L[i, c]
+            for k in range(c):
+                acc -= L[i, k] * R[k, c]
+            L[i, c] = acc / R[c, c]
 
 
 @njit(cache=True, nogil=True)

@@ -26,3 +26,9 @@ def jacobian(t, y, p, ip, aux, work, J):  # noqa: ARG001
         for j in range(n):
             J[i, j] = -1.0 if i == j else 0.0
     return 0
+
+
+@njit(cache=True, nogil=True)
+def step_end(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
+    """The optional ``step_end`` hook: nothing to do (returns 0: nothing changed)."""
+    return 0
