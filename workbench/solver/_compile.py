@@ -9,7 +9,8 @@ module of the package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACK
 ordinary module whose functions call global compiled functions, which numba caches on disk.
 Every process after the first (a CLI call, a dask worker) loads machine code instead of
 compiling. What is generated, for hooks module ``H`` (a model's ``rhs``, ``event_values``,
-``apply_event`` and optional ``jacobian``):
+``apply_event``, optional ``jacobian`` and ``step_end``; a loop whose hooks have no ``step_end``
+is compiled without the call, flag ``HAS_STEP_END``):
 
 ========================  =================================  ==================================
 function                  template                           generates
@@ -153,7 +154,7 @@ def _kernel_parts(hooks: str) -> dict[str, ModuleType]:
     )
     step_end = defines_hook(importlib.import_module(hooks), "step_end")
     modules = {"HOOKS": hooks, "STEPS": steps.__name__, "IMPLICIT": implicit.__name__}
-    modules["STEP_END"] = hooks if step_end else _PLACEHOLDER
+    modules["STEP_END"] = hooks if step_end else "workbench.solver._no_events"  # a no-op
     flags = {"HAS_STEP_END": step_end}
     kernel = _specialise("integration_loop", "kernel", hooks, modules, flags)
     return {"steps": steps, "implicit": implicit, "kernel": kernel}

@@ -8,7 +8,11 @@ from __future__ import annotations
 
 from numba import njit
 
-from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+from workbench.solver._no_events import (  # noqa: F401 (its hooks)
+    apply_event,
+    event_values,
+    step_end,
+)
 
 
 @njit(cache=True, nogil=True)
@@ -25,10 +29,4 @@ def jacobian(t, y, p, ip, aux, work, J):  # noqa: ARG001
     for i in range(n):
         for j in range(n):
             J[i, j] = -1.0 if i == j else 0.0
-    return 0
-
-
-@njit(cache=True, nogil=True)
-def step_end(t, y, p, ip, aux, work, dydt):  # noqa: ARG001
-    """The optional ``step_end`` hook: nothing to do (returns 0: nothing changed)."""
     return 0
