@@ -41,10 +41,10 @@ __all__ = ["lyapunov_spectrum"]
 #: that are the cost (chaos case, 8 exponents, 0.1 cycle after the transient, rtol 1e-6: D = 10
 #: took 63 030 re-orthonormalisations and 736 780 steps per cycle, D = 1 took 1.8e6 and 5.6e6).
 #: With fewer exponents than states the integrated volume (the sum check) needs the orthogonal
-#: parts: over 0.5 cycles, 4 exponents, the check closed to 5.5e-2 at rtol 1e-6 and 7.4e-5 at
-#: 1e-8 with D = 10, to 9.3e-4 and 1.6e-6 with D = 3 (3.4x the steps), while the exponents
-#: agreed to 0.01 1/s; with all of them the volume rate is the trace on the whole state
-#: space and closes at rtol 1e-6 (2.3e-4 over 0.05 cycles).
+#: parts: 4 exponents over 2 cycles closed to 2.8e-2 at rtol 1e-6 and 8.6e-4 at 1e-8, with D = 3
+#: over 0.5 cycles to 3.8e-4 and 1.7e-6 (about 3 times the steps), the exponents the same to
+#: 0.01 1/s; with all of them the volume rate is the trace on the whole state space and closes
+#: at rtol 1e-6 (2.9e-4 over 2 cycles). Figures: benchmarks/tangent_speed.py, docs/results.md.
 DEFECT = 10.0
 #: records of the accumulated growths (running estimate, batch means)
 RECORDS = 400
