@@ -34,7 +34,8 @@ __all__ = ["lyapunov_spectrum"]
 #: orthogonality defect (the tangent directions' log sizes minus the log of the volume they
 #: span) beyond which the tangent system re-orthonormalises them at the end of a step. e^D bounds
 #: the condition number of the directions, whose Gram-Schmidt factors give the volume rate (at
-#: 10, 2e4 leaves ~11 digits), and their parts orthogonal to each other are known to rtol e^D. A re-orthonormalisation costs no evaluation (see
+#: 10, 2e4 leaves ~11 digits), and their parts orthogonal to each other are known to rtol e^D.
+#: A re-orthonormalisation costs no evaluation (see
 #: :mod:`workbench.solver._templates.tangent_hooks`), but it sets the directions apart again,
 #: and on the nine-bar's contacts they re-align within microseconds: the steps that resolve
 #: that are the cost (chaos case, 8 exponents, 0.1 cycle after the transient, rtol 1e-6: D = 10
