@@ -91,6 +91,24 @@ def test_floquet_multipliers_of_a_duffing_orbit_match_scipy():
     assert np.prod(r.modulus.values) == pytest.approx(math.exp(-DUFFING["delta"] * period), 1e-8)
 
 
+def test_floquet_says_which_method_integrates_the_monodromy_matrix():
+    """An implicit method in the scene (radau) runs the transient, but the tangent system is
+    integrated with DOP853: floquet warns, naming the method, and records the one it used; the
+    multipliers equal those of the all-DOP853 call."""
+    scene = {
+        "model": {"name": "duffing"},
+        "parameters": {**DUFFING, "gamma": 0.2},
+        "initial": {"x": 1.0, "v": 0.0},
+        "run": {"transient_cycles": 100},
+    }
+    with pytest.warns(UserWarning, match="DOP853, not with solver.method='radau'"):
+        r = floquet({**scene, "solver": {"method": "radau"}})
+    assert r.attrs["tangent_method"] == "dop853"
+    ref = floquet(scene)
+    assert ref.attrs["tangent_method"] == "dop853"
+    np.testing.assert_allclose(r.modulus.values, ref.modulus.values, atol=1e-6)
+
+
 def _strobe_points(gamma):
     ds = workbench.simulate(
         {

@@ -32,15 +32,19 @@ from workbench.solver import (
 __all__ = ["lyapunov_spectrum"]
 
 #: orthogonality defect (the tangent directions' log sizes minus the log of the volume they
-#: span) at which the tangent system re-orthonormalises them. e^D bounds the condition number
-#: of the directions and e^2D that of their Gram matrix, whose solves give the volume rate:
-#: at 10, 5e8 leaves ~7 digits. Each re-orthonormalisation is an event after which the solver
-#: restarts its step size, and the nine-bar's contacts stretch the directions apart within
-#: microseconds: on the chaos case (8 exponents, the 0.1 s after one transient cycle, rtol
-#: 1e-6) D = 6, 10, 15, 30 took 9 366, 2 763, 765, 9 re-orthonormalisations and 18.0, 6.9,
-#: 2.5, 0.8 s CPU, with the same five leading exponents to 0.1 1/s and sum checks 2-6e-5; at
-#: D = 3, 16 183 over 0.05 s (21.6 s); Lorenz's sum check over 400 s grows with D (1.6e-9 at
-#: 3, 1.4e-7 at 10, 3.8e-6 at 15) as the Gram matrix's condition does.
+#: span) beyond which the tangent system re-orthonormalises them at the end of a step. e^D bounds
+#: the condition number of the directions, whose Gram-Schmidt factors give the volume rate (at
+#: 10, 2e4 leaves ~11 digits), and their parts orthogonal to each other are known to rtol e^D.
+#: A re-orthonormalisation costs no evaluation (see
+#: :mod:`workbench.solver._templates.tangent_hooks`), but it sets the directions apart again,
+#: and on the nine-bar's contacts they re-align within microseconds: the steps that resolve
+#: that are the cost (chaos case, 8 exponents, 0.1 cycle after the transient, rtol 1e-6: D = 10
+#: took 63 030 re-orthonormalisations and 736 780 steps per cycle, D = 1 took 1.8e6 and 5.6e6).
+#: With fewer exponents than states the integrated volume (the sum check) needs the orthogonal
+#: parts: 4 exponents over 2 cycles closed to 2.8e-2 at rtol 1e-6 and 8.6e-4 at 1e-8, with D = 3
+#: over 0.5 cycles to 3.8e-4 and 1.7e-6 (about 3 times the steps), the exponents the same to
+#: 0.01 1/s; with all of them the volume rate is the trace on the whole state space and closes
+#: at rtol 1e-6 (2.9e-4 over 2 cycles). Figures: benchmarks/tangent_speed.py, docs/results.md.
 DEFECT = 10.0
 #: records of the accumulated growths (running estimate, batch means)
 RECORDS = 400
@@ -64,8 +68,9 @@ def tangent_run(
     resume: dict | None = None,
 ) -> dict:
     """Integrate the model and ``m`` tangent vectors over the prepared window (or ``length``
-    seconds of it) in one run of the tangent system, which re-orthonormalises them wherever
-    their orthogonality defect reaches ``defect`` (see :func:`workbench.solver.tangent_problem`),
+    seconds of it) in one run of the tangent system, which re-orthonormalises them at the end
+    of each step where their orthogonality defect exceeds ``defect`` (see
+    :func:`workbench.solver.tangent_problem`),
     and read the accumulated log growths at ``records`` equally spaced times. ``resume``: a
     run returned by this function, continued from its end (its tolerance and vectors).
 

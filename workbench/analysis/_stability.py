@@ -15,11 +15,12 @@ Seydel 2010, Sec. 7.4).
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import xarray as xr
 
-from workbench.analysis._window import Window, measurement_window
+from workbench.analysis._window import EXPLICIT_METHODS, Window, measurement_window
 from workbench.run import integrate as integrate_scene
 from workbench.run import prepare
 from workbench.scene import Scene, SceneSource, scene_from_toml
@@ -239,7 +240,14 @@ def floquet(
         decreasing modulus), ``modulus``, ``orbit_state`` (the refined state, state units)
         over ``state``, ``residual`` (scaled), ``stable``, and ``loss`` (how the largest
         multiplier leaves the unit circle: "stable", "fold" (+1), "flip" (-1) or
-        "neimark-sacker").
+        "neimark-sacker"); attribute ``tangent_method``, the method that integrated the
+        monodromy matrix.
+
+    Warns
+    -----
+    UserWarning
+        Where the scene's method is implicit (``radau``, ``auto``, ``ark548``): it runs the
+        transient, and the monodromy matrix is integrated with DOP853.
 
     Examples
     --------
@@ -254,6 +262,15 @@ def floquet(
     if periods < 1:
         raise ValueError(f"periods={periods!r}: must be a positive integer")
     rtol = min(window.rtol, 1e-10) if rtol is None else float(rtol)
+    if window.method not in EXPLICIT_METHODS:
+        warnings.warn(
+            f"floquet: the monodromy matrix is integrated with DOP853, not with "
+            f"solver.method={window.method!r} (which ran the transient): the tangent system "
+            "carries none of the model's implicit setup (its stiff states for ark548; radau and "
+            "auto would difference the Jacobian over all its states); set solver.method = "
+            "'dop853' to use one method throughout",
+            stacklevel=2,
+        )
     pb = window.problem
     s = state_scale(pb)
     span = periods * window.period
@@ -304,6 +321,7 @@ def floquet(
             "periods": periods,
             "newton_iterations": iterations,
             "rtol": rtol,
+            "tangent_method": window.method if window.method in EXPLICIT_METHODS else "dop853",
             "strobe_time": pb.t0,
             "method": "monodromy matrix of the variational equations with saltation, Newton "
             "on the stroboscopic map",

@@ -9,7 +9,8 @@ module of the package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACK
 ordinary module whose functions call global compiled functions, which numba caches on disk.
 Every process after the first (a CLI call, a dask worker) loads machine code instead of
 compiling. What is generated, for hooks module ``H`` (a model's ``rhs``, ``event_values``,
-``apply_event`` and optional ``jacobian``):
+``apply_event``, optional ``jacobian`` and ``step_end``; a loop whose hooks have no ``step_end``
+is compiled without the call, flag ``HAS_STEP_END``):
 
 ========================  =================================  ==================================
 function                  template                           generates
@@ -151,8 +152,11 @@ def _kernel_parts(hooks: str) -> dict[str, ModuleType]:
         hooks,
         {"HOOKS": hooks, "JACOBIAN": jacobian, "STEPS": steps.__name__},
     )
+    step_end = defines_hook(importlib.import_module(hooks), "step_end")
     modules = {"HOOKS": hooks, "STEPS": steps.__name__, "IMPLICIT": implicit.__name__}
-    kernel = _specialise("integration_loop", "kernel", hooks, modules)
+    modules["STEP_END"] = hooks if step_end else "workbench.solver._no_events"  # a no-op
+    flags = {"HAS_STEP_END": step_end}
+    kernel = _specialise("integration_loop", "kernel", hooks, modules, flags)
     return {"steps": steps, "implicit": implicit, "kernel": kernel}
 
 
@@ -164,16 +168,17 @@ def jacobian_for(hooks: str) -> ModuleType:
     that an analytic Jacobian can be checked against it). See
     :mod:`workbench.solver._templates.jacobian`.
     """
-    analytic = _defines_jacobian(importlib.import_module(hooks))
+    analytic = defines_hook(importlib.import_module(hooks), "jacobian")
     modules = {"HOOKS": hooks, "JACOBIAN": hooks if analytic else _PLACEHOLDER}
     flags = {"HAS_ANALYTIC": analytic}
     return _specialise("jacobian", "jacobian", hooks, modules, flags)
 
 
-def _defines_jacobian(module: ModuleType) -> bool:
-    """Whether ``module`` defines its own ``jacobian`` hook (a derived system's module may
-    import another module's ``jacobian`` under that name, e.g. the tangent system)."""
-    fn = getattr(module, "jacobian", None)
+def defines_hook(module: ModuleType, hook: str) -> bool:
+    """Whether ``module`` defines its own optional hook ``hook`` (``jacobian``, ``step_end``; a
+    derived system's module may import another module's ``jacobian`` under that name, e.g. the
+    tangent system)."""
+    fn = getattr(module, hook, None)
     py_func = getattr(fn, "py_func", fn)
     return fn is not None and getattr(py_func, "__module__", None) == module.__name__
 

@@ -25,6 +25,7 @@ import time as _time
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from workbench.solver._compile import defines_hook
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, Status, solver_stats
 
@@ -41,8 +42,16 @@ class _TooMany(Exception):
 def cannot_start(problem: Problem, rtol: float, atol: np.ndarray) -> str:
     """Why no first step can be formed from the problem's initial state ('' if one can): its
     derivative, or the state itself, overflows its norm scaled by the tolerances (as the
-    compiled loop's initial step tests; scipy would take steps of 1e-323 s forever)."""
+    compiled loop's initial step tests; scipy would take steps of 1e-323 s forever), or its
+    hooks define ``step_end`` (a tangent system's re-orthonormalisation), which only the compiled
+    loop calls."""
     hooks = importlib.import_module(problem.hooks)
+    if defines_hook(hooks, "step_end"):
+        return (
+            f"the hooks {problem.hooks!r} define step_end (e.g. the tangent system's "
+            "re-orthonormalisation at the end of each step), which only the compiled loop calls: "
+            "integrate with a compiled method"
+        )
     f0 = np.empty(problem.y0.size)
     aux = problem.aux0.copy()
     work = np.zeros(max(problem.work_size, 1))

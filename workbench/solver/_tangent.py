@@ -84,10 +84,11 @@ def tangent_problem(
         Initial value of the accumulated log volume change at events.
     reorthonormalise : float, optional
         Orthogonality defect (the columns' log sizes minus the log of the volume they span)
-        at which the system re-orthonormalises its vectors by Gram-Schmidt, adding ``log
-        R_kk`` to their log sizes (Benettin's accumulators), and integrates the log volume
-        they span (:func:`tangent_volume`). Default None: never; the vectors stay ``Phi V``
-        (a monodromy matrix).
+        beyond which the system re-orthonormalises its vectors by Gram-Schmidt at the end of
+        an accepted step (or after an event's saltation), adding ``log R_kk`` to their log
+        sizes (Benettin's accumulators), and integrates the log volume they span
+        (:func:`tangent_volume`). Default None: never; the vectors stay ``Phi V`` (a monodromy
+        matrix). Needs the compiled loop (its ``step_end`` hook).
     """
     n, na = problem.y0.size, problem.aux0.size
     V = np.asarray(V, dtype=float)
@@ -124,9 +125,6 @@ def tangent_problem(
         )
     meta = [n, na, m, problem.event_direction.size, problem.p.size, problem.ip.size]
     meta += [problem.work_size, int(qr)]
-    direction = problem.event_direction
-    if qr:  # the re-orthonormalisation event, on a rising defect
-        direction = np.concatenate([direction, np.ones(1, dtype=direction.dtype)])
     return Problem(
         hooks=hooks,
         states=states,
@@ -135,7 +133,7 @@ def tangent_problem(
         ip=np.concatenate([problem.ip, np.array(meta, dtype=np.int64)]),
         aux0=problem.aux0,
         aux_scale=problem.aux_scale,
-        event_direction=direction,
+        event_direction=problem.event_direction,
         atol_scale=atol_scale,
         t0=problem.t0,
         work_size=problem.work_size + 3 * n + n * na + n * n + 2 * problem.event_direction.size,

@@ -25,6 +25,13 @@ Hooks (all ``numba.njit``), in SI units of the model's state:
 ``apply_event(k, t, y, p, ip, aux, work) -> int``
     Applies the update of event k in place (state ``y`` and discrete state ``aux``); returns 1 to
     stop the integration, else 0.
+``step_end(t, y, p, ip, aux, work, dydt) -> int`` (optional)
+    Called at the end of every accepted step that no event ended, with the state and its
+    derivative there (the next step's first stage): may change how the state is represented,
+    both in place, where that changes neither the solution nor the event functions (the tangent
+    system's re-orthonormalisation of its vectors, :mod:`workbench.solver._templates.
+    tangent_hooks`); returns 1 where it changed them, else 0. A model without it is compiled
+    without the call.
 
 ``work`` is a scratch array of the model's ``Problem.work_size`` floats, allocated once per run,
 so that the hot right-hand side allocates nothing.
@@ -129,9 +136,16 @@ from workbench.solver._templates.placeholder_hooks import (  # @@HOOKS@@
     event_values,
     rhs,
 )
+from workbench.solver._templates.placeholder_hooks import (
+    step_end as hooks_step_end,  # @@STEP_END@@
+)
 from workbench.solver._templates.radau_step import (  # @@IMPLICIT@@
     _radau_attempts,
 )
+
+#: whether the hooks define ``step_end`` (set per model by :mod:`workbench.solver._compile`;
+#: False compiles the loop without the call)
+HAS_STEP_END = True  # @@FLAG@@
 
 _crossed = crossed  # the name tests and older callers use
 
@@ -397,6 +411,10 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
             f_inside = inside_end
             if ne > 0:
                 g_old[:] = g_new
+            if HAS_STEP_END:
+                if hooks_step_end(t, y, p, ip, aux, work, f) != 0:
+                    if im is not None:
+                        forget_jacobian(im.rc)  # the state's representation changed
         current = next_method
         if im is not None:
             im.rc[RC_CURRENT] = current

@@ -8,7 +8,11 @@ from __future__ import annotations
 
 from numba import njit
 
-from workbench.solver._no_events import apply_event, event_values  # noqa: F401 (its hooks)
+from workbench.solver._no_events import (  # noqa: F401 (its hooks)
+    apply_event,
+    event_values,
+    step_end,
+)
 
 
 @njit(cache=True, nogil=True)

@@ -50,12 +50,22 @@ and is normalised again (its log size added to ``l``). ``DR``, ``dR/dt``, ``grad
 
 Re-orthonormalisation (optional, for Lyapunov exponents): the directions tend to the most
 expanding one, and a direction whose part orthogonal to the others has shrunk by e^-D relative
-to its size is known to rtol e^D of that part only. Event ``ne`` (after the model's ``ne``)
-fires where the orthogonality defect ``D`` (the columns' log sizes minus the log of the volume
-they span, Hadamard) reaches ``D_max`` and re-orthonormalises them by Gram-Schmidt (``V <- V
-R^-1``, ``l_k += log R_kk``: Benettin's accumulators; the nested subspaces and the volume stay);
-so does an event of the model whose saltation left ``D`` beyond ``D_max`` (the event function
-would start beyond its surface). Without it the vectors stay ``Phi V`` (a monodromy matrix).
+to its size is known to rtol e^D of that part only. At the end of every accepted step where the
+orthogonality defect ``D`` (the columns' log sizes minus the log of the volume they span,
+Hadamard) exceeds ``D_max`` (the loop's ``step_end`` hook), and after an event whose saltation
+left it there, the directions are re-orthonormalised by Gram-Schmidt (``U <- U R^-1``, ``l_k +=
+log R_kk``: Benettin's accumulators; the nested subspaces and the volume stay). Benettin et al.
+(1980, Meccanica 15, 9 and 21) re-orthonormalise at any times frequent enough that the vectors stay
+numerically independent, and the exponents do not depend on which (the Gram-Schmidt/QR method,
+Geist, Parlitz & Lauterborn 1990, Prog. Theor. Phys. 83, 875): the defect's crossing needs no
+location in time. Nor is the change of basis a discontinuity of the flow: the tangent equations
+are linear, so the linear part of the directions' derivative at the step's end transforms by the
+same ``R^-1`` (:func:`step_end`), the next step starts from it (first-same-as-last, no
+evaluation) with the step size the controller chose, and every component keeps its error scale
+(the directions have unit size before and after). An event located in time (as this system did
+before) cost the dense output's three stages, the evaluation after it and the rest of the step
+at every re-orthonormalisation. Without re-orthonormalisation the vectors stay ``Phi V`` (a
+monodromy matrix).
 
 The volume: the log volume ``W`` of the m vectors grows at ``tr(G^-1 U^T S^-2 A U)`` (``G`` the
 Gram matrix of the directions, ``A = [[J_y, J_a], [0, 0]]`` the generator of the extended
@@ -86,6 +96,7 @@ from workbench.solver._tangent_numerics import (
     defect,
     gram_schmidt,
     normalise,
+    transform_rates,
     volume_rates,
 )
 from workbench.solver._templates.jacobian import (  # @@MODEL_JACOBIAN@@
@@ -120,14 +131,23 @@ SURFACE_FRACTION = 0.02
 MIN_STEP_FACTOR = 1e-3
 
 
-@njit(cache=True, nogil=True)
-def _meta(ip):
-    """(n, na, m, ne, len(p), len(ip), work size) of the model, from the tail of ``ip``."""
+@njit(cache=True, nogil=True, inline="always")
+def _layout(p, ip, work):
+    """The parts of the layout (see the module's docstring): ``(n, na, m, ne, pm, ipm, wm, s,
+    w, time_scale, d_max)``, the model's sizes (states, discrete states; tangent vectors; the
+    model's events), its own ``p``, ``ip`` and ``work`` (views; the tangent system's scratch
+    is ``work[len(wm):]``), the state scales, the weights of the inner product, the time scale
+    (s) and the defect at which the vectors are re-orthonormalised."""
     k = ip.size - N_META
-    return ip[k], ip[k + 1], ip[k + 2], ip[k + 3], ip[k + 4], ip[k + 5], ip[k + 6]
+    n, na, m, ne = ip[k], ip[k + 1], ip[k + 2], ip[k + 3]
+    npm, nip, ws = ip[k + 4], ip[k + 5], ip[k + 6]
+    nx = n + na
+    s = p[npm : npm + n]
+    w = p[npm + n : npm + n + nx]
+    return n, na, m, ne, p[:npm], ip[:nip], work[:ws], s, w, p[npm + n + nx], p[npm + n + nx + 1]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _reorthonormalising(ip):
     """Whether the system re-orthonormalises its vectors (and integrates their volume)."""
     return ip[ip.size - 1] != 0
@@ -135,18 +155,13 @@ def _reorthonormalising(ip):
 
 @njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
-    n, na, m, ne, npm, nip, ws = _meta(ip)
-    pm = p[:npm]
-    ipm = ip[:nip]
-    wm = work[:ws]
+    n, na, m, ne, pm, ipm, wm, scale, w, _, _ = _layout(p, ip, work)
     nx = n + na
-    scale = p[npm : npm + n]
-    w = p[npm + n : npm + n + nx]
     y = Y[:n]
     code = model_rhs(t, y, pm, ipm, aux, wm, dY[:n])
     if code > 0:
         return code
-    o = ws
+    o = wm.size
     yd = work[o : o + n]
     fp = work[o + n : o + 2 * n]
     fm = work[o + 2 * n : o + 3 * n]
@@ -258,12 +273,8 @@ def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
 
 @njit(cache=True, nogil=True)
 def event_values(t, Y, p, ip, aux, work, g):
-    n, na, m, ne, npm, nip, ws = _meta(ip)
-    model_event_values(t, Y[:n], p[:npm], ip[:nip], aux, work[:ws], g[:ne])
-    if _reorthonormalising(ip):
-        nx = n + na
-        w = p[npm + n : npm + n + nx]
-        g[ne] = defect(Y, n, nx, m, w) - p[npm + n + nx + 1]
+    n, _, _, _, pm, ipm, wm, _, _, _, _ = _layout(p, ip, work)
+    model_event_values(t, Y[:n], pm, ipm, aux, wm, g)
 
 
 @njit(cache=True, nogil=True)
@@ -278,26 +289,60 @@ def _reset(k, t, y, a, pm, ipm, wm, out):
 
 
 @njit(cache=True, nogil=True)
-def _reorthonormalise(Y, n, nx, m, w):
-    """Gram-Schmidt on the directions, their log sizes taking log R_kk; counted."""
-    gram_schmidt(Y, n, nx, m, w, n + m * nx + 1)
+def _reorthonormalise(Y, n, nx, m, w, R):
+    """Gram-Schmidt on the directions (``U <- U R^-1``, ``R`` written), their log sizes taking
+    log R_kk; counted."""
+    gram_schmidt(Y, n, nx, m, w, n + m * nx + 1, R)
     Y[n + m * nx + 1 + m + 2] += 1.0
 
 
 @njit(cache=True, nogil=True)
-def apply_event(k, t, Y, p, ip, aux, work):
-    n, na, m, ne, npm, nip, ws = _meta(ip)
-    pm = p[:npm]
-    ipm = ip[:nip]
-    wm = work[:ws]
-    nx = n + na
-    scale = p[npm : npm + n]
-    w = p[npm + n : npm + n + nx]
-    h_t = step(t, p[npm + n + nx])
-    volume = _reorthonormalising(ip)
-    if k == ne:  # the directions lost their orthogonality: re-orthonormalise
-        _reorthonormalise(Y, n, nx, m, w)
+def step_end(t, Y, p, ip, aux, work, dY):
+    """At the end of an accepted step (the loop's ``step_end`` hook), with the state ``Y`` and
+    its derivative ``dY`` there: where the directions' orthogonality defect exceeds D_max,
+    re-orthonormalise them and transform ``dY`` alike, without an evaluation. Returns 1 where
+    it did, else 0.
+
+    ``U <- U R^-1`` is a change of basis of the span of a linear system: the linear part of
+    each direction's rate, ``L(u_c) = du_c/dt + a_c u_c = (J_y u_y + J_a u_a, 0)``, transforms
+    by the same ``R^-1``, the new directions' rates ``a`` follow from it, and the rates of the
+    volume ``W`` and of its memory part ``M`` (traces on the span) do not change."""
+    n, na, m, _, _, _, _, _, w, _, d_max = _layout(p, ip, work)
+    if not _reorthonormalising(ip):
         return 0
+    nx = n + na
+    if not defect(Y, n, nx, m, w) > d_max:
+        return 0
+    il = n + m * nx + 1
+    L = np.empty((n, m))  # the state rows; the discrete state's are zero
+    for c in range(m):
+        b = n + c * nx
+        for i in range(n):
+            L[i, c] = dY[b + i] + dY[il + c] * Y[b + i]
+    R = np.empty((m, m))
+    _reorthonormalise(Y, n, nx, m, w, R)
+    transform_rates(L, R)
+    for c in range(m):
+        b = n + c * nx
+        size = column_dot(Y, b, b, nx, w)
+        rate = 0.0
+        for i in range(n):
+            rate += w[i] * Y[b + i] * L[i, c]
+        a = rate / size if size > 0.0 else 0.0
+        for i in range(n):
+            dY[b + i] = L[i, c] - a * Y[b + i]
+        for k in range(na):
+            dY[b + n + k] = -a * Y[b + n + k]
+        dY[il + c] = a
+    return 1
+
+
+@njit(cache=True, nogil=True)
+def apply_event(k, t, Y, p, ip, aux, work):
+    n, na, m, ne, pm, ipm, wm, scale, w, time_scale, d_max = _layout(p, ip, work)
+    nx = n + na
+    h_t = step(t, time_scale)
+    volume = _reorthonormalising(ip)
     y = Y[:n]
     carried = False
     for i in range(n, n + m * nx):
@@ -400,8 +445,8 @@ def apply_event(k, t, Y, p, ip, aux, work):
         Y[n + m * nx + 1 + m] += columns_log_volume(Y, n, nx, m, w) - before
     for c in range(m):
         normalise(Y, n + c * nx, nx, w, n + m * nx + 1 + c)
-    # a saltation can leave the defect beyond D_max, where the event function would start
-    # beyond its surface and never fire
-    if volume and defect(Y, n, nx, m, w) > p[npm + n + nx + 1]:
-        _reorthonormalise(Y, n, nx, m, w)
+    # a saltation can leave the defect beyond D_max (the loop evaluates the derivative after an
+    # event: nothing to transform)
+    if volume and defect(Y, n, nx, m, w) > d_max:
+        _reorthonormalise(Y, n, nx, m, w, np.empty((m, m)))
     return stop
