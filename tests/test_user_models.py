@@ -110,11 +110,13 @@ def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     for printed, expected in lines:
         assert printed.split() == expected.split()
     # the numbers of the page's text
-    assert round(100 * abs(lam[0] / SPROTT[0] - 1), 1) == 0.3
-    assert round(2 * abs(lam[0] - SPROTT[0]) / err[0]) == 1  # half a standard error
+    assert round(100 * abs(lam[0] / SPROTT[0] - 1), 1) == 0.4
+    assert round(abs(lam[0] - SPROTT[0]) / err[0]) == 1  # about one standard error
     assert 100 * abs(lam[2] / SPROTT[2] - 1) < 0.01
     assert round(float(lam.sum()), 4) == -5.3227
-    assert float(spectrum.sum_check) < 1e-7  # measured 4.4e-8
+    # measured 2.3e-7 at rtol 1e-9: the volume rate carries the vectors' mutual parts, known to
+    # rtol e^D between re-orthonormalisations (defect D = 10), so its precision is rtol e^D
+    assert float(spectrum.sum_check) < 1e-6
 
 
 def test_events_discrete_state_and_outputs_of_a_user_model(user_modules):
