@@ -36,6 +36,7 @@ KEY_FIGURES = (
     "chaos/fig29-poincare.png",
     "chaos/fig30-lle.png",
     "bifurcation_speed/fig32-bifurcation.png",
+    "bifurcation_speed/fig32-route.png",
     "high_speed/fig36-slider_acceleration.png",
 )
 _CITED = re.compile(r"`out/studies/([\w.-]+/[\w.-]+\.png)`")
