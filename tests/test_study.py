@@ -563,7 +563,7 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
         "exponents": [
             {"value": 1.0 * pi, "lle": -3.0, "stderr": 0.5, "method": "floquet"},
             {"value": 1.5 * pi, "lle": -4.0, "stderr": None, "method": "floquet", "bound": True},
-            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0, "method": "copies"},
+            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0, "method": "copies", "note": "a\nb"},
         ],
     }
     text = "\n".join(route_section(route))
@@ -577,7 +577,7 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
     assert "| 1.5 pi | 1/1 | 0 / 0.1 | 0 / 0 | <= -4 (Floquet bound) |" in text
     assert "| 1 pi | 1/1 | 0 / 0 | 0 / 0 | -3 +- 0.5 (Floquet) |" in text
     assert "the nearest continued orbit is stable at 2" in text
-    assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 |" in text
+    assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 (flagged: a; b) |" in text
 
 
 def test_quick_route_of_the_speed_sweep(tmp_path):

@@ -82,12 +82,21 @@ def route_section(r: dict) -> list[str]:
                 row += f" <= {e['lle']:.3g} (Floquet bound) |"
             elif "lle" in e:
                 how = {"floquet": " (Floquet)"}.get(e.get("method", "copies"), "")
-                row += f" {e['lle']:.3g} +- {e['stderr']:.2g}{how} |"
+                row += f" {e['lle']:.3g} +- {e['stderr']:.2g}{how}{_unconverged(e)} |"
             else:
                 row += " failed |"
         lines.append(row)
     lines += ["", *_agreement(r), ""]
     return lines
+
+
+def _unconverged(e: dict) -> str:
+    """A trajectory exponent's ``note`` (one line per condition its estimator did not meet, or
+    why Newton found no orbit first) as a table cell's suffix: such a value is not converged or
+    not what the route asked for. Empty for a Floquet value and for a clean estimate."""
+    if e.get("method", "copies") == "floquet" or not e.get("note"):
+        return ""
+    return " (flagged: " + "; ".join(e["note"].splitlines()) + ")"
 
 
 def _branch_lines(b: dict, p: str) -> list[str]:
