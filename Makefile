@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/workbench run studies/ninebar.toml -o $(OUT)/ninebar.nc --figures $(OUT)/figures
+	$(VENV)/bin/workbench run studies/ninebar.toml -o $(OUT)/ninebar.nc --figures $(OUT)/figures --overwrite
 	@echo "demo: netCDF run in $(OUT)/ninebar.nc, figures in $(OUT)/figures/"
 
 lint: $(STAMP)
