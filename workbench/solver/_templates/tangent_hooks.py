@@ -153,6 +153,25 @@ def _reorthonormalising(ip):
     return ip[ip.size - 1] != 0
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _normalised_rates(Y, n, nx, na, m, w, D, il, dY):
+    """Continuous normalisation: from the rates ``D`` (n x m) of the vectors' state blocks, the
+    rates of the normalised vectors u (their memory blocks included) and of their log sizes l
+    (at ``il``): l takes the growth rate a of u, and u loses it."""
+    for c in range(m):
+        b = n + c * nx
+        size = column_dot(Y, b, b, nx, w)
+        rate = 0.0
+        for i in range(n):
+            rate += w[i] * Y[b + i] * D[i, c]
+        a = rate / size if size > 0.0 else 0.0
+        for i in range(n):
+            dY[b + i] = D[i, c] - a * Y[b + i]
+        for k in range(na):
+            dY[b + n + k] = -a * Y[b + n + k]
+        dY[il + c] = a
+
+
 @njit(cache=True, nogil=True)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, m, ne, pm, ipm, wm, scale, w, _, _ = _layout(p, ip, work)
@@ -232,19 +251,7 @@ def rhs(t, Y, p, ip, aux, work, dY):
     dY[iv + 2] = 0.0
     if volume:
         dY[iv], dY[iv + 1] = volume_rates(Y, n, nx, m, w, D, Dm)
-    # continuous normalisation: the log size l takes the growth rate a of u
-    for c in range(m):
-        b = n + c * nx
-        size = column_dot(Y, b, b, nx, w)
-        rate = 0.0
-        for i in range(n):
-            rate += w[i] * Y[b + i] * D[i, c]
-        a = rate / size if size > 0.0 else 0.0
-        for i in range(n):
-            dY[b + i] = D[i, c] - a * Y[b + i]
-        for k in range(na):
-            dY[b + n + k] = -a * Y[b + n + k]
-        dY[n + m * nx + 1 + c] = a
+    _normalised_rates(Y, n, nx, na, m, w, D, n + m * nx + 1, dY)
     return code
 
 
@@ -322,18 +329,7 @@ def step_end(t, Y, p, ip, aux, work, dY):
     R = np.empty((m, m))
     _reorthonormalise(Y, n, nx, m, w, R)
     transform_rates(L, R)
-    for c in range(m):
-        b = n + c * nx
-        size = column_dot(Y, b, b, nx, w)
-        rate = 0.0
-        for i in range(n):
-            rate += w[i] * Y[b + i] * L[i, c]
-        a = rate / size if size > 0.0 else 0.0
-        for i in range(n):
-            dY[b + i] = L[i, c] - a * Y[b + i]
-        for k in range(na):
-            dY[b + n + k] = -a * Y[b + n + k]
-        dY[il + c] = a
+    _normalised_rates(Y, n, nx, na, m, w, L, il, dY)
     return 1
 
 
