@@ -183,6 +183,14 @@ def test_grazing_against_the_closed_form():
     # one onset and one end per period; contacts shallower than ~1e-4 m (within ~2e-5 rad/s
     # past grazing) last a few ms and fall inside one solver step: their events are not seen
     assert (r.events_per_period[r.omega > grazing[0] + 1e-4] == 2).all()
+    # the orbit's largest event value (x - g, m) is its distance from the stop: negative below
+    # grazing, zero at the located point, positive past it
+    top = r.event_max.isel(event=0)
+    assert top.attrs["units"] == "m"
+    at = int(np.argmin(np.abs(r.omega.values - grazing[0])))
+    assert abs(float(top[at])) < 1e-6
+    below, above = r.omega < grazing[0] - 1e-3, r.omega > grazing[0] + 1e-3
+    assert (top[below] < 0).all() and (top[above] > 0).all()
 
 
 def test_periodic_orbit_of_the_linear_oscillator_is_exact():
