@@ -616,6 +616,12 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
             "last_periodic_up": 1.86 * pi,
             "last_periodic_down": 1.86 * pi,
             "cpu_time": 120.0,
+            "last_orbit": {
+                "value": 1.86 * pi,
+                "largest_modulus": 0.735,
+                "events_per_period": 2.0,
+                "smallest_event": -1.22e-6,
+            },
             "branch": {
                 "start": 1.86 * pi,
                 "values": [1.86 * pi, 1.862 * pi, 1.864 * pi],
@@ -640,7 +646,12 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     assert "reaches 1.864 pi and ends there: the branch turns sharply" in text
     assert "|multiplier| stays within 0.2-0.5" in text
     assert "**no multiplier leaves the unit circle**" in text
-    assert "falls from 1e-07 to 3e-09 m" in text
+    assert "falls from 1e-07 to 3e-09 m: the lasting contact approaches lift-off" in text
+    assert (
+        "2 events per cycle, largest |multiplier| 0.735 and smallest event value -1.22e-06 m:"
+        in text
+    )
+    assert "a contact lifts off and closes again every cycle there" in text
     assert "x0.1 (0.0001, 0.0002 m s-1): 0.02; x1 (0.001, 0.002 m s-1): 0.2" in text
     route["end"]["last_periodic_down"] = 1.85 * pi
     assert "the two directions differ there: hysteresis" in "\n".join(route_section(route))

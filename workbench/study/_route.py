@@ -17,7 +17,8 @@ ends there, and says so, which bounds the study's cost), ``branch_max_step`` (it
 scaled arclength step, default 0.05), ``exponents`` (how many values of the sweep get an
 exponent, default 0), ``refine`` (where the periodic motion ends: that many values between
 the last period-1 value and the next, continued again, and the orbit continued from there;
-:mod:`workbench.study._route_end`, with ``end_branch_points`` and ``end_max_step``).
+:mod:`workbench.study._route_end`, with ``end_transient_cycles``, ``end_branch_points`` and
+``end_max_step``).
 """
 
 from __future__ import annotations

@@ -3,16 +3,23 @@
 The coarse continued sweep brackets the end: the first value going up where the strobe is
 period-1 while the next is not. Within that bracket:
 
-1. a continued sweep of ``refine`` values both ways (each from its neighbour's settled state)
-   says where the attractor stops being period-1 going up, where it starts again coming down,
-   and whether the two differ there (hysteresis at the end);
-2. the period-1 orbit is continued from the last periodic value going up, from the state the
-   refined sweep settled to there (``end_branch_points`` points at most, ``branch_max_step``
-   the largest arclength step): its multipliers say whether it loses stability by a smooth
-   bifurcation, the smallest value of its event functions (the mechanisms: the smallest
-   penetration of a joint in lasting contact, m) whether it ends by lifting off a contact (a
-   grazing, the contact bifurcation of impacting systems; di Bernardo et al. 2008, Ch. 2), and
-   why the branch ended;
+1. a continued sweep of ``refine`` values both ways (each from its neighbour's settled state,
+   ``end_transient_cycles`` transient cycles each, default 30: near the end the contraction to
+   the orbit is slow and a short transient reads as a spread) says where the attractor stops
+   being period-1 going up, where it starts again coming down, and whether the two differ
+   there (hysteresis at the end);
+2. the orbit Newton finds at the last periodic value going up (from the state the refined
+   sweep settled to there): its events per period and smallest event value say whether the
+   contact still lasts through the cycle; and the period-1 orbit continued upwards from the
+   bracket's lower end, from the state the refined sweep settled to there (or the next values,
+   where Newton does not converge;
+   ``end_branch_points`` points at most, default 150; ``end_max_step`` the largest scaled
+   arclength step, default 1: the strobe velocities of the nine-bar's lasting-contact orbit
+   change fast with omega, and a step of 0.05 moves omega by ~1e-4 pi there): its multipliers
+   say whether it loses stability by a smooth bifurcation, the smallest value of its event
+   functions (the mechanisms: the smallest penetration of a joint in lasting contact, m)
+   whether it ends by lifting off a contact (a grazing, the contact bifurcation of impacting
+   systems; di Bernardo et al. 2008, Ch. 2), and why the branch ended;
 3. the orbit's dependence on its history: where the model holds a discrete state through the
    orbit (the mechanisms: each contact's onset velocity, which sets the Lankarani-Nikravesh
    damping, Lankarani & Nikravesh 1990, for as long as the contact lasts), the same orbit is
@@ -101,13 +108,14 @@ def periodic_end(
         return out
     end_spec = dict(
         spec,
-        branch_points=int(spec.get("end_branch_points", 60)),
+        branch_points=int(spec.get("end_branch_points", 150)),
         branch_max_step=float(spec.get("end_max_step", 1.0)),
     )
-    # Newton from the settled state of the last periodic value going up; where the map is not
-    # smooth there (a contact about to lift off) it may not converge: then the values below
+    out["last_orbit"] = _orbit_at(scene, ds, param, out["last_periodic_up"])
+    # the orbit continued up from the bracket's lower end (period-1 in the coarse sweep), from
+    # the state the refined sweep settled to; where Newton does not converge, the next values
     tried = []
-    for start in reversed([v for v in fine if v <= out["last_periodic_up"]][-3:]):
+    for start in [v for v in fine if v <= out["last_periodic_up"]][:3]:
         point = scene.replace(sweep={}).with_parameters(**{param: start})
         y, aux = settled(ds.sel(direction="up"), point, param, start)
         try:
@@ -122,6 +130,27 @@ def periodic_end(
         return out
     out["branch_error"] = "; ".join(tried)
     return out
+
+
+def _orbit_at(scene, ds, param: str, value: float) -> dict:
+    """The period-1 orbit Newton finds at ``value`` from the state the refined sweep settled to
+    going up: its largest |multiplier|, events per period and smallest event value (the
+    mechanisms: penetration, m; negative where a contact lifts off during the cycle)."""
+    from workbench.continuation import periodic_orbit
+
+    point = scene.replace(sweep={}).with_parameters(**{param: value})
+    y, aux = settled(ds.sel(direction="up"), point, param, value)
+    try:
+        orbit = periodic_orbit(point, state=y, discrete_state=aux, rtol=1e-8, tolerance=1e-6)
+    except Exception as exc:  # noqa: BLE001 - a failed Newton is a finding, not a crash
+        return {"value": value, "error": f"{type(exc).__name__}: {str(exc)[:200]}"}
+    lowest = float(orbit.event_min.values.min()) if "event_min" in orbit else math.nan
+    return {
+        "value": value,
+        "largest_modulus": float(np.nanmax(orbit.multiplier_modulus.values)),
+        "events_per_period": float(orbit.events_per_period.values[0]),
+        "smallest_event": lowest,
+    }
 
 
 def _held_dependence(point, param: str, value: float, archive: str) -> list[dict]:

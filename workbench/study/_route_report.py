@@ -222,9 +222,25 @@ def _end_lines(e: dict, p: str) -> list[str]:
         ),
         "",
     ]
+    o = e.get("last_orbit")
+    if o and "error" in o:
+        lines += [f"At {_v(o['value'], p)} Newton finds no period-1 orbit ({o['error']}).", ""]
+    elif o:
+        lifted = math.isfinite(o["smallest_event"]) and o["smallest_event"] < 0
+        lines += [
+            f"The period-1 orbit Newton finds at {_v(o['value'], p)} (from the refined sweep's "
+            f"state) has {o['events_per_period']:g} events per cycle, largest |multiplier| "
+            f"{o['largest_modulus']:.3g} and smallest event value {o['smallest_event']:.3g} m"
+            + (
+                ": a contact lifts off and closes again every cycle there (an impacting orbit)."
+                if lifted
+                else ": its contacts last through the cycle."
+            ),
+            "",
+        ]
     b = e.get("branch")
     if b is None:
-        lines += [f"The orbit could not be continued from there: {e.get('branch_error', '')}", ""]
+        lines += [f"The orbit could not be continued: {e.get('branch_error', '')}", ""]
         return lines
     loss = next(
         (f for f in b["bifurcations"] if f["stable_before"] and not f["stable_after"]), None
@@ -261,8 +277,11 @@ def _end_lines(e: dict, p: str) -> list[str]:
                 if b.get("last_label") not in (None, "end", "regular")
                 else ""
             )
-            + ": the periodic motion ends where the contact is about to lift off, and the "
-            "journal's impacts that follow are what the chaotic values show."
+            + (
+                ": the lasting contact approaches lift-off (a grazing) without losing stability."
+                if low[-1] < low[0]
+                else "."
+            )
             if loss is None
             else f" The smallest event value along the orbit falls from {low[0]:.3g} to "
             f"{low[-1]:.3g} m."

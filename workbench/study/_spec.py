@@ -81,6 +81,7 @@ ROUTE_KEYS = (
     "branch_max_step",
     "exponents",
     "refine",
+    "end_transient_cycles",
     "end_branch_points",
     "end_max_step",
 )
