@@ -646,7 +646,8 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     assert "reaches 1.864 pi and ends there: the branch turns sharply" in text
     assert "|multiplier| stays within 0.2-0.5" in text
     assert "**no multiplier leaves the unit circle**" in text
-    assert "falls from 1e-07 to 3e-09 m: the lasting contact approaches lift-off" in text
+    assert "falls from 1e-07 to 3e-09 m. Its largest" in text
+    assert "and the lasting contact approaches lift-off (a grazing)" in text
     assert (
         "2 events per cycle, largest |multiplier| 0.735 and smallest event value -1.22e-06 m:"
         in text
@@ -655,6 +656,24 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     assert "x0.1 (0.0001, 0.0002 m s-1): 0.02; x1 (0.001, 0.002 m s-1): 0.2" in text
     route["end"]["last_periodic_down"] = 1.85 * pi
     assert "the two directions differ there: hysteresis" in "\n".join(route_section(route))
+    # a multiplier that jumps through +1 right at the lift-off is the grazing's singularity
+    b = route["end"]["branch"]
+    b["values"] = [1.86 * pi, 1.862 * pi, 1.86399 * pi, 1.864 * pi]
+    b.update(stable=[1, 1, 0, 0], largest_modulus=[0.2, 0.05, 1600.0, 1600.0])
+    b["smallest_event"] = [1e-7, 5e-8, 5e-9, 5e-9]
+    jump = {"critical": [1600.0, 0.0], "multipliers": [[1600.0, 0.0]], "stable_before": True}
+    b["bifurcations"] = [
+        dict(jump, type="branch_point", value=1.86399 * pi, stable_after=False),
+        dict(jump, type="grazing", value=1.864 * pi, stable_before=False, stable_after=False),
+    ]
+    for f in b["bifurcations"]:
+        f.update(events_before=0.0, events_after=2.0)
+    text = "\n".join(route_section(route))
+    assert "the end is labelled a grazing at 1.864 pi" in text
+    assert "stays within 0.05-0.2 up to 1.864 pi, where it jumps from 0.05 to 1.6e+03" in text
+    assert (
+        "**the periodic motion ends at the grazing, where the lasting contact lifts off**" in text
+    )
 
 
 def test_quick_route_of_the_speed_sweep(tmp_path):

@@ -245,7 +245,9 @@ def _end_lines(e: dict, p: str) -> list[str]:
     loss = next(
         (f for f in b["bifurcations"] if f["stable_before"] and not f["stable_after"]), None
     )
+    graze = next((f for f in b["bifurcations"] if f["type"] == "grazing"), None)
     low = [x for x in b["smallest_event"] if math.isfinite(x)]
+    span = abs(b["values"][-1] - b["values"][0]) or 1.0
     failed = e.get("failed_starts") or []
     text = (
         f"The period-1 orbit continued from {_v(b['start'], p)} (from the state the refined "
@@ -256,35 +258,47 @@ def _end_lines(e: dict, p: str) -> list[str]:
             else ""
         )
         + f"; {len(b['values'])} points, {b['map_evaluations']} map evaluations) "
-        f"reaches {_v(max(b['values']), p)} and ends there: {b['ended']}. Its largest "
-        f"|multiplier| stays within {min(b['largest_modulus']):.3g}-"
-        f"{max(b['largest_modulus']):.3g} on the way"
-    )
-    text += (
-        f", and it loses stability at {_v(loss['value'], p)} by a "
-        f"**{loss['type'].replace('_', ' ')}** (critical multiplier {_mu(loss['critical'])})."
-        if loss
-        else ": **no multiplier leaves the unit circle** (no fold, period doubling or "
-        "Neimark-Sacker)."
+        f"reaches {_v(max(b['values']), p)} and ends there: {b['ended']}."
     )
     if low:
         text += (
             f" The smallest event value along the orbit (the mechanisms: the smallest "
             f"penetration of a joint in lasting contact) falls from {low[0]:.3g} to "
             f"{low[-1]:.3g} m"
+            + (f"; the end is labelled a grazing at {_v(graze['value'], p)}." if graze else ".")
+        )
+    if loss and graze and abs(loss["value"] - graze["value"]) < 0.01 * span:
+        i = min(range(len(b["values"])), key=lambda k: abs(b["values"][k] - loss["value"]))
+        before = b["largest_modulus"][max(i - 1, 0)]
+        after = max(b["largest_modulus"][i:])
+        text += (
+            f" Its largest |multiplier| stays within {min(b['largest_modulus'][:i]):.3g}-"
+            f"{max(b['largest_modulus'][: max(i, 1)]):.3g} up to {_v(loss['value'], p)}, where "
+            f"it jumps from {before:.3g} to {after:.3g} (labelled a "
+            f"{loss['type'].replace('_', ' ')}) "
+            f"within {_v(abs(graze['value'] - loss['value']), p)} of the lift-off: the map's "
+            "derivative grows without bound as a contact grazes (with a rigid stop the "
+            "square-root singularity of grazing, Nordmark 1991; here a compliant contact's "
+            "lift-off), so **the periodic motion ends at the grazing, where the lasting "
+            "contact lifts off**, not at a smooth bifurcation "
+            "(no fold, period doubling or Neimark-Sacker before it)."
+        )
+    elif loss:
+        text += (
+            f" Its largest |multiplier| stays within {min(b['largest_modulus']):.3g}-"
+            f"{max(b['largest_modulus']):.3g}; it loses stability at {_v(loss['value'], p)} by a "
+            f"**{loss['type'].replace('_', ' ')}** (critical multiplier {_mu(loss['critical'])})."
+        )
+    else:
+        text += (
+            f" Its largest |multiplier| stays within {min(b['largest_modulus']):.3g}-"
+            f"{max(b['largest_modulus']):.3g}: **no multiplier leaves the unit circle** (no fold, "
+            "period doubling or Neimark-Sacker)"
             + (
-                f" (last point labelled {b['last_label'].replace('_', ' ')})"
-                if b.get("last_label") not in (None, "end", "regular")
-                else ""
-            )
-            + (
-                ": the lasting contact approaches lift-off (a grazing) without losing stability."
-                if low[-1] < low[0]
+                ", and the lasting contact approaches lift-off (a grazing)."
+                if low and low[-1] < low[0]
                 else "."
             )
-            if loss is None
-            else f" The smallest event value along the orbit falls from {low[0]:.3g} to "
-            f"{low[-1]:.3g} m."
         )
     lines += [text, ""]
     held = e.get("held") or []
