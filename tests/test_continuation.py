@@ -203,6 +203,32 @@ def test_periodic_orbit_of_the_linear_oscillator_is_exact():
     assert abs(amp - exact) < 1e-8
 
 
+def test_the_shooting_says_which_integrator_it_used(tmp_path, capsys):
+    """A scene solved by Radau (or auto) is shot with DOP853 (the tangent and copies systems
+    need an explicit compiled method): the map says so and the dataset records both methods,
+    and the orbit is the one a DOP853 scene gives."""
+    scene = {
+        "model": {"name": "duffing"},
+        "parameters": {"gamma": 0.2},
+        "run": {"transient_cycles": 50},
+        "solver": {"method": "radau", "rtol": 1e-8, "atol": 1e-8},
+    }
+    smap = StrobeMap(scene)
+    assert (smap.method, smap.scene_method, smap.method_replaced) == ("dop853", "radau", True)
+    r = periodic_orbit(scene)
+    assert (r.attrs["integration_method"], r.attrs["scene_method"]) == ("dop853", "radau")
+    explicit = dict(scene, solver=dict(scene["solver"], method="dopri5"))
+    assert not StrobeMap(explicit).method_replaced
+    r5 = periodic_orbit(explicit)
+    assert (r5.attrs["integration_method"], r5.attrs["scene_method"]) == ("dopri5", "dopri5")
+    assert abs(float(r.orbit_x[0]) - float(r5.orbit_x[0])) < 1e-7
+    path = tmp_path / "radau.toml"
+    path.write_text(workbench.load_scene(scene).to_toml())
+    out = str(tmp_path / "b.nc")
+    assert main(["orbit", str(path), "-o", out, "--param", "gamma", "--stop", "0.205"]) == 0
+    assert "integrated by dop853 in place of the scene's radau" in capsys.readouterr().out
+
+
 # -- the continued sweep's guarantees ----------------------------------------------------------
 def down_sweep(segments: int, **extra):
     return hardening(
