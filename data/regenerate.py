@@ -10,12 +10,24 @@
 Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), then
 ``make notebooks``. ``tests/test_data.py`` fails when the archives no longer match what the
 code writes.
+
+- ``clearance_friction_map.nc``: the chaos map of ``studies/chaos_maps/clearance_friction.toml``
+  (5 x 5 points; ``make chaos-maps`` computes it, ~1 h of CPU) without its strobe samples: the
+  per-point indicators (strobe period, 0-1 K, largest exponent with its error, method, status
+  and convergence flags), the points' status and solver statistics, and the cost of the run
+  from its log (attributes ``measured_*``: CPU and wall time of GNU ``time -v``, the 1-minute
+  load before and after from ``uptime``). docs/continuation.md quotes it and
+  ``tests/test_data.py`` checks those numbers against it. Run after ``make chaos-maps`` under
+  ``/usr/bin/time -v`` with ``uptime`` before and after in LOG:
+  ``python data/regenerate.py --chaos-map out/chaos_maps/clearance_friction.nc LOG``.
 """
 
 from __future__ import annotations
 
 import math
+import re
 import shutil
+import sys
 from pathlib import Path
 
 import workbench
@@ -53,5 +65,38 @@ def main() -> None:
     print("bifurcation_speed.nc")
 
 
+def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
+    """The chaos map at ``source`` without its strobe samples (every variable over ``time``),
+    with the cost of its run from ``log`` (GNU ``time -v`` output and ``uptime`` lines) as
+    attributes, written to ``target``."""
+    maps = workbench.open_run(source)
+    timed = [v for v in maps.data_vars if "time" in maps[v].dims]
+    out = maps.drop_vars([*timed, *(c for c in ("time", "record_time") if c in maps.coords)])
+    text = Path(log).read_text()
+
+    def seconds(label: str) -> float:
+        return float(re.search(rf"{label} \(seconds\): ([0-9.]+)", text).group(1))
+
+    loads = re.findall(r"load average: ([0-9.]+),", text)
+    clock = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([0-9:.]+)", text)
+    wall = sum(float(x) * 60**i for i, x in enumerate(reversed(clock.group(1).split(":"))))
+    out.attrs.update(
+        measured_cpu_time=seconds("User time") + seconds("System time"),
+        measured_wall_time=wall,
+        measured_load_before=float(loads[0]),
+        measured_load_after=float(loads[-1]),
+        measured_command=re.search(r"Command being timed: \"(.*)\"", text).group(1),
+    )
+    workbench.save_run(out, target, classic=True)  # a few kB: no HDF5 per-variable overhead
+    return target
+
+
 if __name__ == "__main__":
-    main()
+    if sys.argv[1:2] == ["--chaos-map"]:
+        print(
+            chaos_map_summary(
+                Path(sys.argv[2]), Path(sys.argv[3]), DATA / "clearance_friction_map.nc"
+            )
+        )
+    else:
+        main()

@@ -211,6 +211,32 @@ def test_periodic_orbit_of_the_linear_oscillator_is_exact():
     assert abs(amp - exact) < 1e-8
 
 
+def test_the_shooting_says_which_integrator_it_used(tmp_path, capsys):
+    """A scene solved by Radau (or auto) is shot with DOP853 (the tangent and copies systems
+    need an explicit compiled method): the map says so and the dataset records both methods,
+    and the orbit is the one a DOP853 scene gives."""
+    scene = {
+        "model": {"name": "duffing"},
+        "parameters": {"gamma": 0.2},
+        "run": {"transient_cycles": 50},
+        "solver": {"method": "radau", "rtol": 1e-8, "atol": 1e-8},
+    }
+    smap = StrobeMap(scene)
+    assert (smap.method, smap.scene_method, smap.method_replaced) == ("dop853", "radau", True)
+    r = periodic_orbit(scene)
+    assert (r.attrs["integration_method"], r.attrs["scene_method"]) == ("dop853", "radau")
+    explicit = dict(scene, solver=dict(scene["solver"], method="dopri5"))
+    assert not StrobeMap(explicit).method_replaced
+    r5 = periodic_orbit(explicit)
+    assert (r5.attrs["integration_method"], r5.attrs["scene_method"]) == ("dopri5", "dopri5")
+    assert abs(float(r.orbit_x[0]) - float(r5.orbit_x[0])) < 1e-7
+    path = tmp_path / "radau.toml"
+    path.write_text(workbench.load_scene(scene).to_toml())
+    out = str(tmp_path / "b.nc")
+    assert main(["orbit", str(path), "-o", out, "--param", "gamma", "--stop", "0.205"]) == 0
+    assert "integrated by dop853 in place of the scene's radau" in capsys.readouterr().out
+
+
 # -- the continued sweep's guarantees ----------------------------------------------------------
 def down_sweep(segments: int, **extra):
     return hardening(
@@ -323,6 +349,66 @@ def test_chaos_map_indicators_against_floquet_and_a_chaotic_point(tmp_path):
     assert (maps.lle_status == 0).all()
 
 
+def test_a_chaos_map_says_which_exponents_converged(tmp_path):
+    """Over 100 cycles (the exponent over 20, its window grown to at most 160) the default
+    Duffing's chaotic point at gamma = 0.5 reads 0.10 +- 0.017 1/s: 17 % error, above the 3 %
+    target, so lle_converged is 0 and lle_unmet says error_target; the period-1 point's
+    Floquet exponent (-delta / 2 = -0.15 1/s, the same at rtol / 100) is converged. Over 3000
+    cycles the chaotic point meets the target (0.107 +- 0.003 1/s) and is converged: the
+    variational spectrum's tolerance check, which a map does not run, is left out and said so.
+    Before, a map stored no such flag and showed both exponents alike."""
+    from workbench.continuation import chaos_indicators
+
+    base = {
+        "model": {"name": "duffing"},
+        "parameters": {"delta": 0.3},
+        "run": {"cycles": 100, "transient_cycles": 150},
+        "record": {"samples_per_period": 1},
+    }
+    maps = chaos_map(
+        workbench.load_scene(dict(base, sweep={"gamma": [0.2, 0.5]})),
+        tmp_path / "map.nc",
+        workers=1,
+    )
+    flags = maps.lle_converged.attrs["flag_meanings"].split()
+    assert maps.lle_converged.attrs["units"] == "1" and flags == ["not_converged", "converged"]
+    periodic, chaotic = maps.sel(gamma=0.2), maps.sel(gamma=0.5)
+    assert int(periodic.strobe_period) == 1 and int(periodic.lle_converged) == 1
+    assert int(periodic.lle_unmet) == 0 and abs(float(periodic.lle) + 0.15) < 1e-6
+    assert int(chaotic.strobe_period) == 0 and int(chaotic.lle_status) == 0  # an estimate...
+    assert int(chaotic.lle_converged) == 0  # ... that did not converge
+    bits = dict(zip(maps.lle_unmet.attrs["flag_meanings"].split(),
+                    maps.lle_unmet.attrs["flag_masks"], strict=True))  # fmt: skip
+    assert int(chaotic.lle_unmet) == bits["error_target"]
+    long = workbench.load_scene(dict(base, parameters={"delta": 0.3, "gamma": 0.5},
+                                     run={"cycles": 3000, "transient_cycles": 150}))  # fmt: skip
+    ind = chaos_indicators(long, workbench.simulate(long))
+    assert int(ind.lle_converged) == 1 and int(ind.lle_unmet) == 0
+    assert float(ind.lle) > 20 * float(ind.lle_stderr) > 0
+    assert ind.attrs["lle_detail"] == "tolerance check: not run (check=False)"
+
+
+def test_an_exponents_unmet_conditions():
+    """Which conditions of an estimator's ``failed`` text count against a map's exponent: all
+    but those the map leaves out on purpose (the copies' variational cross-check); a bound and
+    a failed run are never converged; an unknown condition is 'other', not ignored."""
+    from workbench.continuation import PointExponent
+    from workbench.continuation._exponent import NOT_RUN, _unmet
+
+    text = "variants: spread 6.1 %\nvariational: not run (variational=False)"
+    assert _unmet(text, NOT_RUN["copies"]) == ("variants",)
+    assert _unmet("variational: not run (variational=False)", NOT_RUN["copies"]) == ()
+    assert _unmet("a new check: no", NOT_RUN["copies"]) == ("other",)
+    assert _unmet("tolerance check: x", NOT_RUN["copies"]) == ("tolerance check",)
+    assert PointExponent(-1.0, 0.01, "floquet").converged
+    bound = PointExponent(-3.8, math.nan, "floquet", bound=True)
+    assert not bound.converged and bound.unmet == ("upper bound",) and bound.unmet_code == 32
+    failed = PointExponent(math.nan, math.nan, "copies", True)
+    assert not failed.converged and failed.unmet == ("failed",)
+    with pytest.raises(ValueError, match="unmet=.*'wrong'"):
+        PointExponent(1.0, 0.1, "copies", unmet=("wrong",))
+
+
 @pytest.mark.parametrize(
     ("scene", "value", "rtol"),
     [
@@ -378,6 +464,7 @@ def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
     assert int(ind.strobe_period) == 1
     assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "floquet"
     assert ind.lle_status.attrs["flag_meanings"].split()[int(ind.lle_status)] == "upper_bound"
+    assert int(ind.lle_converged) == 0 and int(ind.lle_unmet) == 32  # a bound, not an estimate
     # docs/continuation.md quotes the bound, -3.8 1/s
     assert float(ind.lle) == pytest.approx(-3.8, abs=0.05) and np.isnan(float(ind.lle_stderr))
     assert -75.93 < float(ind.lle)

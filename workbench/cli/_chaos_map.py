@@ -40,6 +40,11 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
             f"  {int((status == 2).sum())} exponents are upper bounds (lle_status = 2: the Floquet "
             "multipliers are below the noise of the copies' differences)"
         )
+    if "lle_converged" in ds and (ds["lle_converged"] == 0).any():
+        print(
+            f"  {int((ds['lle_converged'] == 0).sum())} exponents did not converge "
+            "(lle_converged = 0; lle_unmet names the conditions; hatched on the figure)"
+        )
     if args.figure:
         from workbench.plot import chaos_map_figure
 

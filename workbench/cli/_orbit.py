@@ -71,6 +71,12 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     )
     for line in found or ["no bifurcation in the range"]:
         print(f"  {line}")
+    a = branch.attrs
+    if a["integration_method"] != a["scene_method"]:
+        print(
+            f"  integrated by {a['integration_method']} in place of the scene's "
+            f"{a['scene_method']} (the tangent and copies systems need an explicit method)"
+        )
     if args.figure:
         from workbench.plot import branch_figure
 

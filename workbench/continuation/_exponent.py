@@ -24,12 +24,19 @@ the larger step is an upper bound (``bound``). The nine-bar's point above is suc
 the copies' Jacobian there is noise (entries ~1e-5 of no structure at step 1e-6), and the
 variational monodromy of :func:`workbench.analysis.floquet` puts its exponent at -76 1/s.
 
+The Floquet exponent is ``converged`` where it is not a bound and its check moved it by at most
+:data:`~workbench.analysis._convergence.TRUST` (20 %) of its value.
+
 Elsewhere (no period up to 16: chaotic, quasi-periodic or a long period) the exponent is the
 variational one for a model with an analytic Jacobian
 (:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms, whose
 tangent system is costly: :mod:`workbench.continuation._strobe`), with its batch-means standard
 error. Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve
-with the model's Jacobian, not the derived system's.
+with the model's Jacobian, not the derived system's. A point's budget leaves out one check of
+each estimator (:data:`NOT_RUN`: the tolerance check of the variational spectrum, the
+variational exponent beside the two-trajectory one, whose tangent system is what the copies
+avoid); the estimate is ``converged`` where every condition its estimator did run holds
+(error target, variants, tolerance check, sum check), and ``unmet`` names those that did not.
 """
 
 from __future__ import annotations
@@ -40,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.analysis import lle_from_equations, lyapunov_spectrum
+from workbench.analysis._convergence import TRUST
 from workbench.continuation._newton import NewtonFailure, orbit_at
 from workbench.continuation._strobe import StrobeMap
 from workbench.run import prepare
@@ -67,6 +75,22 @@ CHECK_FACTOR = 100.0
 #: a largest multiplier that falls by more than this factor when the copies' step grows by
 #: CHECK_FACTOR was the differences' noise
 NOISE_DROP = 10.0
+#: the convergence conditions of a trajectory estimator a map point does not run (its cost):
+#: they are left out of ``converged`` (every other condition must hold)
+NOT_RUN = {"variational": ("tolerance check",), "copies": ("variational",)}
+#: why an exponent is not converged, in the order of the bits of ``PointExponent.unmet_code``
+#: (the trajectory estimators' condition names, Floquet's check, the bound, a failed run, and
+#: any condition not named here)
+UNMET = (
+    "error target",
+    "variants",
+    "tolerance check",
+    "sum check",
+    "floquet check",
+    "upper bound",
+    "failed",
+    "other",
+)
 
 
 @dataclass(frozen=True)
@@ -75,7 +99,8 @@ class PointExponent:
     :data:`METHODS`), ``failed`` (no estimate: the runs failed; value NaN), ``bound`` (the
     value is only an upper bound: the multipliers are below the noise of the differences;
     error NaN), ``detail`` (why Floquet's value was not taken, what failed, or the
-    trajectory method's unmet convergence conditions)."""
+    trajectory method's unmet convergence conditions), ``unmet`` (the names, from
+    :data:`UNMET`, of the conditions that did not hold; empty where the estimate converged)."""
 
     value: float
     error: float
@@ -83,6 +108,27 @@ class PointExponent:
     failed: bool = False
     detail: str = ""
     bound: bool = False
+    unmet: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        unmet = tuple(u for u in self.unmet if u != "failed")
+        if self.failed:
+            unmet += ("failed",)
+        if self.bound and "upper bound" not in unmet:
+            unmet += ("upper bound",)
+        if any(u not in UNMET for u in unmet):
+            raise ValueError(f"unmet={self.unmet!r}: each must be one of {UNMET!r}")
+        object.__setattr__(self, "unmet", unmet)
+
+    @property
+    def converged(self) -> bool:
+        """Every convergence condition that was run holds (not a bound, not failed)."""
+        return not self.unmet
+
+    @property
+    def unmet_code(self) -> int:
+        """``unmet`` as bits: bit i set where ``UNMET[i]`` did not hold (0: converged)."""
+        return sum(1 << UNMET.index(u) for u in self.unmet)
 
 
 def exponent_method(scene: Scene) -> str:
@@ -133,12 +179,24 @@ def floquet_exponent(
                 f"{coarse.step:g}: below the differences' noise; the exponent is at most "
                 f"{lam_c:.4g} 1/s",
             )
+        check = f"a {CHECK_FACTOR:g}x larger copies' step ({coarse.step:g})"
     else:
         tight = StrobeMap(scene, None, periods=period, rtol=smap.rtol / CHECK_FACTOR)
         lam_c = _largest(
             orbit_at(tight, pt.y, pt.aux, math.nan, tolerance=ORBIT_TOLERANCE).value.M, span
         )[1]
-    return PointExponent(lam, abs(lam - lam_c), "floquet")
+        check = f"rtol {tight.rtol:g}"
+    error = abs(lam - lam_c)
+    if error <= TRUST * abs(lam):
+        return PointExponent(lam, error, "floquet")
+    return PointExponent(
+        lam,
+        error,
+        "floquet",
+        unmet=("floquet check",),
+        detail=f"floquet check: the exponent reads {lam:.4g} 1/s and {lam_c:.4g} at {check}: "
+        f"it moved by {error / max(abs(lam), 1e-300):.0%} (allowed {TRUST:.0%})",
+    )
 
 
 def point_exponent(
@@ -202,4 +260,14 @@ def point_exponent(
             unmet = r.attrs["failed"]
     except (SolverError, FloatingPointError, ValueError) as exc:
         return PointExponent(math.nan, math.nan, method, True, notes + str(exc)[:200])
-    return PointExponent(value, error, method, False, notes + unmet)
+    return PointExponent(
+        value, error, method, False, notes + unmet, unmet=_unmet(unmet, NOT_RUN[method])
+    )
+
+
+def _unmet(failed: str, skipped: tuple[str, ...]) -> tuple[str, ...]:
+    """The names of the conditions in an estimator's ``failed`` text (one ``name: what it
+    measured`` line each, :func:`workbench.analysis._convergence.judge`) other than the
+    ``skipped`` ones (not run on purpose); a name :data:`UNMET` does not know is ``other``."""
+    names = [line.split(":", 1)[0].strip() for line in failed.splitlines() if line.strip()]
+    return tuple(dict.fromkeys(n if n in UNMET else "other" for n in names if n not in skipped))

@@ -12,7 +12,9 @@ strongly contracting orbit: :mod:`workbench.continuation._exponent`), else over
 with saltation for a model with an analytic Jacobian, or by the linearised two-trajectory method
 (the mechanisms, whose tangent system took 50x the bare model's steps on a nine-bar orbit in
 lasting contact, :mod:`workbench.continuation._strobe`). A failure of the exponent's runs is
-recorded (``lle_status``), not raised, so one hard point does not stop a map.
+recorded (``lle_status``), not raised, so one hard point does not stop a map; whether the
+exponent converged is recorded beside it (``lle_converged``, and ``lle_unmet``: which of its
+conditions did not hold, :data:`workbench.continuation._exponent.UNMET`).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import xarray as xr
 
 from workbench.analysis import poincare_section, zero_one_test
 from workbench.campaign import run_campaign
-from workbench.continuation._exponent import METHODS, point_exponent
+from workbench.continuation._exponent import METHODS, NOT_RUN, UNMET, point_exponent
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = [
@@ -53,6 +55,30 @@ LLE_METHOD = {
     "flag_values": np.arange(len(METHODS), dtype=np.int8),
     "flag_meanings": " ".join(METHODS),
     **{f"method_{k}": v for k, v in METHODS.items()},
+}
+LLE_CONVERGED = {
+    "long_name": "the largest Lyapunov exponent converged",
+    "units": "1",
+    "flag_values": np.array([0, 1], np.int8),
+    "flag_meanings": "not_converged converged",
+    "comment": "1 where every convergence condition the map runs holds (lle_unmet = 0): "
+    "trajectory methods: the error target, the separation and growth variants and the check "
+    "at rtol / 100 (copies), the error target and the sum check (variational); floquet: the "
+    "exponent moves by at most 20 % with its check; never for an upper bound or a failed "
+    "run. Not run in a map (their cost): "
+    + "; ".join(f"{m}: {', '.join(c)}" for m, c in NOT_RUN.items()),
+}
+LLE_UNMET = {
+    "long_name": "the convergence conditions of the largest Lyapunov exponent that failed",
+    "units": "1",
+    "flag_masks": np.array([1 << i for i in range(len(UNMET))], np.int16),
+    "flag_meanings": " ".join(u.replace(" ", "_") for u in UNMET),
+    "comment": "bit field, 0: converged. error_target: the standard error is above 3 % of the "
+    "estimate after the window's budget; variants: the two-trajectory separation and growth "
+    "variants disagree; tolerance_check: the run at rtol / 100 disagrees; sum_check: the "
+    "spectrum's sum and the integrated volume rate differ; floquet_check: the Floquet exponent "
+    "moves by more than 20 % with its check; upper_bound: see lle_status; failed: the "
+    "exponent's runs failed; other: a condition of the estimator not named here",
 }
 
 
@@ -88,7 +114,8 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
     ``zero_one_K`` (median over the recorded variables' components) and ``zero_one_K_<var>``
     (per variable, over its model dims), ``lle`` and ``lle_stderr`` (s-1), ``lle_per_period``
     (1), ``lle_method`` (floquet, variational or copies: :func:`workbench.continuation.
-    point_exponent`) and ``lle_status``.
+    point_exponent`), ``lle_status``, ``lle_converged`` and ``lle_unmet`` (why not; the
+    estimator's own words in the attribute ``lle_detail``).
 
     Parameters
     ----------
@@ -159,7 +186,9 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
     out["lle_method"] = ((), np.int8(list(METHODS).index(exp.method)), LLE_METHOD)
     status = 1 if exp.failed else 2 if exp.bound else 0
     out["lle_status"] = ((), np.int8(status), LLE_STATUS)
-    return xr.Dataset(out)
+    out["lle_converged"] = ((), np.int8(exp.converged), LLE_CONVERGED)
+    out["lle_unmet"] = ((), np.int16(exp.unmet_code), LLE_UNMET)
+    return xr.Dataset(out, attrs={"lle_detail": exp.detail})
 
 
 def strobe_zero_one(x: np.ndarray) -> float:

@@ -389,6 +389,8 @@ def _dataset(
         continuation_parameter=parameter or "",
         method=METHOD,
         monodromy=smap.monodromy,
+        integration_method=smap.method,
+        scene_method=smap.scene_method,
         rtol=smap.rtol,
         tolerance=tolerance,
         map_evaluations=int(sum(tr.evaluations for tr in branches)),

@@ -25,6 +25,14 @@ the mechanisms, which have no analytic Jacobian, where it took 50x the steps of 
 a nine-bar orbit in lasting contact (measured: 373 494 against ~7 000 steps per crank cycle at
 omega = 1.5 pi). ``"auto"`` (default) takes the tangent system for a model with an analytic
 Jacobian and copies otherwise.
+
+The map is integrated by an explicit compiled method: the scene's own where it is ``dop853`` or
+``dopri5``, else **DOP853** in place of the scene's implicit method or ``auto`` (Radau and the
+implicit stages of ``auto`` solve with the model's Jacobian, not the tangent or copies system's,
+so they cannot integrate those systems, and the map and its Jacobian must come from one
+integration). :class:`StrobeMap` says which (``method``, ``scene_method``,
+``method_replaced``), and the orbits' datasets record it (attributes ``integration_method`` and
+``scene_method``).
 """
 
 from __future__ import annotations
@@ -88,6 +96,16 @@ class StrobeMap:
         ``"tangent"``, ``"copies"`` or ``"auto"`` (see the module docstring).
     step : float
         Central-difference step of the copies (scaled units; discrete states: relative).
+
+    Attributes
+    ----------
+    method : str
+        The integrator of the map, its tangent system and its copies: the scene's method where
+        it is ``dop853`` or ``dopri5``, else ``dop853`` (see the module docstring).
+    scene_method : str
+        The scene's own ``solver.method``.
+    method_replaced : bool
+        Whether ``method`` replaced the scene's method.
     """
 
     #: default central-difference step of the copies (scaled units; discrete states: relative)
@@ -120,7 +138,10 @@ class StrobeMap:
         s = self.scene.solver
         self.rtol = min(float(s["rtol"]), 1e-9) if rtol is None else float(rtol)
         self.atol = float(s["atol"]) * self.rtol / float(s["rtol"])
+        self.scene_method = str(s["method"])
+        # the tangent and copies systems need an explicit compiled method (module docstring)
         self.method = s["method"] if s["method"] in ("dop853", "dopri5") else "dop853"
+        self.method_replaced = self.method != self.scene_method
         self.max_steps = int(s["max_steps"])
         base = self.prepared(self.value)
         if base.period is None:

@@ -21,6 +21,8 @@ LABEL_MARKS = {
     "grazing": ("v", "G", "tab:brown"),
     "nonsmooth_fold": ("X", "NF", "tab:pink"),
 }
+#: the mark of an exponent that is only an upper bound on a chaos map
+BOUND_MARK = r"$\leq$"
 _DIRECTION_COLOURS = {"up": "tab:blue", "down": "tab:orange"}
 
 
@@ -137,8 +139,10 @@ def chaos_map_figure(
     """Maps of chaos indicators over the two parameter dims of a campaign (from
     :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
     x axis. ``scales`` multiplies a dim's values (e.g. ``{"omega": 1 / pi}``), ``labels``
-    names its axis. On the exponent's map, "<=" marks an upper bound (``lle_status`` 2) and
-    "x" a failed exponent."""
+    names its axis. On the exponent's map, hatched cells hold an exponent that did not converge
+    (``lle_converged`` 0; ``lle_unmet`` says why), a "less or equal" sign marks an upper bound
+    (``lle_status`` 2) and "x" a failed exponent; a legend below the panel says so where any
+    cell is marked."""
     scales = dict(scales or {})
     labels = dict(labels or {})
     dims = maps.attrs["campaign_dims"].split()
@@ -173,14 +177,63 @@ def chaos_map_figure(
                 kw = {"vmin": -lim, "vmax": lim}
             im = ax.pcolormesh(x, y, da.values, cmap=cmap, shading="nearest", **kw)
             fig.colorbar(im, ax=ax)
-            if name == "lle" and "lle_status" in maps:  # mark upper bounds and failures
-                status = maps["lle_status"].transpose(yd, xd).values
-                for (i, j), st in np.ndenumerate(status):
-                    if st in (1, 2):
-                        ax.text(x[j], y[i], "<=" if st == 2 else "x", ha="center", va="center")
+            if name == "lle":
+                _mark_exponents(ax, maps, xd, yd, x, y)
         ax.set_xlabel(labels.get(xd, axis_label(maps[xd])))
         ax.set_ylabel(labels.get(yd, axis_label(maps[yd])))
         units = maps[name].attrs.get("units", "1")
         ax.set_title(f"{name} [{units}]", fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def _edges(centres: np.ndarray) -> np.ndarray:
+    """Cell edges around ``centres`` (midpoints; the outer cells as wide as their neighbour),
+    as ``pcolormesh(shading="nearest")`` draws them."""
+    c = np.asarray(centres, dtype=float)
+    if c.size == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = (c[1:] + c[:-1]) / 2
+    return np.concatenate([[2 * c[0] - mid[0]], mid, [2 * c[-1] - mid[-1]]])
+
+
+def _mark_exponents(ax, maps: xr.Dataset, xd: str, yd: str, x, y) -> None:
+    """Hatch the exponent map's unconverged cells, mark bounds "<=" and failures "x", and say
+    so in a legend below the panel (only the marks that occur)."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch, Rectangle
+
+    handles = []
+    if "lle_converged" in maps:
+        conv = maps["lle_converged"].transpose(yd, xd).values
+        xe, ye = _edges(x), _edges(y)
+        cells = [(i, j) for (i, j), c in np.ndenumerate(conv) if c == 0]
+        for i, j in cells:
+            ax.add_patch(
+                Rectangle(
+                    (xe[j], ye[i]), xe[j + 1] - xe[j], ye[i + 1] - ye[i],
+                    fill=False, hatch="///", edgecolor="0.3", linewidth=0,
+                )
+            )  # fmt: skip
+        if cells:
+            handles.append(
+                Patch(facecolor="none", edgecolor="0.3", hatch="///", label="not converged")
+            )
+    if "lle_status" in maps:
+        status = maps["lle_status"].transpose(yd, xd).values
+        for (i, j), st in np.ndenumerate(status):
+            if st in (1, 2):
+                mark = BOUND_MARK if st == 2 else "x"
+                ax.text(x[j], y[i], mark, ha="center", va="center", fontsize=12)
+        for code, mark, text in ((2, BOUND_MARK, "upper bound"), (1, "x", "failed")):
+            if (status == code).any():
+                handles.append(Line2D([], [], ls="", marker=mark, color="k", label=text))
+    if handles:
+        ax.legend(
+            handles=handles,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.16),
+            ncol=len(handles),
+            fontsize=8,
+            frameon=False,
+        )
