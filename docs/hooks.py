@@ -37,6 +37,7 @@ KEY_FIGURES = (
     "chaos/fig30-lle.png",
     "bifurcation_speed/fig32-bifurcation.png",
     "bifurcation_speed/fig32-route.png",
+    "bifurcation_speed/fig32-route-end.png",
     "high_speed/fig36-slider_acceleration.png",
 )
 _CITED = re.compile(r"`out/studies/([\w.-]+/[\w.-]+\.png)`")

@@ -563,7 +563,13 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
         "exponents": [
             {"value": 1.0 * pi, "lle": -3.0, "stderr": 0.5, "method": "floquet"},
             {"value": 1.5 * pi, "lle": -4.0, "stderr": None, "method": "floquet", "bound": True},
-            {"value": 2.5 * pi, "lle": 25.0, "stderr": 4.0, "method": "copies", "note": "a\nb"},
+            {
+                "value": 2.5 * pi,
+                "lle": 25.0,
+                "stderr": 4.0,
+                "method": "copies",
+                "note": "a\nb\nvariational: not run (variational=False)",
+            },
         ],
     }
     text = "\n".join(route_section(route))
@@ -577,7 +583,10 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
     assert "| 1.5 pi | 1/1 | 0 / 0.1 | 0 / 0 | <= -4 (Floquet bound) |" in text
     assert "| 1 pi | 1/1 | 0 / 0 | 0 / 0 | -3 +- 0.5 (Floquet) |" in text
     assert "the nearest continued orbit is stable at 2" in text
-    assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 (flagged: a; b) |" in text
+    assert (
+        "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 (flagged: a; b) "
+        "(not checked: variational) |"
+    ) in text
 
 
 def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
@@ -671,9 +680,17 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     text = "\n".join(route_section(route))
     assert "the end is labelled a grazing at 1.864 pi" in text
     assert "stays within 0.05-0.2 up to 1.864 pi, where it jumps from 0.05 to 1.6e+03" in text
+    assert "**the lasting-contact orbit ends at the grazing, where a contact lifts off**" in text
+    assert "**The route**" not in text  # the grazing (1.864 pi) lies above the last periodic value
+    b["values"] = [1.84 * pi, 1.842 * pi, 1.84299 * pi, 1.843 * pi]
+    b["bifurcations"][0]["value"], b["bifurcations"][1]["value"] = 1.84299 * pi, 1.843 * pi
+    route["end"]["directions"]["up"]["K"] = [0, 0, 0.98, 0.99, 1.0, 1.0]
+    text = "\n".join(route_section(route))
     assert (
-        "**the periodic motion ends at the grazing, where the lasting contact lifts off**" in text
-    )
+        "**The route**: lasting contact up to the grazing at 1.843 pi; then period-1 motion "
+        "with impacts (the orbit at 1.86 pi: 2 contact events per cycle, largest |multiplier| "
+        "0.735) up to 1.86 pi; no period from 1.87 pi on (0-1 test K = 0.98)."
+    ) in text
 
 
 def test_quick_route_of_the_speed_sweep(tmp_path):
@@ -739,3 +756,28 @@ def test_route_with_a_branch_and_exponents_at_small_size(tmp_path):
     assert [e["method"] for e in r["exponents"]] == ["floquet", "floquet"]
     assert all(e["lle"] < 0 for e in r["exponents"])
     assert "The largest exponent (2 values: 2 from the Floquet multipliers" in text
+
+
+def test_the_studies_page_quotes_the_reports_end_of_the_periodic_motion():
+    """docs/studies/index.md quotes where Fig. 32's periodic motion ends from the committed
+    studies/REPORT.md (written from the study's numbers): each number it gives is the report's."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    report = (root / "studies" / "REPORT.md").read_text()
+    page = " ".join((root / "docs" / "studies" / "index.md").read_text().split())
+    route = re.search(
+        r"\*\*The route\*\*: lasting contact up to the grazing at ([\d.]+) pi; .*? up to "
+        r"([\d.]+) pi; no period from ([\d.]+) pi on",
+        report,
+    )
+    graze, last, first = route.groups()
+    low = re.search(r"falls from [\d.e+-]+ to ([\d.e+-]+) m; the end is labelled a grazing", report)
+    jump = re.search(r"where it jumps from ([\d.e+-]+) to ([\d.e+-]+) \(labelled", report)
+    near = re.search(r"\) within ([\d.e+-]+) pi of the lift-off", report)
+    assert f"within {float(near.group(1)):.0e} pi of it" in page
+    assert f"lasting contact at both joints up to a grazing at {graze} pi" in page
+    assert f"period-1 motion with impacts up to {last} pi, and no period from {first} pi" in page
+    assert f"falls to {float(low.group(1)):.2g} m" in page
+    before, after = (float(x) for x in jump.groups())
+    assert f"jumps from {before:.2g} to {after:.2g}" in page

@@ -106,7 +106,7 @@ def _end(study: Study, e: dict, path: Path, param: str, scale: float, xlabel: st
         p = np.array(b["values"]) * scale
         axes[1].semilogy(p, np.maximum(b["smallest_event"], 1e-12), "k.-", lw=1, ms=3)
         axes[1].set_ylabel("smallest penetration along the orbit [m]", fontsize=8)
-        axes[2].plot(p, b["largest_modulus"], "k.-", lw=1, ms=3)
+        axes[2].semilogy(p, b["largest_modulus"], "k.-", lw=1, ms=3)
         axes[2].axhline(1.0, color="0.5", lw=0.6)
         axes[2].set_ylabel("largest |Floquet multiplier| [1]", fontsize=8)
     axes[0].legend(fontsize=7)
@@ -114,8 +114,8 @@ def _end(study: Study, e: dict, path: Path, param: str, scale: float, xlabel: st
     for ax in axes:
         ax.grid(alpha=0.3)
     fig.suptitle(
-        f"{study.title}: where the periodic motion ends (refined continued sweep; the orbit "
-        "continued from its last periodic value, solid stable)",
+        f"{study.title}: where the periodic motion ends\nrefined continued sweep; period-1 "
+        "orbit continued from the bracket's lower end (solid stable, dashed unstable)",
         fontsize=8,
     )
     fig.tight_layout()

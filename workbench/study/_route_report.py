@@ -98,7 +98,12 @@ def _unconverged(e: dict) -> str:
     not what the route asked for. Empty for a Floquet value and for a clean estimate."""
     if e.get("method", "copies") == "floquet" or not e.get("note"):
         return ""
-    return " (flagged: " + "; ".join(e["note"].splitlines()) + ")"
+    lines = e["note"].splitlines()
+    failed = [line for line in lines if "not run" not in line]
+    skipped = [line.split(":")[0] for line in lines if "not run" in line]
+    return (" (flagged: " + "; ".join(failed) + ")" if failed else "") + (
+        " (not checked: " + ", ".join(skipped) + ")" if skipped else ""
+    )
 
 
 def _branch_lines(b: dict, p: str) -> list[str]:
@@ -279,8 +284,8 @@ def _end_lines(e: dict, p: str) -> list[str]:
             f"within {_v(abs(graze['value'] - loss['value']), p)} of the lift-off: the map's "
             "derivative grows without bound as a contact grazes (with a rigid stop the "
             "square-root singularity of grazing, Nordmark 1991; here a compliant contact's "
-            "lift-off), so **the periodic motion ends at the grazing, where the lasting "
-            "contact lifts off**, not at a smooth bifurcation "
+            "lift-off), so **the lasting-contact orbit ends at the grazing, where a contact "
+            "lifts off**, not at a smooth bifurcation "
             "(no fold, period doubling or Neimark-Sacker before it)."
         )
     elif loss:
@@ -301,6 +306,23 @@ def _end_lines(e: dict, p: str) -> list[str]:
             )
         )
     lines += [text, ""]
+    o = e.get("last_orbit") or {}
+    if graze and o.get("smallest_event", 0.0) < 0 and up is not None and up > graze["value"]:
+        k_next = next(
+            (k for v, k in zip(e["values"], fup["K"], strict=True) if v == first_up), None
+        )
+        lines += [
+            f"**The route**: lasting contact up to the grazing at {_v(graze['value'], p)}; "
+            f"then period-1 motion with impacts (the orbit at {_v(o['value'], p)}: "
+            f"{o['events_per_period']:g} contact events per cycle, largest |multiplier| "
+            f"{o['largest_modulus']:.3g}) up to {_v(up, p)}; "
+            + (
+                f"no period from {_v(first_up, p)} on (0-1 test K = {k_next:.3g})."
+                if first_up is not None and k_next is not None
+                else "no period above it."
+            ),
+            "",
+        ]
     held = e.get("held") or []
     if held:
         cells = "; ".join(
