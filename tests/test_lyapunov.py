@@ -381,6 +381,8 @@ def test_two_trajectory_exponent_of_a_damped_linear_oscillator_is_its_closed_for
     assert bool(r.converged), r.attrs["failed"]
     assert abs(float(r.lle) + 0.5) <= 2 * float(r.stderr)
     assert float(r.stderr) < 0.01  # 1/s: 2 % of the exponent
+    # docs/analysis.md quotes -0.4993 +/- 0.0023
+    assert (round(float(r.lle), 4), round(float(r.stderr), 4)) == (-0.4993, 0.0023)
     assert abs(float(r.lle_variational) + 0.5) <= 2 * float(r.stderr_variational)
     # every renormalisation is a shrinkage: ln 10 each, over the 4 x 104.7 s followed
     shrinks = r.shrink_renormalisations.values
@@ -408,6 +410,8 @@ def test_two_trajectory_exponent_of_a_stable_duffing_orbit_is_floquets():
     assert bool(r.converged), r.attrs["failed"]
     assert abs(float(r.lle) - reference) <= 2 * float(r.stderr)
     assert int(r.shrink_renormalisations[0]) > 0
+    # docs/analysis.md quotes -0.4191 +/- 0.0023 against -0.4166
+    assert (round(float(r.lle), 4), round(float(r.stderr), 4)) == (-0.4191, 0.0023)
 
 
 def test_bad_arguments_are_refused():
@@ -443,6 +447,39 @@ def test_chaos_case_two_trajectory_and_variational_agree():
     # within two of its own standard errors (at d0 = 1e-4 and rtol 1e-6 single contacts the
     # copies resolve differently added up to +3 1/s over 10 cycles; benchmarks/lle.py --scan)
     assert abs(float(r.difference)) <= 2 * float(r.stderr_difference)
+
+
+@pytest.mark.slow
+def test_contracting_nine_bar_orbit_reads_a_negative_exponent():
+    """The nine-bar at omega = 0.5 pi, c = 20 um (A+B, Coulomb c_f = 0.01; studies/chaos_maps/
+    omega_clearance.toml) settles on a stable period-1 orbit (Floquet exponent -75.93 1/s,
+    tests/test_continuation.py) that stays in contact: over one cycle its scaled separations
+    swing by 10x up and down ~500 times a second. Renormalised on growth alone the copies sank
+    into the integration's noise and read ~0 1/s (-0.5 .. +0.3 over the five variants, 1 cycle,
+    rtol 1e-6) while the variational exponent on the same trajectory read -74; renormalised on
+    shrinkage as well they read -68 (variants -66.6 .. -68.0, also at rtol 1e-8 and with the
+    step capped at 1e-5 s). What remains, the copies ~8 % above the variational exponent on the
+    same trajectory, depends on none of d0, growth, tolerance or step, and is not yet explained
+    (docs/analysis.md); the estimate is not converged over one cycle and says so."""
+    scene = load_scene(
+        Path(__file__).resolve().parents[1] / "studies/chaos_maps/omega_clearance.toml"
+    )
+    point = scene.replace(
+        sweep={},
+        run={"cycles": 1, "transient_cycles": 20},
+        solver=dict(scene.solver, method="dop853"),
+    ).with_parameters(omega=0.5 * math.pi, clearance=2e-5)
+    with pytest.warns(ConvergenceWarning):
+        r = lle_from_equations(point, starts=1, budget=1, check=False)
+    assert not bool(r.converged)
+    assert float(r.spread) < 0.05, r.estimate.values
+    assert -80.0 < float(r.lle) < -55.0  # 1/s
+    assert -80.0 < float(r.lle_variational) < -65.0
+    # docs/analysis.md quotes -67.9 and -74.2
+    assert (round(float(r.lle), 1), round(float(r.lle_variational), 1)) == (-67.9, -74.2)
+    assert float(r.method_difference) < 0.15
+    shrinks = r.shrink_renormalisations.values
+    assert np.all(shrinks > 0.3 * r.renormalisations.values)
 
 
 _OBLIQUE_JOURNAL = {
