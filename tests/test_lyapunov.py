@@ -623,3 +623,10 @@ def test_the_lyapunov_page_quotes_the_benchmark():
     page = (Path(__file__).resolve().parents[1] / "docs" / "analysis.md").read_text()
     for table in lle_doc_tables():
         assert table in page
+    # and the count of renormalisations on shrinkage it quotes for the chaos case
+    e = json.loads((RESULTS / "lle_chaos.json").read_text())["1e-06"]
+    quoted = (
+        f"{e['shrink_renormalisations'][0]:.0f} of the estimate's "
+        f"{e['renormalisations'][0]:.0f} renormalisations"
+    )
+    assert quoted in " ".join(page.split())

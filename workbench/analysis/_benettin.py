@@ -29,10 +29,10 @@ __all__ = ["lle_from_equations"]
 #: (relative error ~d). On the chaos case (`benchmarks/lle.py --scan`, benchmarks/results/
 #: lle_separation_scan.json, docs/analysis.md) the copies' estimate minus the variational
 #: exponent on the same trajectory, mean over 4 starts, per decade of d0 from 1e-10 to 1e-4,
-#: was +6.6, +1.1, +0.9, +1.6, +1.8, +1.9, +1.6 1/s at rtol 1e-6, +6.2, +1.1, +0.1, -0.1,
-#: 0.0, +0.4, +0.2 at 1e-8 and +6.8, +1.2, -0.1, 0.0, 0.0, 0.0, 0.0 at 1e-10 (exponent ~27
-#: 1/s): below ~1e-9 a noise floor at every tolerance; above it a heavy-tailed lift of some
-#: windows that sets in at smaller d0 the looser the tolerance (and the longer the steps).
+#: was +4.0, +0.3, 0.0, +0.4, +0.3, +0.5, +0.7 1/s at rtol 1e-6, +4.9, +0.5, -0.2, 0.0, 0.0,
+#: 0.0, 0.0 at 1e-8 and +4.5, +0.3, 0.0, 0.0, 0.0, 0.0, 0.0 at 1e-10 (exponent ~27 1/s): below
+#: ~1e-9 a noise floor at every tolerance; above it, at rtol 1e-6, a heavy-tailed lift of
+#: some windows.
 SEPARATION = math.sqrt(np.finfo(float).eps)
 #: default log change of a copy's separation that triggers its renormalisation: growth or
 #: shrinkage by a factor 10
