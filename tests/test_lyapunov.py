@@ -304,7 +304,8 @@ def test_duffing_spectrum_sums_to_minus_delta():
 
 
 def test_two_trajectory_lorenz_converges_from_independent_starts():
-    """Lorenz over 4 starts x 100 s (realisations 0-3 of the scene): the error is the larger of
+    """Lorenz over 4 starts x 100 s, grown to 200 s (realisations 0-3 of the scene): the error
+    is the larger of
     the starts' spread and their batch means, so that it is never below what the independent
     starts show; the estimate lies within three of its errors of Sprott's value and the
     variational exponent on the same trajectories differs by far less than the error (the
@@ -313,7 +314,10 @@ def test_two_trajectory_lorenz_converges_from_independent_starts():
     b = lle_from_equations(scene)
     assert bool(b.converged), b.attrs["failed"]
     assert b.sizes["start"] == 4 and b.attrs["starts"] == 4
-    assert b.attrs["duration"] == pytest.approx(400.0) and b.attrs["duration_per_start"] == 100.0
+    # 400 s shared among the starts, 100 s each, read 0.9086 +/- 0.0280 (3.1 %, above the 3 %
+    # target): the windows doubled once (before shrink renormalisation changed the step
+    # sequence, and with it the samples, 2.8 % at 100 s)
+    assert b.attrs["duration"] == pytest.approx(800.0) and b.attrs["duration_per_start"] == 200.0
     starts = b.start_lle.values
     assert len(set(starts.tolist())) == 4  # four different trajectories
     assert float(b.lle) == pytest.approx(starts.mean(), rel=1e-12)
