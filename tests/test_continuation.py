@@ -183,6 +183,14 @@ def test_grazing_against_the_closed_form():
     # one onset and one end per period; contacts shallower than ~1e-4 m (within ~2e-5 rad/s
     # past grazing) last a few ms and fall inside one solver step: their events are not seen
     assert (r.events_per_period[r.omega > grazing[0] + 1e-4] == 2).all()
+    # the orbit's largest event value (x - g, m) is its distance from the stop: negative below
+    # grazing, zero at the located point, positive past it
+    top = r.event_max.isel(event=0)
+    assert top.attrs["units"] == "m"
+    at = int(np.argmin(np.abs(r.omega.values - grazing[0])))
+    assert abs(float(top[at])) < 1e-6
+    below, above = r.omega < grazing[0] - 1e-3, r.omega > grazing[0] + 1e-3
+    assert (top[below] < 0).all() and (top[above] > 0).all()
 
 
 def test_periodic_orbit_of_the_linear_oscillator_is_exact():
@@ -394,3 +402,29 @@ def test_an_implicit_scene_method_still_gets_an_exponent():
     assert int(ind.strobe_period) == 0 and int(ind.lle_status) == 0
     assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "variational"
     assert float(ind.lle) > 3 * float(ind.lle_stderr) > 0
+
+
+@pytest.mark.slow  # ~30 s of CPU: a 60-cycle transient and three Newton solves on the nine-bar
+def test_a_held_onset_velocity_makes_a_family_of_lasting_contact_orbits():
+    """A contact lasting through the orbit keeps its onset velocity, which the LN damping
+    divides by: the nine-bar's lasting-contact orbit at omega = 1.8 pi is one orbit per held
+    velocity, on the same path and with different multipliers (docs/continuation.md quotes
+    them). Both joints' velocities are set to each value; Newton starts from the state after 60
+    cycles."""
+    from workbench.continuation import StrobeMap
+    from workbench.continuation._newton import orbit_at
+
+    scene = workbench.load_scene(ROOT / "studies" / "bifurcation_speed" / "sweep.toml")
+    point = scene.replace(sweep={}, run={"cycles": 1, "transient_cycles": 60})
+    smap = StrobeMap(point.with_parameters(omega=1.8 * math.pi), "omega", rtol=1e-8)
+    y, aux = smap.initial(smap.value)
+    largest, positions = [], []
+    for v0 in (1e-4, 1e-3, 1e-2):  # m/s
+        pt = orbit_at(smap, y, np.full_like(aux, v0), smap.value, tolerance=1e-7)
+        assert pt.value.events == 0 and pt.value.live.size == 0  # held: not an unknown
+        largest.append(float(np.abs(pt.multipliers).max()))
+        positions.append(pt.y[:4])  # clearance vectors at A and B, m
+    assert [round(m, 2) for m in largest] == [0.01, 0.24, 0.72]  # docs: 0.013, 0.24, 0.72
+    assert round(largest[0], 3) == 0.013
+    spread = np.ptp(np.array(positions), axis=0).max()
+    assert 1e-7 < spread < 1e-6, spread  # m (6.3e-7 measured): within 1 % of c = 1e-4 m

@@ -106,3 +106,31 @@ def test_key_figures_are_the_reports():
     assert set(hooks.KEY_FIGURES) <= cited
     committed = {str(p.relative_to(hooks.FIGURES)) for p in hooks.FIGURES.rglob("*.png")}
     assert committed <= set(hooks.KEY_FIGURES)
+
+
+def test_fig32_cost_is_the_newest_benchmark_record():
+    """docs/continuation.md quotes the newest ``continuation.py --parts fig32`` entry of
+    benchmarks/RESULTS.md (the cost of the paper's Fig. 32 continued): each number it gives is
+    that record's."""
+    records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
+    fig32 = [r for r in records if r.startswith("continuation.py") and "continued sweep (up)" in r]
+    newest = fig32[-1]
+    sweep = re.search(
+        r"workers' CPU ([\d.]+) min, longest segment ([\d.]+) min; wall ([\d.]+) min on 2 "
+        r"workers \(load ([\d.]+) -> ([\d.]+)\)",
+        newest,
+    )
+    brute = re.search(
+        r"-> ([\d.]+) min for all, ([\d.]+) min on 2 workers; continuation "
+        r"([\d.]+)x less CPU",
+        newest,
+    )
+    commit = re.search(r"commit (\w+)", newest).group(1)
+    page = " ".join((DOCS / "continuation.md").read_text().split())
+    cpu, longest, wall, load0, load1 = sweep.groups()
+    assert f"at {commit}): the 300 values" in page
+    assert f"took {wall} min wall on 2 workers ({cpu} min of the workers' CPU" in page
+    assert f"longest segment {longest} min" in page and f"from {load0} to {load1}" in page
+    assert f"costs {brute.group(1)} min of CPU for all 300, {brute.group(2)} min" in page
+    assert f"takes {brute.group(3)}x less CPU" in page
+    assert float(wall) <= 10.0  # the issue's target (issue 25 item 6)

@@ -580,6 +580,83 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
     assert "| 2.5 pi | none/none | 0.3 / 0.3 | 0.95 / 0.9 | 25 +- 4 (flagged: a; b) |" in text
 
 
+def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
+    """Where the periodic motion ends (``[route] refine``): the bracket is the first period-1
+    value followed by another going up; the refined sweep's last periodic value each way; the
+    report says whether the orbit loses stability or ends at a lift-off, and the history."""
+    import math
+
+    from workbench.study._route_end import _last_periodic, end_bracket
+    from workbench.study._route_report import route_section
+
+    assert end_bracket([1, 1, 0, 1, 0]) == 1
+    assert end_bracket([0, 0, 1]) is None and end_bracket([1, 1, 1]) is None
+    assert _last_periodic([1.0, 2.0, 3.0, 4.0], [1, 1, 2, 1]) == 2.0
+    assert _last_periodic([1.0, 2.0], [0, 1]) is None
+    pi = math.pi
+    values = [1.8 * pi, 1.85 * pi, 1.9 * pi]
+    route = {
+        "status": "computed",
+        "parameter": "omega",
+        "values": values,
+        "cycles": [100, 3],
+        "chained_seams": 0,
+        "cpu_time_continued_sweep": 60.0,
+        "wall_time": {"continued_sweep": 40.0},
+        "directions": {
+            "up": {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]},
+            "down": {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]},
+        },
+        "hysteresis": {"values": [], "tolerance": 0.05, "differs": [0, 0, 0]},
+        "end": {
+            "status": "computed",
+            "bracket": [1.85 * pi, 1.9 * pi],
+            "values": [1.85 * pi, 1.86 * pi, 1.87 * pi, 1.88 * pi, 1.89 * pi, 1.9 * pi],
+            "directions": {"up": {"period": [1, 1, 0, 0, 0, 0]}},
+            "last_periodic_up": 1.86 * pi,
+            "last_periodic_down": 1.86 * pi,
+            "cpu_time": 120.0,
+            "last_orbit": {
+                "value": 1.86 * pi,
+                "largest_modulus": 0.735,
+                "events_per_period": 2.0,
+                "smallest_event": -1.22e-6,
+            },
+            "branch": {
+                "start": 1.86 * pi,
+                "values": [1.86 * pi, 1.862 * pi, 1.864 * pi],
+                "stable": [1, 1, 1],
+                "largest_modulus": [0.2, 0.5, 0.4],
+                "smallest_event": [1e-7, 5e-8, 3e-9],
+                "last_label": "end",
+                "bifurcations": [],
+                "ended": "the branch turns sharply",
+                "map_evaluations": 50,
+            },
+            "held": [
+                {"factor": 0.1, "held": [1e-4, 2e-4], "largest_modulus": 0.02},
+                {"factor": 1.0, "held": [1e-3, 2e-3], "largest_modulus": 0.2},
+                {"factor": 10.0, "held": [1e-2, 2e-2], "largest_modulus": 0.7},
+            ],
+        },
+    }
+    text = "\n".join(route_section(route))
+    assert "going up the strobe is period-1 up to 1.86 pi and not at 1.87 pi" in text
+    assert "period-1 again from 1.86 pi (the same value: no hysteresis at the end" in text
+    assert "reaches 1.864 pi and ends there: the branch turns sharply" in text
+    assert "|multiplier| stays within 0.2-0.5" in text
+    assert "**no multiplier leaves the unit circle**" in text
+    assert "falls from 1e-07 to 3e-09 m: the lasting contact approaches lift-off" in text
+    assert (
+        "2 events per cycle, largest |multiplier| 0.735 and smallest event value -1.22e-06 m:"
+        in text
+    )
+    assert "a contact lifts off and closes again every cycle there" in text
+    assert "x0.1 (0.0001, 0.0002 m s-1): 0.02; x1 (0.001, 0.002 m s-1): 0.2" in text
+    route["end"]["last_periodic_down"] = 1.85 * pi
+    assert "the two directions differ there: hysteresis" in "\n".join(route_section(route))
+
+
 def test_quick_route_of_the_speed_sweep(tmp_path):
     """A study's [route] end to end, shortened (no branch, no exponents): the sweep continued
     both ways, per direction the strobe spread, period and K, the hysteresis, the figures."""

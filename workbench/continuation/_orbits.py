@@ -179,7 +179,12 @@ def continue_orbit(
         ``periods`` per point, ``multiplier_real``, ``multiplier_imag`` and
         ``multiplier_modulus`` (1), ``stable`` (all inside the unit circle),
         ``events_per_period``, ``label`` (CF flags: regular, start, end, fold, branch_point,
-        period_doubling, neimark_sacker, grazing), ``newton_iterations``, ``residual``; and
+        period_doubling, neimark_sacker, grazing, nonsmooth_fold), ``newton_iterations``,
+        ``residual``; for a model with a discrete state ``orbit_discrete_state`` (point,
+        discrete_state; the mechanisms: held contact onset velocities, m s-1), with events
+        ``event_max`` and ``event_min`` (point, event: the largest and smallest value of each
+        event function along the orbit; the mechanisms: penetration, m; the largest crosses 0
+        where a contact appears, the smallest where a lasting one lifts off); and
         per located bifurcation (dim ``bifurcation``): ``bifurcation_parameter``,
         ``bifurcation_label``, ``bifurcation_branch``, ``critical_real`` and
         ``critical_imag`` (the multiplier that crossed). Attributes: the scene, the cost
@@ -269,7 +274,46 @@ def _dataset(
             strobe[q.name][i, : samples.shape[0]] = samples[:, index[q.name]]
     modulus = np.abs(mu)
     periods = np.array([branches[b].smap.periods for b, _, _, _ in rows], np.int32)
+    model = get_model(smap.scene.model)
     data: dict = {}
+    na, ne = pb.aux0.size, pb.event_direction.size
+    if na:
+        held = np.array([r[1].aux for r in rows], dtype=float).reshape(n, na)
+        data["orbit_discrete_state"] = (
+            ("point", "discrete_state"),
+            held,
+            _attrs(
+                "the model's discrete state on the orbit at the strobe time (the mechanisms: "
+                "each joint's contact onset velocity, held through a lasting contact: a "
+                "constant of such an orbit that sets its contact damping)",
+                model.discrete_state_units,
+            ),
+        )
+    if ne:
+        extrema = [branches[b].smap.event_extrema(pt.y, pt.aux, pt.p) for b, pt, _, _ in rows]
+        for k, (name, meaning) in enumerate(
+            (
+                (
+                    "event_max",
+                    "largest value of each event function along the orbit (crosses "
+                    "0 where a contact appears: grazing)",
+                ),
+                (
+                    "event_min",
+                    "smallest value of each event function along the orbit (crosses "
+                    "0 where a lasting contact lifts off)",
+                ),
+            )
+        ):
+            data[name] = (
+                ("point", "event"),
+                np.array([e[k] for e in extrema]).reshape(n, ne),
+                _attrs(
+                    meaning + "; the mechanisms: a joint's penetration, events 2i and 2i + 1 "
+                    "of its i-th clearance joint",
+                    model.event_units,
+                ),
+            )
     if parameter is not None:
         par = get_model(smap.scene.model).parameter(parameter)
         p_attrs = _attrs(par.long_name, par.units)
@@ -333,6 +377,10 @@ def _dataset(
         "sample": ("sample", np.arange(kmax), _attrs("strobe sample of the orbit (k T on)")),
         "bifurcation": ("bifurcation", np.arange(len(special)), _attrs("located bifurcation")),
     }
+    if na:
+        coords["discrete_state"] = ("discrete_state", np.arange(na), _attrs("discrete state"))
+    if ne:
+        coords["event"] = ("event", np.arange(ne), _attrs("event function"))
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(provenance(smap.scene, by="workbench.continuation.continue_orbit"))
     title = f"periodic orbits of model {smap.scene.model}"

@@ -27,6 +27,7 @@ from workbench.campaign import (
     invalid_outcome,
     run_outcome,
 )
+from workbench.models import get_model
 from workbench.run import derive, integrate, prepare, to_dataset
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.solver import Status
@@ -158,7 +159,7 @@ def run_segment(task: SegmentTask) -> dict:
         seeds.append(kind)
     own = slice(task.own_from, None)
     ds = block_dataset(scene, task.flat[own], runs[own])
-    ds = ds.merge(_finals(runs[own], seeds[own]))
+    ds = ds.merge(_finals(scene, runs[own], seeds[own]))
     if task.own_from:
         ds = ds.merge(_seam_points(scene, task.flat[: task.own_from], runs[: task.own_from]))
     ran = next((r for r in runs if r.get("states") is not None), None)
@@ -176,7 +177,7 @@ def run_segment(task: SegmentTask) -> dict:
     return block_summary(task, ds, runs, code, wall0)
 
 
-def _finals(runs: list[dict], seeds: list[int]) -> xr.Dataset:
+def _finals(scene: Scene, runs: list[dict], seeds: list[int]) -> xr.Dataset:
     """Per point: how it started (``seed``), its final state (``final_<state>``, one variable
     per state with its units; NaN where the run failed) and discrete state."""
     data = {"seed": ("point", np.array(seeds, np.int8), SEED_ATTRS)}
@@ -199,8 +200,8 @@ def _finals(runs: list[dict], seeds: list[int]) -> xr.Dataset:
             a,
             {
                 "long_name": "the model's discrete state at the end of the run (the mechanisms: "
-                "each joint's held contact onset velocity in m s-1, 0 out of contact)",
-                "units": "1",
+                "each joint's held contact onset velocity, 0 out of contact)",
+                "units": get_model(scene.model).discrete_state_units,
             },
         )
     return xr.Dataset(data)

@@ -108,6 +108,10 @@ class Model:
     event_directions: ClassVar[tuple[int, ...]] = ()
     #: initial discrete state ``aux`` (changed only by ``apply_event``; recorded with the run)
     initial_aux: ClassVar[tuple[float, ...]] = ()
+    #: units of the event functions' values and of the discrete state (``units`` attributes of
+    #: outputs that report them, e.g. a periodic orbit's smallest event value)
+    event_units: ClassVar[str] = "1"
+    discrete_state_units: ClassVar[str] = "1"
     #: name of the parameter that is the angular frequency (rad s-1) of a periodic forcing:
     #: the forcing period is 2 pi / that value; None for an autonomous system
     forcing_frequency: ClassVar[str | None] = None

@@ -64,6 +64,10 @@ class Mechanism(Model):
     assembly: ClassVar[str]
     #: module of the compiled hooks, with the layouts P, IP, W, RECORD and ``evaluate_many``
     dynamics: ClassVar[ModuleType]
+    #: event functions: each clearance joint's penetration (onset, end); discrete state: each
+    #: joint's normal velocity held from its contact onset (0 out of contact)
+    event_units = "m"
+    discrete_state_units = "m s-1"
 
     def states(self, effects):
         return tuple(clearance_states(effects["clearance"], effects["friction"]))

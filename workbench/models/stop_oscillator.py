@@ -69,6 +69,7 @@ class StopOscillator(Model):
         "with a one-sided elastic stop at the gap g"
     )
     reference = "Shaw & Holmes (1983); Nordmark (1991); di Bernardo et al. (2008), Ch. 2"
+    event_units = "m"  # both event functions are x - g
     parameters = (
         Parameter("mass", 1.0, "kg", "mass", lower=0.0, lower_open=True),
         Parameter("damping", 0.1, "N s m-1", "viscous damping coefficient c", lower=0.0),

@@ -13,8 +13,12 @@ by the two-trajectory method over 20 cycles). ``[route]`` keys: ``case`` (defaul
 one), ``segments``, ``transient_cycles`` (per continued point), ``cycles`` (recorded; >= 100
 for the 0-1 test), ``method`` (solver), ``branch_start``, ``branch_stop`` (the orbit's range;
 no branch without them), ``branch_points`` (the most points of the branch, default 300: it
-ends there, and says so, which bounds the study's cost), ``exponents`` (how many values of the
-sweep get an exponent, default 0).
+ends there, and says so, which bounds the study's cost), ``branch_max_step`` (its largest
+scaled arclength step, default 0.05), ``exponents`` (how many values of the sweep get an
+exponent, default 0), ``refine`` (where the periodic motion ends: that many values between
+the last period-1 value and the next, continued again, and the orbit continued from there;
+:mod:`workbench.study._route_end`, with ``end_transient_cycles``, ``end_branch_points`` and
+``end_max_step``).
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from workbench.archive import save_run
 from workbench.study._measure import CLEARANCE_COORDINATES, clearance_of, select
 from workbench.study._spec import Study, parameter_sweep
 
-__all__ = ["route"]
+__all__ = ["branch_summary", "indicators", "route", "settled"]
 #: two attractors differ at a point when their clouds are further apart than this fraction of
 #: the clearance plus twice their own record spacing (the seam test of the continued sweep)
 HYSTERESIS_TOLERANCE = 0.05
@@ -73,12 +77,7 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
     branch's bifurcations, exponents, the files written and the wall time of each part)."""
     if not study.route:
         return None
-    from workbench.continuation import (
-        continued_sweep,
-        point_exponent,
-        strobe_period,
-        strobe_zero_one,
-    )
+    from workbench.continuation import continued_sweep, point_exponent
 
     spec = dict(study.route)
     swept = [c for c, s in study.cases.items() if parameter_sweep(s)]
@@ -95,26 +94,23 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
     out["values"] = values
     out["cycles"] = [int(cscene.run["cycles"]), int(cscene.continuation["transient_cycles"])]
     out["chained_seams"] = int(ds["seam_chained"].sum()) if "seam_chained" in ds else 0
-    per: dict = {}
-    clouds: dict = {}
-    for d in ("up", "down"):
-        part = ds.sel(direction=d)
-        rows = {"spread": [], "period": [], "K": []}
-        clouds[d] = []
-        for v in values:
-            x = _coordinates(part, scene, param, v)
-            clouds[d].append(x)
-            rows["spread"].append(float(np.mean(np.std(x, axis=0))) if len(x) else math.nan)
-            rows["period"].append(strobe_period(x) if len(x) else -1)
-            ks = [strobe_zero_one(x[:, j]) for j in range(x.shape[1])] if len(x) else []
-            rows["K"].append(float(np.nanmedian(ks)) if np.isfinite(ks).any() else math.nan)
-        per[d] = rows
+    per, clouds = indicators(ds, scene, param, values)
     out["directions"] = per
     out["hysteresis"] = _hysteresis(clouds, values)
     if "branch_start" in spec and not quick:
         t0 = time.perf_counter()
-        out["branch"] = _branch(scene, param, spec, directory / f"{case}-branch.nc")
+        start, stop = float(spec["branch_start"]), float(spec["branch_stop"])
+        point = scene.replace(sweep={}).with_parameters(**{param: start})
+        out["branch"] = branch_summary(
+            point, param, start, stop, spec, directory / f"{case}-branch.nc"
+        )
         out["wall_time"]["branch"] = time.perf_counter() - t0
+    if spec.get("refine") and not quick:
+        from workbench.study._route_end import periodic_end
+
+        t0 = time.perf_counter()
+        out["end"] = periodic_end(scene, cscene, param, values, per, spec, directory, case, workers)
+        out["wall_time"]["end"] = time.perf_counter() - t0
     n_exp = int(spec.get("exponents", 0)) if not quick else 0
     if n_exp:
         t0 = time.perf_counter()
@@ -123,7 +119,7 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
         up = ds.sel(direction="up")
         for i in picks:
             point = scene.with_parameters(**{param: values[i]})
-            y, aux = _settled(up, point, param, values[i])
+            y, aux = settled(up, point, param, values[i])
             e = point_exponent(
                 point,
                 period=max(per["up"]["period"][i], 0),
@@ -141,7 +137,7 @@ def route(study: Study, directory: Path, quick: bool, workers: int | None) -> di
     return out
 
 
-def _settled(part: xr.Dataset, point, param: str, value: float):
+def settled(part: xr.Dataset, point, param: str, value: float):
     """(state, discrete state) a continued point ended in (at forcing phase 0), or (None,
     None) where its run failed."""
     from workbench.run import prepare
@@ -178,19 +174,48 @@ def _hysteresis(clouds: dict, values: list[float]) -> dict:
     }
 
 
-def _branch(scene, param: str, spec: dict, path: Path) -> dict:
-    """The period-1 orbit continued from ``branch_start`` towards ``branch_stop``."""
+def indicators(ds: xr.Dataset, scene, param: str, values: list[float]) -> tuple[dict, dict]:
+    """Per direction of a continued sweep and per value: the strobe spread (in units of c),
+    period (0: none up to 16) and 0-1 test K; and the strobe samples themselves."""
+    from workbench.continuation import strobe_period, strobe_zero_one
+
+    per: dict = {}
+    clouds: dict = {}
+    for d in ("up", "down"):
+        part = ds.sel(direction=d)
+        rows = {"spread": [], "period": [], "K": []}
+        clouds[d] = []
+        for v in values:
+            x = _coordinates(part, scene, param, v)
+            clouds[d].append(x)
+            rows["spread"].append(float(np.mean(np.std(x, axis=0))) if len(x) else math.nan)
+            rows["period"].append(strobe_period(x) if len(x) else -1)
+            ks = [strobe_zero_one(x[:, j]) for j in range(x.shape[1])] if len(x) else []
+            rows["K"].append(float(np.nanmedian(ks)) if np.isfinite(ks).any() else math.nan)
+        per[d] = rows
+    return per, clouds
+
+
+def branch_summary(
+    point, param: str, start: float, stop: float, spec: dict, path: Path, state=None, aux=None
+) -> dict:
+    """The period-1 orbit of ``point`` continued from ``start`` towards ``stop`` (Newton's start:
+    ``state`` and ``aux``, default after the scene's transient), written to ``path``, and the
+    numbers the report needs: per point its value, stability, largest |multiplier|, events per
+    period and smallest event value; the bifurcations with their multipliers; why it ended."""
     from workbench.continuation import branch_bifurcations, continue_orbit
 
-    start, stop = float(spec["branch_start"]), float(spec["branch_stop"])
-    point = scene.replace(sweep={}).with_parameters(**{param: start})
     branch = continue_orbit(
         point,
         param,
+        start=start,
         stop=stop,
+        state=state,
+        discrete_state=aux,
         rtol=1e-8,
         tolerance=1e-6,
         max_points=int(spec.get("branch_points", 300)),
+        max_step=float(spec.get("branch_max_step", 0.05)),
     )
     save_run(branch, path)
     stable = branch.stable.values
@@ -212,6 +237,11 @@ def _branch(scene, param: str, spec: dict, path: Path) -> dict:
             }
         )
     modulus = np.nanmax(branch.multiplier_modulus.values, axis=1)
+    if "event_min" in branch:
+        lowest = np.min(branch.event_min.values, axis=1)
+    else:
+        lowest = np.full(stable.size, np.nan)
+    names = branch.label.attrs["flag_meanings"].split()
     return {
         "archive": str(path),
         "start": start,
@@ -220,6 +250,8 @@ def _branch(scene, param: str, spec: dict, path: Path) -> dict:
         "stable": [int(s) for s in stable],
         "largest_modulus": [float(m) for m in modulus],
         "events_per_period": [float(e) for e in branch.events_per_period.values],
+        "smallest_event": [float(e) for e in lowest],
+        "last_label": names[int(branch.label.values[-1])],
         "bifurcations": bifurcations,
         "ended": branch.attrs["branch_ended"],
         "map_evaluations": int(branch.attrs["map_evaluations"]),

@@ -73,7 +73,55 @@ def route_figures(study: Study, r: dict, directory: Path) -> list[Path]:
     first = directory / f"{tag}-route.png"
     fig.savefig(first, dpi=130)
     plt.close(fig)
-    return [first, _indicators(r, directory / f"{tag}-route-indicators.png", param, scale, xlabel)]
+    paths = [first, _indicators(r, directory / f"{tag}-route-indicators.png", param, scale, xlabel)]
+    if r.get("end", {}).get("status") == "computed":
+        paths.append(
+            _end(study, r["end"], directory / f"{tag}-route-end.png", param, scale, xlabel)
+        )
+    return paths
+
+
+def _end(study: Study, e: dict, path: Path, param: str, scale: float, xlabel: str) -> Path:
+    """Where the periodic motion ends: the refined continued sweep's strobe samples of x1 with
+    the orbit continued from its last periodic value, the orbit's smallest penetration and its
+    largest |multiplier|."""
+    scene = study.cases[next(iter(study.cases))]
+    var, where = CLEARANCE_COORDINATES["x1"]
+    ds = open_run(e["archive"])
+    b = e.get("branch")
+    fig, axes = plt.subplots(3 if b else 1, 1, figsize=(8, 8.4 if b else 3.2), sharex=True)
+    axes = np.atleast_1d(axes)
+    c = clearance_of(scene, where["joint"])
+    for d in ("up", "down"):
+        da = select(ds.sel(direction=d), var, where).transpose(param, ...)
+        y = da.values.reshape(da.shape[0], -1) / c
+        x = np.broadcast_to(da[param].values[:, None] * scale, y.shape)
+        axes[0].plot(
+            x.ravel(), y.ravel(), ".", ms=2.5, color=_COLOURS[d], alpha=0.5, label=f"continued {d}"
+        )
+    axes[0].set_ylabel(f"x1: strobe samples of {var} at {where['joint']} / c [1]", fontsize=8)
+    if b:
+        branch = open_run(b["archive"])
+        _branch(axes[0], branch, param, scale, _STATES["x1"], scene, where["joint"])
+        p = np.array(b["values"]) * scale
+        axes[1].semilogy(p, np.maximum(b["smallest_event"], 1e-12), "k.-", lw=1, ms=3)
+        axes[1].set_ylabel("smallest penetration along the orbit [m]", fontsize=8)
+        axes[2].plot(p, b["largest_modulus"], "k.-", lw=1, ms=3)
+        axes[2].axhline(1.0, color="0.5", lw=0.6)
+        axes[2].set_ylabel("largest |Floquet multiplier| [1]", fontsize=8)
+    axes[0].legend(fontsize=7)
+    axes[-1].set_xlabel(xlabel, fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.suptitle(
+        f"{study.title}: where the periodic motion ends (refined continued sweep; the orbit "
+        "continued from its last periodic value, solid stable)",
+        fontsize=8,
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
 
 
 def _branch(ax, branch, param: str, scale: float, state: str, scene, joint: str) -> None:

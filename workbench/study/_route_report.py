@@ -48,6 +48,8 @@ def route_section(r: dict) -> list[str]:
     b = r.get("branch")
     if b:
         lines += _branch_lines(b, p)
+    if r.get("end"):
+        lines += _end_lines(r["end"], p)
     h = r["hysteresis"]
     if h["values"]:
         shown = ", ".join(_v(v, p) for v in h["values"])
@@ -194,3 +196,110 @@ def _agreement(r: dict) -> list[str]:
             + "."
         )
     return [" ".join(text)]
+
+
+def _end_lines(e: dict, p: str) -> list[str]:
+    """Where and how the periodic motion ends (:mod:`workbench.study._route_end`)."""
+    if e.get("status") != "computed":
+        return [f"*Where the periodic motion ends*: not computed ({e.get('reason', '')}).", ""]
+    lo, hi = e["bracket"]
+    step = (hi - lo) / max(len(e["values"]) - 1, 1)
+    up, down = e["last_periodic_up"], e["last_periodic_down"]
+    fup = e["directions"]["up"]
+    first_up = next((v for v, k in zip(e["values"], fup["period"], strict=True) if k != 1), None)
+    lines = [
+        f"*Where the periodic motion ends* (the continued sweep again at {len(e['values'])} values "
+        f"between {_v(lo, p)} and {_v(hi, p)}, both ways, {e['cpu_time'] / 60:.1f} min of "
+        "workers' CPU): going up the strobe is period-1 up to "
+        + (_v(up, p) if up is not None else "none of them")
+        + (f" and not at {_v(first_up, p)}" if first_up is not None else "")
+        + "; coming down it is period-1 again from "
+        + (_v(down, p) if down is not None else "none of them")
+        + (
+            f" (the same value: no hysteresis at the end, to the refined step {_v(step, p)})."
+            if up is not None and up == down
+            else " (the two directions differ there: hysteresis)."
+        ),
+        "",
+    ]
+    o = e.get("last_orbit")
+    if o and "error" in o:
+        lines += [f"At {_v(o['value'], p)} Newton finds no period-1 orbit ({o['error']}).", ""]
+    elif o:
+        lifted = math.isfinite(o["smallest_event"]) and o["smallest_event"] < 0
+        lines += [
+            f"The period-1 orbit Newton finds at {_v(o['value'], p)} (from the refined sweep's "
+            f"state) has {o['events_per_period']:g} events per cycle, largest |multiplier| "
+            f"{o['largest_modulus']:.3g} and smallest event value {o['smallest_event']:.3g} m"
+            + (
+                ": a contact lifts off and closes again every cycle there (an impacting orbit)."
+                if lifted
+                else ": its contacts last through the cycle."
+            ),
+            "",
+        ]
+    b = e.get("branch")
+    if b is None:
+        lines += [f"The orbit could not be continued: {e.get('branch_error', '')}", ""]
+        return lines
+    loss = next(
+        (f for f in b["bifurcations"] if f["stable_before"] and not f["stable_after"]), None
+    )
+    low = [x for x in b["smallest_event"] if math.isfinite(x)]
+    failed = e.get("failed_starts") or []
+    text = (
+        f"The period-1 orbit continued from {_v(b['start'], p)} (from the state the refined "
+        "sweep settled to"
+        + (
+            f"; Newton did not converge from the {len(failed)} periodic value(s) above it"
+            if failed
+            else ""
+        )
+        + f"; {len(b['values'])} points, {b['map_evaluations']} map evaluations) "
+        f"reaches {_v(max(b['values']), p)} and ends there: {b['ended']}. Its largest "
+        f"|multiplier| stays within {min(b['largest_modulus']):.3g}-"
+        f"{max(b['largest_modulus']):.3g} on the way"
+    )
+    text += (
+        f", and it loses stability at {_v(loss['value'], p)} by a "
+        f"**{loss['type'].replace('_', ' ')}** (critical multiplier {_mu(loss['critical'])})."
+        if loss
+        else ": **no multiplier leaves the unit circle** (no fold, period doubling or "
+        "Neimark-Sacker)."
+    )
+    if low:
+        text += (
+            f" The smallest event value along the orbit (the mechanisms: the smallest "
+            f"penetration of a joint in lasting contact) falls from {low[0]:.3g} to "
+            f"{low[-1]:.3g} m"
+            + (
+                f" (last point labelled {b['last_label'].replace('_', ' ')})"
+                if b.get("last_label") not in (None, "end", "regular")
+                else ""
+            )
+            + (
+                ": the lasting contact approaches lift-off (a grazing) without losing stability."
+                if low[-1] < low[0]
+                else "."
+            )
+            if loss is None
+            else f" The smallest event value along the orbit falls from {low[0]:.3g} to "
+            f"{low[-1]:.3g} m."
+        )
+    lines += [text, ""]
+    held = e.get("held") or []
+    if held:
+        cells = "; ".join(
+            f"x{h['factor']:g} ({', '.join(f'{a:.3g}' for a in h['held'])} m s-1): "
+            + (f"{h['largest_modulus']:.3g}" if math.isfinite(h["largest_modulus"]) else "no orbit")
+            for h in held
+        )
+        lines += [
+            f"*History*: the orbit at {_v(b['start'], p)} holds each contact's onset velocity "
+            "(the Lankarani-Nikravesh damping's, held while the contact lasts). Found again with "
+            f"those velocities scaled, its largest |multiplier| is {cells}: the lasting-contact "
+            "orbit is a family, one per onset velocity, and how stable the periodic motion is "
+            "depends on the impact that began the contact, not on the parameter alone.",
+            "",
+        ]
+    return lines

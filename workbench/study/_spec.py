@@ -78,7 +78,12 @@ ROUTE_KEYS = (
     "branch_start",
     "branch_stop",
     "branch_points",
+    "branch_max_step",
     "exponents",
+    "refine",
+    "end_transient_cycles",
+    "end_branch_points",
+    "end_max_step",
 )
 QUICK_REALISATIONS = 4  # the fewest for which the two-sample rank test can reach p < 0.05
 _KEYS = {

@@ -1,0 +1,184 @@
+"""Where and how the periodic motion of a study's route ends (``[route] refine``).
+
+The coarse continued sweep brackets the end: the first value going up where the strobe is
+period-1 while the next is not. Within that bracket:
+
+1. a continued sweep of ``refine`` values both ways (each from its neighbour's settled state,
+   ``end_transient_cycles`` transient cycles each, default 30: near the end the contraction to
+   the orbit is slow and a short transient reads as a spread) says where the attractor stops
+   being period-1 going up, where it starts again coming down, and whether the two differ
+   there (hysteresis at the end);
+2. the orbit Newton finds at the last periodic value going up (from the state the refined
+   sweep settled to there): its events per period and smallest event value say whether the
+   contact still lasts through the cycle; and the period-1 orbit continued upwards from the
+   bracket's lower end, from the state the refined sweep settled to there (or the next values,
+   where Newton does not converge;
+   ``end_branch_points`` points at most, default 150; ``end_max_step`` the largest scaled
+   arclength step, default 1: the strobe velocities of the nine-bar's lasting-contact orbit
+   change fast with omega, and a step of 0.05 moves omega by ~1e-4 pi there): its multipliers
+   say whether it loses stability by a smooth bifurcation, the smallest value of its event
+   functions (the mechanisms: the smallest penetration of a joint in lasting contact, m)
+   whether it ends by lifting off a contact (a grazing, the contact bifurcation of impacting
+   systems; di Bernardo et al. 2008, Ch. 2), and why the branch ended;
+3. the orbit's dependence on its history: where the model holds a discrete state through the
+   orbit (the mechanisms: each contact's onset velocity, which sets the Lankarani-Nikravesh
+   damping, Lankarani & Nikravesh 1990, for as long as the contact lasts), the same orbit is
+   found again with those held values scaled by ``HELD_FACTORS``, and its largest |multiplier|
+   reported for each: a family of orbits, one per onset velocity, not one orbit.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from workbench.study._route import branch_summary, indicators, settled
+
+__all__ = ["HELD_FACTORS", "end_bracket", "periodic_end"]
+
+#: the held discrete states of the last periodic orbit are scaled by these factors to show how
+#: its multipliers depend on them
+HELD_FACTORS = (0.1, 1.0, 10.0)
+
+
+def end_bracket(periods: list[int]) -> int | None:
+    """The index i of the first value whose strobe is period-1 while the next one's is not, or
+    None."""
+    for i in range(len(periods) - 1):
+        if periods[i] == 1 and periods[i + 1] != 1:
+            return i
+    return None
+
+
+def _last_periodic(values: list[float], periods: list[int]) -> float | None:
+    """The end of the run of period-1 values at the bottom of the range (None: the first value
+    is not period-1). For the upward sweep, where its periodic motion ends; for the downward
+    one, where periodic motion has set in again once the sweep comes down."""
+    last = None
+    for v, k in zip(values, periods, strict=True):
+        if k != 1:
+            break
+        last = v
+    return last
+
+
+def periodic_end(
+    scene,
+    cscene,
+    param: str,
+    values: list[float],
+    per: dict,
+    spec: dict,
+    directory: Path,
+    case: str,
+    workers: int | None,
+) -> dict:
+    """Where the period-1 motion of the continued sweep ``per`` (over ``values``) ends, and how
+    (see the module docstring): a dict for the summary."""
+    from workbench.continuation import continued_sweep
+
+    i = end_bracket(per["up"]["period"])
+    if i is None:
+        return {"status": "no end", "reason": "no period-1 value is followed by another going up"}
+    lo, hi = values[i], values[i + 1]
+    fine = [float(v) for v in np.linspace(lo, hi, int(spec["refine"]))]
+    transient = int(spec.get("end_transient_cycles", 30))
+    sweep = {
+        param: fine,
+        "continuation": dict(cscene.continuation, segments=1, transient_cycles=transient),
+    }
+    path = directory / f"{case}-refined.nc"
+    ds = continued_sweep(cscene.replace(sweep=sweep), path, workers=workers, restart=True)
+    fper, _ = indicators(ds, scene, param, fine)
+    out: dict = {
+        "status": "computed",
+        "archive": str(path),
+        "bracket": [lo, hi],
+        "values": fine,
+        "transient_cycles": transient,
+        "directions": fper,
+        "last_periodic_up": _last_periodic(fine, fper["up"]["period"]),
+        "last_periodic_down": _last_periodic(fine, fper["down"]["period"]),
+        "cpu_time": float(ds.attrs["campaign_cpu_time"]),
+    }
+    if out["last_periodic_up"] is None:
+        out["branch_error"] = "the refined sweep is not period-1 at its first value"
+        return out
+    end_spec = dict(
+        spec,
+        branch_points=int(spec.get("end_branch_points", 150)),
+        branch_max_step=float(spec.get("end_max_step", 1.0)),
+    )
+    out["last_orbit"] = _orbit_at(scene, ds, param, out["last_periodic_up"])
+    # the orbit continued up from the bracket's lower end (period-1 in the coarse sweep), from
+    # the state the refined sweep settled to; where Newton does not converge, the next values
+    tried = []
+    for start in [v for v in fine if v <= out["last_periodic_up"]][:3]:
+        point = scene.replace(sweep={}).with_parameters(**{param: start})
+        y, aux = settled(ds.sel(direction="up"), point, param, start)
+        try:
+            out["branch"] = branch_summary(
+                point, param, start, hi, end_spec, directory / f"{case}-end-branch.nc", y, aux
+            )
+        except Exception as exc:  # noqa: BLE001 - a failed start is a finding, not a crash
+            tried.append(f"from {start:.6g}: {type(exc).__name__}: {str(exc)[:160]}")
+            continue
+        out["failed_starts"] = tried
+        out["held"] = _held_dependence(point, param, start, out["branch"]["archive"])
+        return out
+    out["branch_error"] = "; ".join(tried)
+    return out
+
+
+def _orbit_at(scene, ds, param: str, value: float) -> dict:
+    """The period-1 orbit Newton finds at ``value`` from the state the refined sweep settled to
+    going up: its largest |multiplier|, events per period and smallest event value (the
+    mechanisms: penetration, m; negative where a contact lifts off during the cycle)."""
+    from workbench.continuation import periodic_orbit
+
+    point = scene.replace(sweep={}).with_parameters(**{param: value})
+    y, aux = settled(ds.sel(direction="up"), point, param, value)
+    try:
+        orbit = periodic_orbit(point, state=y, discrete_state=aux, rtol=1e-8, tolerance=1e-6)
+    except Exception as exc:  # noqa: BLE001 - a failed Newton is a finding, not a crash
+        return {"value": value, "error": f"{type(exc).__name__}: {str(exc)[:200]}"}
+    lowest = float(orbit.event_min.values.min()) if "event_min" in orbit else math.nan
+    return {
+        "value": value,
+        "largest_modulus": float(np.nanmax(orbit.multiplier_modulus.values)),
+        "events_per_period": float(orbit.events_per_period.values[0]),
+        "smallest_event": lowest,
+    }
+
+
+def _held_dependence(point, param: str, value: float, archive: str) -> list[dict]:
+    """The first orbit of the end branch found again with its held discrete states scaled by
+    each of ``HELD_FACTORS``: the held values and the largest |multiplier| (NaN where Newton
+    failed). Empty when the orbit holds none."""
+    from workbench.archive import open_run
+    from workbench.continuation import StrobeMap
+    from workbench.continuation._newton import NewtonFailure, orbit_at
+
+    branch = open_run(archive)
+    if "orbit_discrete_state" not in branch:
+        return []
+    held = branch.orbit_discrete_state.values[0]
+    if not np.any(held != 0.0):
+        return []
+    smap = StrobeMap(point, param, rtol=1e-8)
+    pb = smap.prepared(value).problem
+    if any(f"orbit_{q.name}" not in branch for q in pb.states):
+        return []
+    y = np.array([float(branch[f"orbit_{q.name}"].values[0]) for q in pb.states])
+    rows = []
+    for f in HELD_FACTORS:
+        aux = held * f
+        try:
+            pt = orbit_at(smap, y, aux, value, tolerance=1e-6)
+            largest = float(np.abs(pt.multipliers).max())
+        except NewtonFailure:
+            largest = math.nan
+        rows.append({"factor": f, "held": [float(a) for a in aux], "largest_modulus": largest})
+    return rows
