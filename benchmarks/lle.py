@@ -27,8 +27,9 @@ minus the variational exponent on the same trajectory, their mean and its standa
 
 ``--chaos RTOL [RTOL ...]``: the default call ``lle_from_equations(chaos, cycles=40,
 budget=80, rtol=RTOL)`` (four starts), its value +/- error, cycles, verdict, the variational
-exponent on the same trajectories +/- error, the difference, CPU time and load
-(``benchmarks/results/lle_chaos.json``, one entry per tolerance).
+exponent on the same trajectories +/- error, the difference, the copies' renormalisations
+(all, and those on shrinkage), CPU time and load (``benchmarks/results/lle_chaos.json``, one
+entry per tolerance).
 
 Run: ``python benchmarks/lle.py [--skip-ninebar | --scan | --chaos 1e-6 1e-10]``.
 """
@@ -208,7 +209,10 @@ def chaos_calls(rtols: list[float]) -> None:
             f"{max(rtol / 100, 1e-11):g}: {float(r.lle_tight):.2f} +/- "
             f"{float(r.stderr_tight):.2f}; "
             f"variants {np.round(r.estimate.values, 2).tolist()}; starts "
-            f"{np.round(r.start_lle.values, 2).tolist()}; {cpu:.0f} s CPU, {wall:.0f} s wall, "
+            f"{np.round(r.start_lle.values, 2).tolist()}; renormalisations "
+            f"{r.renormalisations.values.astype(int).tolist()}, of them on shrinkage "
+            f"{r.shrink_renormalisations.values.astype(int).tolist()}; "
+            f"{cpu:.0f} s CPU, {wall:.0f} s wall, "
             f"load {load0:.1f} -> {load1:.1f}, {r.attrs['solver_steps']} steps"
         )
         for line in r.attrs["failed"].splitlines():
@@ -229,6 +233,8 @@ def chaos_calls(rtols: list[float]) -> None:
                 "stderr_difference": float(r.stderr_difference),
                 "lle_tight": float(r.lle_tight), "stderr_tight": float(r.stderr_tight),
                 "estimates": r.estimate.values.tolist(), "rtol_used": r.attrs["rtol"],
+                "renormalisations": r.renormalisations.values.tolist(),
+                "shrink_renormalisations": r.shrink_renormalisations.values.tolist(),
                 "cpu_s": cpu, "wall_s": wall, "load": [load0, load1],
             },
         )  # fmt: skip

@@ -11,7 +11,12 @@ import numpy as np
 import pytest
 
 from workbench import load_scene
-from workbench.analysis import ConvergenceWarning, lle_from_equations, lyapunov_spectrum
+from workbench.analysis import (
+    ConvergenceWarning,
+    floquet,
+    lle_from_equations,
+    lyapunov_spectrum,
+)
 from workbench.models import get_model
 from workbench.solver import integrate
 from workbench.solver._compile import jacobian_for
@@ -299,7 +304,8 @@ def test_duffing_spectrum_sums_to_minus_delta():
 
 
 def test_two_trajectory_lorenz_converges_from_independent_starts():
-    """Lorenz over 4 starts x 100 s (realisations 0-3 of the scene): the error is the larger of
+    """Lorenz over 4 starts x 100 s, grown to 200 s (realisations 0-3 of the scene): the error
+    is the larger of
     the starts' spread and their batch means, so that it is never below what the independent
     starts show; the estimate lies within three of its errors of Sprott's value and the
     variational exponent on the same trajectories differs by far less than the error (the
@@ -308,7 +314,10 @@ def test_two_trajectory_lorenz_converges_from_independent_starts():
     b = lle_from_equations(scene)
     assert bool(b.converged), b.attrs["failed"]
     assert b.sizes["start"] == 4 and b.attrs["starts"] == 4
-    assert b.attrs["duration"] == pytest.approx(400.0) and b.attrs["duration_per_start"] == 100.0
+    # 400 s shared among the starts, 100 s each, read 0.9086 +/- 0.0280 (3.1 %, above the 3 %
+    # target): the windows doubled once (before shrink renormalisation changed the step
+    # sequence, and with it the samples, 2.8 % at 100 s)
+    assert b.attrs["duration"] == pytest.approx(800.0) and b.attrs["duration_per_start"] == 200.0
     starts = b.start_lle.values
     assert len(set(starts.tolist())) == 4  # four different trajectories
     assert float(b.lle) == pytest.approx(starts.mean(), rel=1e-12)
@@ -359,6 +368,56 @@ def test_two_trajectory_verdict_refuses_converged_and_names_each_failure():
         lle_from_equations(scene, starts=0)
 
 
+def test_two_trajectory_exponent_of_a_damped_linear_oscillator_is_its_closed_form():
+    """A contracting orbit: the forced underdamped linear oscillator x'' + 2 zeta w x' + w^2 x
+    = F cos(omega t) (the Duffing model with beta = 0; w = 1 1/s, zeta = 0.5) has both
+    exponents -zeta w = -delta / 2 = -0.5 1/s on every orbit. Renormalised on growth alone
+    the copies shrank onto the fiducial trajectory (e^-52 over one start's 105 s) until they
+    coincided with it and the run failed; renormalised on shrinkage as well (each shrink by
+    10x adds -ln 10: ~0.5 x 105 / ln 10 = 23 per start) the estimate is the closed form
+    within its error, converged, as is the variational exponent on the same trajectories."""
+    scene = {
+        "model": {"name": "duffing"},
+        "parameters": {"delta": 1.0, "alpha": 1.0, "beta": 0.0, "gamma": 0.5, "omega": 1.2},
+        "run": {"cycles": 80, "transient_cycles": 10},
+    }
+    r = lle_from_equations(scene)
+    assert bool(r.converged), r.attrs["failed"]
+    assert abs(float(r.lle) + 0.5) <= 2 * float(r.stderr)
+    assert float(r.stderr) < 0.01  # 1/s: 2 % of the exponent
+    # docs/analysis.md quotes -0.4993 +/- 0.0023
+    assert (round(float(r.lle), 4), round(float(r.stderr), 4)) == (-0.4993, 0.0023)
+    assert abs(float(r.lle_variational) + 0.5) <= 2 * float(r.stderr_variational)
+    # every renormalisation is a shrinkage: ln 10 each, over the 4 x 104.7 s followed
+    shrinks = r.shrink_renormalisations.values
+    assert np.array_equal(shrinks, r.renormalisations.values)
+    length = r.attrs["cycles"] * 2 * math.pi / 1.2
+    assert shrinks[0] == pytest.approx(0.5 * length / math.log(10), abs=r.attrs["starts"])
+
+
+def test_two_trajectory_exponent_of_a_stable_duffing_orbit_is_floquets():
+    """A stable period-1 orbit of the Duffing oscillator (delta = 1, gamma = 0.3: real
+    multipliers 0.1129 and 0.0471, exponents ln |mu| / T = -0.4166 and -0.5834 1/s): the
+    two-trajectory estimate is the largest Floquet exponent (workbench.analysis.floquet,
+    Newton-refined orbit, monodromy from the tangent system at rtol 1e-10) within its error.
+    Renormalised on growth alone the copies coincided with the fiducial trajectory and the run
+    failed."""
+    scene = {
+        "model": {"name": "duffing"},
+        "parameters": {"delta": 1.0, "gamma": 0.3},
+        "run": {"cycles": 80, "transient_cycles": 10},
+    }
+    period = 2 * math.pi / 1.2
+    reference = math.log(float(floquet(scene).modulus[0])) / period
+    assert reference == pytest.approx(-0.4166, abs=1e-4)
+    r = lle_from_equations(scene)
+    assert bool(r.converged), r.attrs["failed"]
+    assert abs(float(r.lle) - reference) <= 2 * float(r.stderr)
+    assert int(r.shrink_renormalisations[0]) > 0
+    # docs/analysis.md quotes -0.4191 +/- 0.0023 against -0.4166
+    assert (round(float(r.lle), 4), round(float(r.stderr), 4)) == (-0.4191, 0.0023)
+
+
 def test_bad_arguments_are_refused():
     scene = {"model": {"name": "lorenz"}, "run": {"duration": 1.0}}
     with pytest.raises(ValueError, match="exponents=5"):
@@ -392,6 +451,39 @@ def test_chaos_case_two_trajectory_and_variational_agree():
     # within two of its own standard errors (at d0 = 1e-4 and rtol 1e-6 single contacts the
     # copies resolve differently added up to +3 1/s over 10 cycles; benchmarks/lle.py --scan)
     assert abs(float(r.difference)) <= 2 * float(r.stderr_difference)
+
+
+@pytest.mark.slow
+def test_contracting_nine_bar_orbit_reads_a_negative_exponent():
+    """The nine-bar at omega = 0.5 pi, c = 20 um (A+B, Coulomb c_f = 0.01; studies/chaos_maps/
+    omega_clearance.toml) settles on a stable period-1 orbit (Floquet exponent -75.93 1/s,
+    tests/test_continuation.py) that stays in contact: over one cycle its scaled separations
+    swing by 10x up and down ~500 times a second. Renormalised on growth alone the copies sank
+    into the integration's noise and read ~0 1/s (-0.5 .. +0.3 over the five variants, 1 cycle,
+    rtol 1e-6) while the variational exponent on the same trajectory read -74; renormalised on
+    shrinkage as well they read -68 (variants -66.6 .. -68.0, also at rtol 1e-8 and with the
+    step capped at 1e-5 s). What remains, the copies ~8 % above the variational exponent on the
+    same trajectory, depends on none of d0, growth, tolerance or step, and is not yet explained
+    (docs/analysis.md); the estimate is not converged over one cycle and says so."""
+    scene = load_scene(
+        Path(__file__).resolve().parents[1] / "studies/chaos_maps/omega_clearance.toml"
+    )
+    point = scene.replace(
+        sweep={},
+        run={"cycles": 1, "transient_cycles": 20},
+        solver=dict(scene.solver, method="dop853"),
+    ).with_parameters(omega=0.5 * math.pi, clearance=2e-5)
+    with pytest.warns(ConvergenceWarning):
+        r = lle_from_equations(point, starts=1, budget=1, check=False)
+    assert not bool(r.converged)
+    assert float(r.spread) < 0.05, r.estimate.values
+    assert -80.0 < float(r.lle) < -55.0  # 1/s
+    assert -80.0 < float(r.lle_variational) < -65.0
+    # docs/analysis.md quotes -67.9 and -74.2
+    assert (round(float(r.lle), 1), round(float(r.lle_variational), 1)) == (-67.9, -74.2)
+    assert float(r.method_difference) < 0.15
+    shrinks = r.shrink_renormalisations.values
+    assert np.all(shrinks > 0.3 * r.renormalisations.values)
 
 
 _OBLIQUE_JOURNAL = {
@@ -535,3 +627,10 @@ def test_the_lyapunov_page_quotes_the_benchmark():
     page = (Path(__file__).resolve().parents[1] / "docs" / "analysis.md").read_text()
     for table in lle_doc_tables():
         assert table in page
+    # and the count of renormalisations on shrinkage it quotes for the chaos case
+    e = json.loads((RESULTS / "lle_chaos.json").read_text())["1e-06"]
+    quoted = (
+        f"{e['shrink_renormalisations'][0]:.0f} of the estimate's "
+        f"{e['renormalisations'][0]:.0f} renormalisations"
+    )
+    assert quoted in " ".join(page.split())

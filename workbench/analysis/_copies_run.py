@@ -1,6 +1,7 @@
 """The fiducial trajectory of a scene's window and nearby copies of it, integrated side by side
-in one step-size sequence and renormalised towards it whenever their separation has grown by a
-set factor (Benettin, Galgani & Strelcyn 1976, Phys. Rev. A 14, 2338): the runs that
+in one step-size sequence and renormalised towards it whenever their separation has grown or
+shrunk by a set factor (Benettin, Galgani & Strelcyn 1976, Phys. Rev. A 14, 2338; Benettin,
+Galgani, Giorgilli & Strelcyn 1980, Meccanica 15, 9): the runs that
 :func:`workbench.analysis.lle_from_equations` reads its estimates from.
 
 The copies share the fiducial trajectory's steps, so that their integration errors are nearly
@@ -18,6 +19,7 @@ import numpy as np
 from workbench.analysis._window import Window
 from workbench.solver import (
     copies_problem,
+    shrink_counts,
     split_copies,
     state_scale,
     tangent_growths,
@@ -43,13 +45,16 @@ def follow_copies(
 ) -> dict:
     """Integrate the fiducial trajectory and one copy per entry of ``separations`` (scaled,
     dimensionless) side by side over ``length`` seconds, each renormalised whenever its log
-    growth reaches its ``growth``; with ``variational`` the fiducial also carries a tangent
-    vector (the variational equations with saltation, :mod:`workbench.solver._tangent`), so
-    that both estimates follow one trajectory. Returns the record ``times`` (s), every copy's
-    accumulated log growth at them (renormalisations plus the current separation), the tangent
-    vector's (``variational``), renormalisation counts, solver statistics, and the system and
-    its end state to continue from (``resume``: a run returned by this function, continued
-    from its end over ``length`` seconds with its copies, tolerance and tangent vector)."""
+    growth reaches ``+growth`` or ``-growth`` (its entry of ``growth``; see
+    :mod:`workbench.solver._templates.copies_hooks`); with ``variational`` the fiducial also
+    carries a tangent vector (the variational equations with saltation,
+    :mod:`workbench.solver._tangent`), so that both estimates follow one trajectory. Returns
+    the record ``times`` (s), every copy's accumulated log growth at them (renormalisations
+    plus the current separation), the tangent vector's (``variational``), renormalisation
+    counts since the start (``renormalisations``, of which ``shrinkages`` on shrinkage),
+    solver statistics, and the system and its end state to continue from (``resume``: a run
+    returned by this function, continued from its end over ``length`` seconds with its
+    copies, tolerance and tangent vector)."""
     pb = prep.problem
     n, na = pb.y0.size, pb.aux0.size
     scale = state_scale(pb)
@@ -101,6 +106,7 @@ def follow_copies(
         "total": total,
         "variational": tangent if variational else None,
         "renormalisations": counts,
+        "shrinkages": shrink_counts(res.AUX[-1], k),
         "stats": stats,
         "rtol": rtol,
         "system": system,

@@ -11,7 +11,7 @@ sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled
 """
 
 from workbench.solver._compile import TEMPLATE_MODULES, generated_source, jacobian_for
-from workbench.solver._copies import copies_problem, split_copies
+from workbench.solver._copies import copies_problem, shrink_counts, split_copies
 from workbench.solver._integrate import COMPILED_METHODS, METHODS, PAUSE_SECONDS, integrate
 from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
 from workbench.solver._result import RunResult, SolverError, Status
@@ -39,6 +39,7 @@ __all__ = [
     "generated_source",
     "integrate",
     "jacobian_for",
+    "shrink_counts",
     "split_copies",
     "state_scale",
     "tangent_columns",

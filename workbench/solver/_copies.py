@@ -8,8 +8,9 @@ import numpy as np
 from workbench.solver._compile import copies_for
 from workbench.solver._problem import Problem
 from workbench.solver._tangent import state_scale
+from workbench.solver._templates.copies_hooks import SLOTS
 
-__all__ = ["copies_problem", "split_copies"]
+__all__ = ["copies_problem", "shrink_counts", "split_copies"]
 
 
 def copies_problem(
@@ -24,11 +25,12 @@ def copies_problem(
     """The problem's model integrated for every row of ``Y`` (states) and ``AUX`` (discrete
     states) at once, from ``problem.t0``.
 
-    With ``separations`` (scaled, one per copy after the first) and ``growth`` (log growth
-    that triggers a renormalisation, one per copy after the first), copies 1.. are
-    renormalised towards copy 0; their accumulated log growth and renormalisation counts
-    follow the copies' discrete states in ``aux`` (see :func:`split_copies`). ``measured``
-    (default all) is how many leading states the separations are measured in.
+    With ``separations`` (scaled, one per copy after the first) and ``growth`` (log change,
+    one per copy after the first), copies 1.. are renormalised towards copy 0 where their
+    separation has grown by ``exp(growth)`` or shrunk by the same factor; their accumulated
+    log growth and renormalisation counts follow the copies' discrete states in ``aux`` (see
+    :func:`split_copies` and :func:`shrink_counts`). ``measured`` (default all) is how many
+    leading states the separations are measured in.
     """
     Y = np.atleast_2d(np.asarray(Y, dtype=float))
     AUX = np.atleast_2d(np.asarray(AUX, dtype=float))
@@ -42,7 +44,7 @@ def copies_problem(
     renorm = separations is not None
     ne = problem.event_direction.size
     p = [problem.p, state_scale(problem)]
-    aux0 = [AUX.ravel(), np.zeros(3 * (k - 1))]
+    aux0 = [AUX.ravel(), np.zeros(SLOTS * (k - 1))]
     direction = [np.tile(problem.event_direction, k)]
     if renorm:
         sep = np.broadcast_to(np.asarray(separations, dtype=float), (k - 1,))
@@ -53,7 +55,7 @@ def copies_problem(
                 "the first"
             )
         p.append(np.column_stack([sep, gro]).ravel())
-        direction.append(np.ones(k - 1, dtype=np.int64))
+        direction.append(np.ones(2 * (k - 1), dtype=np.int64))  # growth, shrinkage
     nm = n if measured is None else int(measured)
     meta = np.array([n, na, ne, k, problem.p.size, int(renorm), nm], dtype=np.int64)
     return Problem(
@@ -76,8 +78,20 @@ def split_copies(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """From a copies-system state and discrete state: the copies' states (k, n), discrete
     states (k, na), and for copies 1.. their accumulated log growth at renormalisations and
-    the number of renormalisations."""
-    na = (aux.size - 3 * (k - 1)) // k
+    the number of renormalisations (on growth and on shrinkage)."""
+    na = (aux.size - SLOTS * (k - 1)) // k
     A = aux[: k * na].reshape(k, na).copy()
-    extra = aux[k * na :].reshape(k - 1, 3) if k > 1 else np.zeros((0, 3))
+    extra = _renormalisation_states(aux, k)
     return y.reshape(k, -1).copy(), A, extra[:, 0].copy(), extra[:, 1].copy()
+
+
+def shrink_counts(aux: np.ndarray, k: int) -> np.ndarray:
+    """From a copies-system discrete state: for copies 1.. the number of their
+    renormalisations that were on shrinkage (included in :func:`split_copies`' counts)."""
+    return _renormalisation_states(aux, k)[:, 3].copy()
+
+
+def _renormalisation_states(aux: np.ndarray, k: int) -> np.ndarray:
+    """The discrete states (L, N, P, S) of copies 1.. (see
+    :mod:`workbench.solver._templates.copies_hooks`), shape (k - 1, SLOTS)."""
+    return aux[aux.size - SLOTS * (k - 1) :].reshape(k - 1, SLOTS)
