@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from workbench.study._route import branch_summary, indicators, settled
+from workbench.study._route_parts import branch_summary, indicators, settled
 
 __all__ = ["HELD_FACTORS", "end_bracket", "periodic_end"]
 
