@@ -515,6 +515,26 @@ def test_exponent_table_of_the_chaos_case_at_small_size():
     assert t.attrs["sum_check"] < 1e-2
 
 
+def _route_numbers(values, *, up, down, hysteresis, chained_seams) -> dict:
+    """The part of a route summary every route section needs (the numbers of a continued
+    sweep both ways), for the report tests below."""
+    return {
+        "status": "computed",
+        "parameter": "omega",
+        "values": values,
+        "cycles": [100, 3],
+        "chained_seams": chained_seams,
+        "cpu_time_continued_sweep": 120.0,
+        "wall_time": {"continued_sweep": 90.0},
+        "directions": {"up": up, "down": down},
+        "hysteresis": {
+            "values": hysteresis,
+            "tolerance": 0.05,
+            "differs": [int(v in hysteresis) for v in values],
+        },
+    }
+
+
 def test_route_section_says_where_and_how_the_periodic_motion_ends():
     """The route section is written from the numbers alone: the first loss of stability, the
     hysteresis, the agreement of the strobe period, the 0-1 test and the exponents."""
@@ -524,19 +544,14 @@ def test_route_section_says_where_and_how_the_periodic_motion_ends():
 
     pi = math.pi
     values = [1.0 * pi, 1.5 * pi, 2.0 * pi, 2.5 * pi]
-    route = {
-        "status": "computed",
-        "parameter": "omega",
-        "values": values,
-        "cycles": [100, 3],
-        "chained_seams": 1,
-        "cpu_time_continued_sweep": 120.0,
-        "wall_time": {"continued_sweep": 90.0},
-        "directions": {
-            "up": {"period": [1, 1, 0, 0], "spread": [0.0, 0.0, 0.2, 0.3], "K": [0, 0, 0.9, 0.95]},
-            "down": {"period": [1, 1, 0, 0], "spread": [0.0, 0.1, 0.2, 0.3], "K": [0, 0, 0.8, 0.9]},
-        },
-        "hysteresis": {"values": [1.5 * pi], "tolerance": 0.05, "differs": [0, 1, 0, 0]},
+    route = _route_numbers(
+        values,
+        up={"period": [1, 1, 0, 0], "spread": [0.0, 0.0, 0.2, 0.3], "K": [0, 0, 0.9, 0.95]},
+        down={"period": [1, 1, 0, 0], "spread": [0.0, 0.1, 0.2, 0.3], "K": [0, 0, 0.8, 0.9]},
+        hysteresis=[1.5 * pi],
+        chained_seams=1,
+    )
+    route |= {
         "branch": {
             "start": pi,
             "stop": 2.6 * pi,
@@ -604,19 +619,9 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     assert _last_periodic([1.0, 2.0], [0, 1]) is None
     pi = math.pi
     values = [1.8 * pi, 1.85 * pi, 1.9 * pi]
-    route = {
-        "status": "computed",
-        "parameter": "omega",
-        "values": values,
-        "cycles": [100, 3],
-        "chained_seams": 0,
-        "cpu_time_continued_sweep": 60.0,
-        "wall_time": {"continued_sweep": 40.0},
-        "directions": {
-            "up": {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]},
-            "down": {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]},
-        },
-        "hysteresis": {"values": [], "tolerance": 0.05, "differs": [0, 0, 0]},
+    sweep = {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]}
+    route = _route_numbers(values, up=sweep, down=dict(sweep), hysteresis=[], chained_seams=0)
+    route |= {
         "end": {
             "status": "computed",
             "bracket": [1.85 * pi, 1.9 * pi],

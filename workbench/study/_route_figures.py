@@ -38,25 +38,7 @@ def route_figures(study: Study, r: dict, directory: Path) -> list[Path]:
     tag = f"fig{study.paper_figures}" if study.paper_figures else study.name
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
     for ax, (label, (var, where)) in zip(axes.ravel(), CLEARANCE_COORDINATES.items(), strict=True):
-        for d in ("up", "down"):
-            da = select(ds.sel(direction=d), var, where).transpose(param, ...)
-            c = np.array(
-                [
-                    v if param == "clearance" else clearance_of(scene, where["joint"])
-                    for v in da[param].values
-                ]
-            )
-            y = da.values.reshape(da.shape[0], -1) / c[:, None]
-            x = np.broadcast_to(da[param].values[:, None] * scale, y.shape)
-            ax.plot(
-                x.ravel(),
-                y.ravel(),
-                ".",
-                ms=2.5,
-                color=_COLOURS[d],
-                alpha=0.5,
-                label=f"continued {d}",
-            )
+        _samples(ax, ds, param, var, where, scene, scale)
         if branch is not None:
             _branch(ax, branch, param, scale, _STATES[label], scene, where["joint"])
         ax.set_xlabel(xlabel, fontsize=8)
@@ -75,30 +57,39 @@ def route_figures(study: Study, r: dict, directory: Path) -> list[Path]:
     plt.close(fig)
     paths = [first, _indicators(r, directory / f"{tag}-route-indicators.png", param, scale, xlabel)]
     if r.get("end", {}).get("status") == "computed":
-        paths.append(
-            _end(study, r["end"], directory / f"{tag}-route-end.png", param, scale, xlabel)
-        )
+        end = directory / f"{tag}-route-end.png"
+        paths.append(_end(study, scene, r["end"], end, param, scale, xlabel))
     return paths
 
 
-def _end(study: Study, e: dict, path: Path, param: str, scale: float, xlabel: str) -> Path:
+def _samples(ax, ds, param: str, var: str, where: dict, scene, scale: float) -> None:
+    """A continued sweep's strobe samples of ``var`` at ``where``, both ways, in units of the
+    clearance, against the parameter."""
+    for d in ("up", "down"):
+        da = select(ds.sel(direction=d), var, where).transpose(param, ...)
+        c = np.array(
+            [
+                v if param == "clearance" else clearance_of(scene, where["joint"])
+                for v in da[param].values
+            ]
+        )
+        y = da.values.reshape(da.shape[0], -1) / c[:, None]
+        x = np.broadcast_to(da[param].values[:, None] * scale, y.shape)
+        ax.plot(
+            x.ravel(), y.ravel(), ".", ms=2.5, color=_COLOURS[d], alpha=0.5, label=f"continued {d}"
+        )
+
+
+def _end(study: Study, scene, e: dict, path: Path, param: str, scale: float, xlabel: str) -> Path:
     """Where the periodic motion ends: the refined continued sweep's strobe samples of x1 with
     the orbit continued from its last periodic value, the orbit's smallest penetration and its
     largest |multiplier|."""
-    scene = study.cases[next(iter(study.cases))]
     var, where = CLEARANCE_COORDINATES["x1"]
     ds = open_run(e["archive"])
     b = e.get("branch")
     fig, axes = plt.subplots(3 if b else 1, 1, figsize=(8, 8.4 if b else 3.2), sharex=True)
     axes = np.atleast_1d(axes)
-    c = clearance_of(scene, where["joint"])
-    for d in ("up", "down"):
-        da = select(ds.sel(direction=d), var, where).transpose(param, ...)
-        y = da.values.reshape(da.shape[0], -1) / c
-        x = np.broadcast_to(da[param].values[:, None] * scale, y.shape)
-        axes[0].plot(
-            x.ravel(), y.ravel(), ".", ms=2.5, color=_COLOURS[d], alpha=0.5, label=f"continued {d}"
-        )
+    _samples(axes[0], ds, param, var, where, scene, scale)
     axes[0].set_ylabel(f"x1: strobe samples of {var} at {where['joint']} / c [1]", fontsize=8)
     if b:
         branch = open_run(b["archive"])
