@@ -5,14 +5,17 @@ bifurcation in closed form; and the continued sweep's own guarantees (hysteresis
 the same numbers whatever the workers, seams chained where they disagree, resumable)."""
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 from _harmonic_balance import folds as hb_folds
 from scipy.optimize import brentq
 
 import workbench
+from workbench.analysis import ConvergenceWarning
 from workbench.campaign import CampaignError
 from workbench.cli import main
 from workbench.continuation import (
@@ -20,7 +23,9 @@ from workbench.continuation import (
     chaos_map,
     continue_orbit,
     continued_sweep,
+    lle_cycles,
     periodic_orbit,
+    point_exponent,
     strobe_period,
 )
 from workbench.models.stop_oscillator import grazing_amplitude
@@ -372,6 +377,13 @@ def test_a_chaos_map_says_which_exponents_converged(tmp_path):
     )
     flags = maps.lle_converged.attrs["flag_meanings"].split()
     assert maps.lle_converged.attrs["units"] == "1" and flags == ["not_converged", "converged"]
+    # CF flags are integers in the archive as in the worker (they were stored as float64)
+    for name, dtype in [("lle_converged", np.int8), ("lle_unmet", np.int16),
+                        ("lle_status", np.int8), ("lle_method", np.int8),
+                        ("strobe_period", np.int16)]:  # fmt: skip
+        assert (
+            maps[name].dtype == dtype and xr.open_dataset(tmp_path / "map.nc")[name].dtype == dtype
+        )
     periodic, chaotic = maps.sel(gamma=0.2), maps.sel(gamma=0.5)
     assert int(periodic.strobe_period) == 1 and int(periodic.lle_converged) == 1
     assert int(periodic.lle_unmet) == 0 and abs(float(periodic.lle) + 0.15) < 1e-6
@@ -380,9 +392,14 @@ def test_a_chaos_map_says_which_exponents_converged(tmp_path):
     bits = dict(zip(maps.lle_unmet.attrs["flag_meanings"].split(),
                     maps.lle_unmet.attrs["flag_masks"], strict=True))  # fmt: skip
     assert int(chaotic.lle_unmet) == bits["error_target"]
+    short = workbench.load_scene(dict(base, parameters={"delta": 0.3, "gamma": 0.5}))
+    with pytest.warns(ConvergenceWarning, match="has not converged: error target"):
+        point_exponent(short, period=0, cycles=lle_cycles(short))
     long = workbench.load_scene(dict(base, parameters={"delta": 0.3, "gamma": 0.5},
                                      run={"cycles": 3000, "transient_cycles": 150}))  # fmt: skip
-    ind = chaos_indicators(long, workbench.simulate(long))
+    with warnings.catch_warnings():  # converged: no warning, also not for the skipped check
+        warnings.simplefilter("error", ConvergenceWarning)
+        ind = chaos_indicators(long, workbench.simulate(long))
     assert int(ind.lle_converged) == 1 and int(ind.lle_unmet) == 0
     assert float(ind.lle) > 20 * float(ind.lle_stderr) > 0
     assert ind.attrs["lle_detail"] == "tolerance check: not run (check=False)"
@@ -390,16 +407,19 @@ def test_a_chaos_map_says_which_exponents_converged(tmp_path):
 
 def test_an_exponents_unmet_conditions():
     """Which conditions of an estimator's ``failed`` text count against a map's exponent: all
-    but those the map leaves out on purpose (the copies' variational cross-check); a bound and
+    but those the map leaves out on purpose (the run at rtol / 100); a bound and
     a failed run are never converged; an unknown condition is 'other', not ignored."""
     from workbench.continuation import PointExponent
-    from workbench.continuation._exponent import NOT_RUN, _unmet
+    from workbench.continuation._exponent import NOT_RUN, UNMET, _unmet
 
-    text = "variants: spread 6.1 %\nvariational: not run (variational=False)"
+    text = "variants: spread 6.1 %\ntolerance check: not run (check=False)"
     assert _unmet(text, NOT_RUN["copies"]) == ("variants",)
-    assert _unmet("variational: not run (variational=False)", NOT_RUN["copies"]) == ()
+    assert _unmet("tolerance check: not run (check=False)", NOT_RUN["copies"]) == ()
     assert _unmet("a new check: no", NOT_RUN["copies"]) == ("other",)
-    assert _unmet("tolerance check: x", NOT_RUN["copies"]) == ("tolerance check",)
+    disagree = "variational: the variational exponent on the same trajectories reads 30 1/s"
+    assert _unmet(disagree, NOT_RUN["copies"]) == ("variational",)
+    assert PointExponent(30.0, 5.0, "copies", unmet=("variational",)).unmet_code == 1 << 7
+    assert UNMET[-1] == "other"
     assert PointExponent(-1.0, 0.01, "floquet").converged
     bound = PointExponent(-3.8, math.nan, "floquet", bound=True)
     assert not bound.converged and bound.unmet == ("upper bound",) and bound.unmet_code == 32

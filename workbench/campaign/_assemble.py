@@ -148,11 +148,11 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
         data_vars[name] = (pdims, gather(name, missing).astype(dtype), stat_attrs(name))
     data_vars["point_wall_time"] = (pdims, gather("point_wall_time", np.nan), POINT_WALL_ATTRS)
     for name, (tail, attrs) in _measured_variables(scene, blocks).items():
-        out = np.full((n,) + tail[1], np.nan)
-        for b in blocks:
-            if name in b.data_vars:
-                out[b["point"].values] = b[name].values
-        data_vars[name] = (pdims + tail[0], out.reshape(shape + tail[1]), attrs)
+        data_vars[name] = (
+            pdims + tail[0],
+            _measured(name, tail[1], n, blocks).reshape(shape + tail[1]),
+            attrs,
+        )
 
     params = parameter_coords(
         model, scene.resolved_parameters, skip=pdims, taken=[*coords, *data_vars]
@@ -182,6 +182,20 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
     )
     ds.attrs.update(grid_attrs)
     return ds
+
+
+def _measured(name: str, tail: tuple[int, ...], n: int, blocks: list[xr.Dataset]) -> np.ndarray:
+    """One per-point measurement over the ``n`` points: in its own dtype where every point has
+    it (an integer flag stays an integer, as CF flags must), else as floats, NaN where a point
+    has none."""
+    values = [(b["point"].values, b[name].values) for b in blocks if name in b.data_vars]
+    dtypes = {v.dtype for _, v in values}
+    covered = sum(len(idx) for idx, _ in values) == n
+    keep = len(dtypes) == 1 and covered and next(iter(dtypes)).kind in "biu"
+    out = np.full((n,) + tail, 0 if keep else np.nan, dtype=next(iter(dtypes)) if keep else float)
+    for idx, v in values:
+        out[idx] = v
+    return out
 
 
 def _measured_variables(scene: Scene, blocks: list[xr.Dataset]) -> dict:

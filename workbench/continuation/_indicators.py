@@ -10,11 +10,11 @@ orbit Newton finds from the state where the run ended (a trajectory method canno
 strongly contracting orbit: :mod:`workbench.continuation._exponent`), else over
 :func:`lle_cycles` forcing periods after the scene's transient from the variational equations
 with saltation for a model with an analytic Jacobian, or by the linearised two-trajectory method
-(the mechanisms, whose tangent system took 50x the bare model's steps on a nine-bar orbit in
-lasting contact, :mod:`workbench.continuation._strobe`). A failure of the exponent's runs is
-recorded (``lle_status``), not raised, so one hard point does not stop a map; whether the
-exponent converged is recorded beside it (``lle_converged``, and ``lle_unmet``: which of its
-conditions did not hold, :data:`workbench.continuation._exponent.UNMET`).
+(the mechanisms), checked by the variational exponent on the same trajectories. A failure of
+the exponent's runs is recorded (``lle_status``), not raised, so one hard point does not stop a
+map; whether the exponent converged is recorded beside it (``lle_converged``, and
+``lle_unmet``: which of its conditions did not hold,
+:data:`workbench.continuation._exponent.UNMET`).
 """
 
 from __future__ import annotations
@@ -62,8 +62,9 @@ LLE_CONVERGED = {
     "flag_values": np.array([0, 1], np.int8),
     "flag_meanings": "not_converged converged",
     "comment": "1 where every convergence condition the map runs holds (lle_unmet = 0): "
-    "trajectory methods: the error target, the separation and growth variants and the check "
-    "at rtol / 100 (copies), the error target and the sum check (variational); floquet: the "
+    "trajectory methods: the error target, the separation and growth variants and the "
+    "variational exponent on the same trajectories (copies), the error target and the sum "
+    "check (variational); floquet: the "
     "exponent moves by at most 20 % with its check; never for an upper bound or a failed "
     "run. Not run in a map (their cost): "
     + "; ".join(f"{m}: {', '.join(c)}" for m, c in NOT_RUN.items()),
@@ -78,7 +79,8 @@ LLE_UNMET = {
     "variants disagree; tolerance_check: the run at rtol / 100 disagrees; sum_check: the "
     "spectrum's sum and the integrated volume rate differ; floquet_check: the Floquet exponent "
     "moves by more than 20 % with its check; upper_bound: see lle_status; failed: the "
-    "exponent's runs failed; other: a condition of the estimator not named here",
+    "exponent's runs failed; variational: the copies' exponent and the variational one on the "
+    "same trajectories differ; other: a condition of the estimator not named here",
 }
 
 
