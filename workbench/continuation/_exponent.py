@@ -85,8 +85,9 @@ NOISE_DROP = 10.0
 #: they are left out of ``converged`` (every other condition must hold)
 NOT_RUN = {"variational": ("tolerance check",), "copies": ("tolerance check",)}
 #: why an exponent is not converged, in the order of the bits of ``PointExponent.unmet_code``
-#: (the trajectory estimators' condition names, Floquet's check, the bound, a failed run, and
-#: any condition not named here)
+#: (the trajectory estimators' condition names, Floquet's check, the bound, a failed run, any
+#: condition not named here, and the copies' variational check, added last so that the older
+#: bits keep their meaning)
 UNMET = (
     "error target",
     "variants",
@@ -95,8 +96,8 @@ UNMET = (
     "floquet check",
     "upper bound",
     "failed",
-    "variational",
     "other",
+    "variational",
 )
 
 
