@@ -43,20 +43,23 @@ studies: $(STAMP)
 	$(PY) docs/hooks.py $(OUT)/studies
 
 # Chaos indicators of the nine-bar over (omega, c) and (c, c_f): campaigns whose workers measure
-# the strobe period, 0-1 K and largest exponent (their cost: `python benchmarks/continuation.py
-# --parts chaos_maps`, recorded in benchmarks/RESULTS.md). The (c, c_f) map runs under GNU
-# time (its CPU) and its indicators go to data/clearance_friction_map.nc (docs/continuation.md
-# quotes them; tests/test_data.py checks the quotes).
+# the strobe period, 0-1 K and largest exponent (their cost per point: `python
+# benchmarks/continuation.py --parts chaos_maps`, recorded in benchmarks/RESULTS.md). Each map
+# runs under GNU time (its CPU, with the load before and after) and its indicators go to
+# data/<map>_map.nc (docs/continuation.md quotes them; tests/test_data.py checks the quotes),
+# its figure to docs/figures/chaos-map-<map>.png (shown on the site).
+MAPS := omega_clearance clearance_friction
 chaos-maps: $(STAMP)
-	$(VENV)/bin/workbench chaos-map studies/chaos_maps/omega_clearance.toml --workers 2 -q \
-		-o $(OUT)/chaos_maps/omega_clearance.nc --figure $(OUT)/chaos_maps/omega_clearance.png
-	mkdir -p $(OUT)/chaos_maps && uptime > $(OUT)/chaos_maps/clearance_friction.log
-	/usr/bin/time -v $(VENV)/bin/workbench chaos-map studies/chaos_maps/clearance_friction.toml \
-		--workers 2 -q -o $(OUT)/chaos_maps/clearance_friction.nc \
-		--figure $(OUT)/chaos_maps/clearance_friction.png >> $(OUT)/chaos_maps/clearance_friction.log 2>&1
-	uptime >> $(OUT)/chaos_maps/clearance_friction.log
-	$(PY) data/regenerate.py --chaos-map $(OUT)/chaos_maps/clearance_friction.nc \
-		$(OUT)/chaos_maps/clearance_friction.log
+	mkdir -p $(OUT)/chaos_maps
+	for m in $(MAPS); do \
+		uptime > $(OUT)/chaos_maps/$$m.log && \
+		/usr/bin/time -v $(VENV)/bin/workbench chaos-map studies/chaos_maps/$$m.toml --workers 2 \
+			-q -o $(OUT)/chaos_maps/$$m.nc --figure $(OUT)/chaos_maps/$$m.png \
+			>> $(OUT)/chaos_maps/$$m.log 2>&1 && \
+		uptime >> $(OUT)/chaos_maps/$$m.log && \
+		$(PY) data/regenerate.py --chaos-map $(OUT)/chaos_maps/$$m.nc $(OUT)/chaos_maps/$$m.log && \
+		cp $(OUT)/chaos_maps/$$m.png docs/figures/chaos-map-$$m.png || exit 1; \
+	done
 
 # The small archives the notebooks open (tests/test_data.py fails when they are stale), and the
 # notebooks executed in place on them (committed with their outputs: the site shows them).

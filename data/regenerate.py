@@ -11,15 +11,17 @@ Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), th
 ``make notebooks``. ``tests/test_data.py`` fails when the archives no longer match what the
 code writes.
 
-- ``clearance_friction_map.nc``: the chaos map of ``studies/chaos_maps/clearance_friction.toml``
-  (5 x 5 points; ``make chaos-maps`` computes it, ~1 h of CPU) without its strobe samples: the
+- ``omega_clearance_map.nc`` and ``clearance_friction_map.nc``: the chaos maps of
+  ``studies/chaos_maps/*.toml`` (6 x 3 and 5 x 5 points; ``make chaos-maps`` computes them,
+  each of order an hour of CPU) without their strobe samples: the
   per-point indicators (strobe period, 0-1 K, largest exponent with its error, method, status
   and convergence flags), the points' status and solver statistics, and the cost of the run
   from its log (attributes ``measured_*``: CPU and wall time of GNU ``time -v``, the 1-minute
-  load before and after from ``uptime``). docs/continuation.md quotes it and
-  ``tests/test_data.py`` checks those numbers against it. Run after ``make chaos-maps`` under
+  load before and after from ``uptime``). docs/continuation.md quotes them and
+  ``tests/test_data.py`` checks those numbers against them. Run after ``make chaos-maps`` under
   ``/usr/bin/time -v`` with ``uptime`` before and after in LOG:
-  ``python data/regenerate.py --chaos-map out/chaos_maps/clearance_friction.nc LOG``.
+  ``python data/regenerate.py --chaos-map out/chaos_maps/clearance_friction.nc LOG`` (the
+  archive is named after the map: ``data/<map>_map.nc``).
 """
 
 from __future__ import annotations
@@ -93,10 +95,7 @@ def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
 
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--chaos-map"]:
-        print(
-            chaos_map_summary(
-                Path(sys.argv[2]), Path(sys.argv[3]), DATA / "clearance_friction_map.nc"
-            )
-        )
+        source = Path(sys.argv[2])
+        print(chaos_map_summary(source, Path(sys.argv[3]), DATA / f"{source.stem}_map.nc"))
     else:
         main()

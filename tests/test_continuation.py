@@ -535,3 +535,33 @@ def test_a_held_onset_velocity_makes_a_family_of_lasting_contact_orbits():
     assert round(largest[0], 3) == 0.013
     spread = np.ptp(np.array(positions), axis=0).max()
     assert 1e-7 < spread < 1e-6, spread  # m (6.3e-7 measured): within 1 % of c = 1e-4 m
+
+
+@pytest.mark.slow  # ~2 min of CPU: the copies alone over 4 x 40 cycles, then the map's exponent
+def test_the_copies_alone_go_wrong_on_the_chaotic_nine_bar_and_the_tangent_vector_catches_it():
+    """At omega = 2.2 pi (Fig. 32's scene, c = 0.1 mm, c_f = 0.01) the two-trajectory copies
+    integrated alone read an exponent whose separation and growth variants spread by more than
+    20 % after 4 x 40 cycles; with the tangent vector carried by the same trajectories (what a
+    map point and a route exponent run: point_exponent) the copies and the variational
+    exponent agree and the estimate converges within 4 x 10 cycles. docs/continuation.md
+    quotes both."""
+    from workbench.analysis import lle_from_equations
+
+    scene = workbench.load_scene(ROOT / "studies" / "bifurcation_speed" / "sweep.toml")
+    point = scene.replace(
+        sweep={},
+        solver=dict(scene.solver, method="dop853"),
+        run={"cycles": 40, "transient_cycles": 30},
+    ).with_parameters(omega=2.2 * math.pi)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        alone = lle_from_equations(
+            point, cycles=40, budget=160, check=False, tighten=False, variational=False
+        )
+    assert float(alone.spread) > 0.2 and not bool(alone.converged)
+    assert round(float(alone.lle), 1) == 30.4 and round(float(alone.stderr), 1) == 5.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        e = point_exponent(point, period=0, cycles=40)
+    assert e.method == "copies" and e.converged and e.unmet == ()
+    assert round(e.value, 1) == 36.7 and round(e.error, 1) == 1.0

@@ -31,11 +31,11 @@ variational one for a model with an analytic Jacobian
 (:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms,
 :func:`workbench.analysis.lle_from_equations`) with the variational exponent carried by the
 same trajectories as its check, with its batch-means standard error. The copies alone are not
-enough on the nine-bar: at omega = 2 pi, c = 60 um, c_f = 0.25 they read 314 +- 86 1/s with
-one start at 56 (variants spread 27 %) where copies and tangent vector together read 398 +- 5
-and 396 +- 5 (variants 0.2 %, 4 x 10 cycles each); the tangent vector in the error norm takes
-~35 % more steps, on which the copies' differences stay accurate, and at 2.2 pi, c = 0.1 mm
-the copies alone read 30.4 +- 5.0 (variants 25 %) against 36.7 +- 1.0 with it (2 %).
+enough on the nine-bar: at omega = 2.2 pi, c = 0.1 mm they read 30.4 +- 5.0 1/s after 4 x 40
+cycles (variants spread 25 %) against 36.7 +- 1.0 with the tangent vector after 4 x 10 (2 %);
+at omega = 2 pi, c = 60 um, c_f = 0.25, 314 +- 86 with one start at 56 (27 %) against 398 +- 5
+(0.2 %). The tangent vector in the error norm takes ~35 % more steps, on which the copies'
+differences stay accurate.
 Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve with the
 model's Jacobian, not the derived system's. A point's budget leaves out one check of each
 estimator (:data:`NOT_RUN`: the run at rtol / 100); the estimate is ``converged`` where every
