@@ -84,3 +84,71 @@ def test_a_stale_archive_fails_the_check(tmp_path):
     stale.attrs["format_version"] = np.int32(1)
     with pytest.raises(AssertionError):
         _same_structure(stale, fresh, "stale")
+
+
+MAPS = ("omega_clearance", "clearance_friction")
+
+
+def _map_quotes(maps: xr.Dataset) -> list[str]:
+    """What docs/continuation.md says of a chaos map (``make chaos-maps``), from its archive:
+    the strobe's periods, the 0-1 test's K and the exponents where there is no period, how many
+    exponents did not converge and why (the bits of ``lle_unmet``), and what the map cost."""
+    period = maps.strobe_period.values
+    none = period == 0
+    lle, unmet = maps.lle.values, maps.lle_unmet.values.astype(int)
+    bits = dict(zip(maps.lle_unmet.attrs["flag_meanings"].split(),
+                    maps.lle_unmet.attrs["flag_masks"], strict=True))  # fmt: skip
+    K = maps.zero_one_K.values
+    a = maps.attrs
+    quotes = [
+        f"{int((period >= 1).sum())} periodic",
+        f"{int(none.sum())} with no period up to 16",
+        f"{int((maps.lle_converged.values == 0).sum())} of the {maps.lle.size} exponents did "
+        "not converge",
+        f"{int((maps.lle_status.values == 2).sum())} upper bounds",
+        f"{a['measured_cpu_time'] / 60:.0f} min of CPU",
+        f"{a['measured_wall_time'] / 60:.0f} min wall",
+        f"load {a['measured_load_before']:.1f} before and {a['measured_load_after']:.1f} after",
+    ]
+    if none.any():
+        quotes += [
+            f"K {np.nanmin(K[none]):.2f}-{np.nanmax(K[none]):.2f}",
+            f"exponents {np.nanmin(lle[none]):.0f}-{np.nanmax(lle[none]):.0f} 1/s",
+        ]
+    for name in ("error_target", "variants", "variational"):
+        quotes.append(f"{name} {int(((unmet & bits[name]) != 0).sum())}")
+    return quotes
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_the_chaos_maps_the_docs_quote(name):
+    """data/<map>_map.nc is the indicators of studies/chaos_maps/<map>.toml's chaos map
+    (``make chaos-maps``, which runs data/regenerate.py --chaos-map) in today's vocabulary,
+    and docs/continuation.md quotes its numbers and its cost."""
+    from workbench.continuation._indicators import (
+        LLE_CONVERGED,
+        LLE_METHOD,
+        LLE_STATUS,
+        LLE_UNMET,
+    )
+
+    path = DATA / f"{name}_map.nc"
+    maps = workbench.open_run(path)
+    assert path.stat().st_size < 100_000
+    scene = workbench.load_scene(DATA.parent / "studies" / "chaos_maps" / f"{name}.toml")
+    assert workbench.scene_from_toml(maps.attrs["scene"]).to_toml() == scene.to_toml()
+    for var, attrs in [
+        ("lle_converged", LLE_CONVERGED),
+        ("lle_unmet", LLE_UNMET),
+        ("lle_status", LLE_STATUS),
+        ("lle_method", LLE_METHOD),
+    ]:
+        assert set(maps[var].attrs) == set(attrs), var
+        for key, value in attrs.items():
+            np.testing.assert_array_equal(maps[var].attrs[key], value, err_msg=f"{var} {key}")
+        assert maps[var].dtype.kind == "i", var  # CF flags are integers
+    assert (maps.status.values == 0).all()
+    text = " ".join((DATA.parent / "docs" / "continuation.md").read_text().split())
+    section = text[text.index(f"`{name}`") :]
+    for quote in _map_quotes(maps):
+        assert quote in section[:2000], quote
