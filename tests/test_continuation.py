@@ -480,7 +480,8 @@ def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
         run={"cycles": 10, "transient_cycles": 20},
         solver=dict(scene.solver, method="dop853"),  # the old code's trajectory path
     ).with_parameters(omega=0.5 * math.pi, clearance=2e-5)
-    ind = chaos_indicators(point, workbench.simulate(point))
+    with pytest.warns(ConvergenceWarning, match="has not converged: upper bound"):
+        ind = chaos_indicators(point, workbench.simulate(point))
     assert int(ind.strobe_period) == 1
     assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "floquet"
     assert ind.lle_status.attrs["flag_meanings"].split()[int(ind.lle_status)] == "upper_bound"
@@ -505,7 +506,8 @@ def test_an_implicit_scene_method_still_gets_an_exponent():
             "record": {"samples_per_period": 1},
         }
     )
-    ind = chaos_indicators(point, workbench.simulate(point))
+    with pytest.warns(ConvergenceWarning, match="has not converged: error target"):
+        ind = chaos_indicators(point, workbench.simulate(point))
     assert int(ind.strobe_period) == 0 and int(ind.lle_status) == 0
     assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "variational"
     assert float(ind.lle) > 3 * float(ind.lle_stderr) > 0
