@@ -134,3 +134,23 @@ def test_fig32_cost_is_the_newest_benchmark_record():
     assert f"costs {brute.group(1)} min of CPU for all 300, {brute.group(2)} min" in page
     assert f"takes {brute.group(3)}x less CPU" in page
     assert float(wall) <= 10.0  # the issue's target (issue 25 item 6)
+
+
+def test_the_newton_step_cost_is_the_newest_benchmark_record():
+    """docs/continuation.md quotes the newest ``continuation.py --parts newton`` entry of
+    benchmarks/RESULTS.md: the CPU time of one Newton step on the nine-bar's branch (map and
+    Jacobian, parameter derivative) at each omega it measured, and that record's commit."""
+    records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
+    newest = [r for r in records if r.startswith("continuation.py") and "Newton step at" in r][-1]
+    steps = re.findall(
+        r"Newton step at omega = ([\d.]+) pi \(copies\): map and Jacobian ([\d.]+) s CPU .*?"
+        r"parameter derivative ([\d.]+) s",
+        newest,
+    )
+    commit = re.search(r"commit (\w+)", newest).group(1)
+    page = " ".join((DOCS / "continuation.md").read_text().split())
+    omegas, maps, derivatives = (" / ".join(col) for col in zip(*steps, strict=True))
+    assert f"newton`, at {commit}):" in page
+    assert f"costs {maps} s of CPU at omega = {omegas} pi" in page
+    assert f"its derivative in omega {derivatives} s more" in page
+    assert max(float(m) + float(d) for _, m, d in steps) < 10.0  # seconds (issue 25 item 6)
