@@ -11,9 +11,9 @@ Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), th
 ``make notebooks``. ``tests/test_data.py`` fails when the archives no longer match what the
 code writes.
 
-- ``omega_clearance_map.nc`` and ``clearance_friction_map.nc``: the chaos maps of
-  ``studies/chaos_maps/*.toml`` (6 x 3 and 5 x 5 points; ``make chaos-maps`` computes them,
-  each of order an hour of CPU) without their strobe samples: the
+- ``<map>_map.nc``: a chaos map of ``studies/chaos_maps/<map>.toml`` (``make chaos-maps``
+  computes both, each of order an hour of CPU; data/ ships ``clearance_friction_map.nc``, the
+  5 x 5 map over c and c_f) without its strobe samples: the
   per-point indicators (strobe period, 0-1 K, largest exponent with its error, method, status
   and convergence flags), the points' status and solver statistics, and the cost of the run
   from its log (attributes ``measured_*``: CPU and wall time of GNU ``time -v``, the 1-minute
