@@ -108,13 +108,20 @@ def test_key_figures_are_the_reports():
     assert committed <= set(hooks.KEY_FIGURES)
 
 
+def _newest_continuation_record(marker: str) -> tuple[str, str, str]:
+    """The newest ``continuation.py`` entry of benchmarks/RESULTS.md that contains ``marker``,
+    its commit, and docs/continuation.md with its whitespace collapsed."""
+    records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
+    newest = [r for r in records if r.startswith("continuation.py") and marker in r][-1]
+    commit = re.search(r"commit (\w+)", newest).group(1)
+    return newest, commit, " ".join((DOCS / "continuation.md").read_text().split())
+
+
 def test_fig32_cost_is_the_newest_benchmark_record():
     """docs/continuation.md quotes the newest ``continuation.py --parts fig32`` entry of
     benchmarks/RESULTS.md (the cost of the paper's Fig. 32 continued): each number it gives is
     that record's."""
-    records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
-    fig32 = [r for r in records if r.startswith("continuation.py") and "continued sweep (up)" in r]
-    newest = fig32[-1]
+    newest, commit, page = _newest_continuation_record("continued sweep (up)")
     sweep = re.search(
         r"workers' CPU ([\d.]+) min, longest segment ([\d.]+) min; wall ([\d.]+) min on 2 "
         r"workers \(load ([\d.]+) -> ([\d.]+)\)",
@@ -125,8 +132,6 @@ def test_fig32_cost_is_the_newest_benchmark_record():
         r"([\d.]+)x less CPU",
         newest,
     )
-    commit = re.search(r"commit (\w+)", newest).group(1)
-    page = " ".join((DOCS / "continuation.md").read_text().split())
     cpu, longest, wall, load0, load1 = sweep.groups()
     assert f"at {commit}): the 300 values" in page
     assert f"took {wall} min wall on 2 workers ({cpu} min of the workers' CPU" in page
@@ -140,15 +145,12 @@ def test_the_newton_step_cost_is_the_newest_benchmark_record():
     """docs/continuation.md quotes the newest ``continuation.py --parts newton`` entry of
     benchmarks/RESULTS.md: the CPU time of one Newton step on the nine-bar's branch (map and
     Jacobian, parameter derivative) at each omega it measured, and that record's commit."""
-    records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
-    newest = [r for r in records if r.startswith("continuation.py") and "Newton step at" in r][-1]
+    newest, commit, page = _newest_continuation_record("Newton step at")
     steps = re.findall(
         r"Newton step at omega = ([\d.]+) pi \(copies\): map and Jacobian ([\d.]+) s CPU .*?"
         r"parameter derivative ([\d.]+) s",
         newest,
     )
-    commit = re.search(r"commit (\w+)", newest).group(1)
-    page = " ".join((DOCS / "continuation.md").read_text().split())
     omegas, maps, derivatives = (" / ".join(col) for col in zip(*steps, strict=True))
     assert f"newton`, at {commit}):" in page
     assert f"costs {maps} s of CPU at omega = {omegas} pi" in page
