@@ -17,6 +17,7 @@ from workbench.plot import (
     CoarseSamplingWarning,
     bifurcation_figure,
     campaign_figure,
+    chaos_map_figure,
     run_figures,
     timeseries_figure,
     work_precision_figure,
@@ -75,6 +76,28 @@ def test_small_values_are_shown_in_micrometres_without_an_offset():
     legend = pen.get_legend().get_window_extent(renderer)
     assert legend.x0 >= pen.get_window_extent(renderer).x1
     assert "(Chen et al. 2019, Sec. 4.2)" in fig._suptitle.get_text().splitlines()[-1]
+    plt.close(fig)
+
+
+def test_a_chaos_map_shows_the_clearance_in_micrometres_and_keeps_a_given_scale():
+    c = np.array([2e-5, 6e-5, 1e-4])
+    omega = np.pi * np.array([0.5, 1.0])
+    maps = xr.Dataset(
+        {"zero_one_K": (("omega", "clearance"), [[0.1, 0.2, 0.9], [0.95, 1.0, 0.99]])},
+        coords={
+            "omega": ("omega", omega, {"units": "rad s-1"}),
+            "clearance": ("clearance", c, {"units": "m", "long_name": "radial clearance"}),
+        },
+        attrs={"campaign_dims": "omega clearance"},
+    )
+    fig = chaos_map_figure(maps, scales={"omega": 1 / np.pi}, labels={"omega": "omega / pi"})
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "omega / pi"
+    assert ax.get_ylabel() == "radial clearance [µm]"
+    assert ax.get_ylim() == pytest.approx((0.0, 120.0))  # cells around 20, 60, 100 µm
+    assert ax.get_xlim() == pytest.approx((0.25, 1.25))
+    assert ax.yaxis.get_offset_text().get_text() == ""
     plt.close(fig)
 
 

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, plt
+from workbench.plot._base import axis_label, display_scale, plt
 
 __all__ = ["branch_figure", "chaos_map_figure", "LABEL_MARKS"]
 
@@ -139,10 +139,11 @@ def chaos_map_figure(
     """Maps of chaos indicators over the two parameter dims of a campaign (from
     :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
     x axis. ``scales`` multiplies a dim's values (e.g. ``{"omega": 1 / pi}``), ``labels``
-    names its axis. On the exponent's map, hatched cells hold an exponent that did not converge
-    (``lle_converged`` 0; ``lle_unmet`` says why), a "less or equal" sign marks an upper bound
-    (``lle_status`` 2) and "x" a failed exponent; a legend below the panel says so where any
-    cell is marked."""
+    names its axis; a dim without a scale is shown in a readable SI prefix (a clearance in µm,
+    :func:`display_scale`). On the exponent's map, hatched cells hold an exponent that did not
+    converge (``lle_converged`` 0; ``lle_unmet`` says why), a "less or equal" sign marks an
+    upper bound (``lle_status`` 2) and "x" a failed exponent; a legend below the panel says so
+    where any cell is marked."""
     scales = dict(scales or {})
     labels = dict(labels or {})
     dims = maps.attrs["campaign_dims"].split()
@@ -151,8 +152,12 @@ def chaos_map_figure(
     xd, yd = dims
     shown = [v for v in indicators if v in maps]
     fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.8), squeeze=False)
-    x = maps[xd].values * scales.get(xd, 1.0)
-    y = maps[yd].values * scales.get(yd, 1.0)
+    for d in (xd, yd):
+        if d not in scales:
+            scales[d], units = display_scale(maps[d].values, maps[d].attrs.get("units"))
+            labels.setdefault(d, axis_label(maps[d], units))
+    x = maps[xd].values * scales[xd]
+    y = maps[yd].values * scales[yd]
     for ax, name in zip(axes[0], shown, strict=True):
         da = maps[name].transpose(yd, xd)
         if name == "strobe_period":
