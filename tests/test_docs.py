@@ -94,6 +94,22 @@ def test_docs_command_parses(line):
     assert parsed.command == args[0]
 
 
+@pytest.mark.parametrize("page", [ROOT / "README.md", DOCS / "getting-started.md"], ids=str)
+def test_every_command_is_shown(page):
+    """The command-line tours list every subcommand ``workbench --help`` has."""
+    from workbench.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    shown = {
+        line.split()[1]
+        for lang, code in FENCE.findall(page.read_text())
+        if lang == "sh"
+        for line in code.splitlines()
+        if line.startswith("workbench ") and not line.startswith("workbench --")
+    }
+    assert sorted(set(sub.choices) - shown) == [], page.name
+
+
 def test_key_figures_are_the_reports():
     """The figures the site commits beside the report (docs/hooks.py) are ones the report cites,
     and each one committed is in that list (make studies copies them from its run)."""

@@ -22,3 +22,12 @@ def test_readme_block_runs(code, tmp_path, monkeypatch):
     (tmp_path / "studies").symlink_to(ROOT / "studies")
     monkeypatch.chdir(tmp_path)
     exec(compile(code, str(ROOT / "README.md"), "exec"), {"__name__": "__readme__"})
+
+
+def test_the_readme_states_the_current_version_and_format():
+    import workbench
+
+    text = (ROOT / "README.md").read_text()
+    stated = re.search(r"^Version (\S+), archive format (\d+)", text, re.M)
+    assert stated, "README.md lost its 'Version X, archive format N' line"
+    assert stated.groups() == (workbench.__version__, str(workbench.FORMAT_VERSION))
