@@ -8,7 +8,7 @@ import xarray as xr
 ENERGY = ["driver_work", "dissipated_energy", "kinetic_energy", "potential_energy"]
 
 # Ideal joints: peak slider speed (m s-1) and acceleration (m s-2) of the nine-bar at each crank
-# speed (rad s-1), from "Numbers to check" of shared/spec/ninebar-parameters.md.
+# speed (rad s-1), from "Numbers to check" of docs/ninebar-parameters.md.
 IDEAL_SLIDER_PEAKS = [
     (math.pi, 0.638, 3.39),
     (2 * math.pi, 1.277, 13.56),

@@ -214,3 +214,12 @@ def test_the_generated_kernel_of_a_model_is_printed(capsys):
     assert "from workbench.models.duffing import" in out and out.endswith(path.read_text())
     assert main(["kernel", "no_such_model"]) == 2
     assert "MODEL: got 'no_such_model'; allowed: a scene file or one of" in capsys.readouterr().err
+
+
+def test_every_command_takes_quiet():
+    """Getting started promises ``-q`` on every command."""
+    from workbench.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        assert "-q" in parser._option_string_actions, name

@@ -184,6 +184,10 @@ def test_grazing_against_the_closed_form():
     assert grazing.size == 1
     assert abs(grazing[0] - exact) < 1e-6 * exact, (grazing, exact)
     assert round(exact, 7) == 0.7106874  # as docs/continuation.md quotes
+    # the stop's square-root singularity: a period doubling right past the grazing (the page
+    # quotes its distance)
+    doubling = r.bifurcation_parameter.values[r.bifurcation_label.values == 5]
+    assert doubling.size >= 1 and f"{doubling[0] - grazing[0]:.1e}" == "2.3e-06", doubling
     assert (r.events_per_period[r.omega < grazing[0]] == 0).all()
     # one onset and one end per period; contacts shallower than ~1e-4 m (within ~2e-5 rad/s
     # past grazing) last a few ms and fall inside one solver step: their events are not seen

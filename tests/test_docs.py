@@ -126,10 +126,12 @@ def test_key_figures_are_the_reports():
 
 def _newest_continuation_record(marker: str) -> tuple[str, str, str]:
     """The newest ``continuation.py`` entry of benchmarks/RESULTS.md that contains ``marker``,
-    its commit, and docs/continuation.md with its whitespace collapsed."""
+    its commit as the page names it ("plus uncommitted changes" where the record's tree was
+    dirty), and docs/continuation.md with its whitespace collapsed."""
     records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
     newest = [r for r in records if r.startswith("continuation.py") and marker in r][-1]
-    commit = re.search(r"commit (\w+)", newest).group(1)
+    found = re.search(r"commit (\w+)(-dirty)?", newest)
+    commit = found.group(1) + (" plus uncommitted changes" if found.group(2) else "")
     return newest, commit, " ".join((DOCS / "continuation.md").read_text().split())
 
 
@@ -172,3 +174,14 @@ def test_the_newton_step_cost_is_the_newest_benchmark_record():
     assert f"costs {maps} s of CPU at omega = {omegas} pi" in page
     assert f"its derivative in omega {derivatives} s more" in page
     assert max(float(m) + float(d) for _, m, d in steps) < 10.0  # seconds (issue 25 item 6)
+
+
+def test_the_templates_page_names_every_tag():
+    """docs/internals/templates.md lists the tags the compiler rewrites in the templates."""
+    used = {
+        tag
+        for path in (ROOT / "workbench").rglob("*.py")
+        for tag in re.findall(r"@@[A-Z_]+@@", path.read_text())
+    }
+    named = set(re.findall(r"@@[A-Z_]+@@", (DOCS / "internals" / "templates.md").read_text()))
+    assert sorted(used - named) == []

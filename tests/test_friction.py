@@ -27,7 +27,7 @@ from workbench.models.friction import (
     stribeck,
 )
 
-# the paper's normalised parameters (shared/spec/ninebar-parameters.md)
+# the paper's normalised parameters (docs/ninebar-parameters.md)
 MU_K, MU_S, S0, S2, V_S, GAMMA = 0.05, 0.15, 1e5, 0.4, 1e-3, 2.0
 PAPER_S1 = 316.2  # s m-1, constant: the paper's value
 DEFAULT = {"s1": PAPER_S1, "v_d": 1e-3}  # the package's default: Olsson's fading damping

@@ -1,6 +1,6 @@
 """Nine-bar kinematics: the spec's numbers, loop closure, exact derivatives, assembly failures.
 
-Reference values: ``shared/spec/ninebar-parameters.md``, "Numbers to check" (ideal joints,
+Reference values: ``docs/ninebar-parameters.md``, "Numbers to check" (ideal joints,
 theta10 = theta40 = 0, theta1 = -omega t, theta4 = +omega t).
 """
 

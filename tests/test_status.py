@@ -101,3 +101,20 @@ def test_campaign_flags_every_status(tmp_path):
     assert int(ds.solver_steps.sel(mode=float(Status.MAX_STEPS))) == 5000
     assert campaign_exit_code(ds.status.values) == 5
     assert campaign_exit_code(np.array([0, 1])) == 0
+
+
+def test_the_status_table_of_the_archives_page_is_the_code():
+    """docs/archives.md: every row `name` | value | meaning | exit code is the code's."""
+    import re
+    from pathlib import Path
+
+    from workbench.campaign._block import STATUS
+    from workbench.cli._campaign import campaign_exit_code
+
+    page = (Path(__file__).parents[1] / "docs" / "archives.md").read_text()
+    row = r"^\| (?:\(campaign point\) )?`(\w+)` \| (\d+) \| .* \| (\d+) \|$"
+    rows = re.findall(row, page, re.M)
+    assert {name for name, _, _ in rows} == set(STATUS.values())
+    for name, value, code in rows:
+        assert STATUS[int(value)] == name
+        assert campaign_exit_code(np.array([int(value)])) == int(code), name

@@ -101,3 +101,11 @@ def test_a_newer_format_is_refused_and_a_foreign_file_left_alone(tmp_path):
     foreign = xr.Dataset({"y": ("x", np.arange(3.0))}, attrs={"source": "another tool"})
     foreign.to_netcdf(tmp_path / "foreign.nc")
     assert "format_version" not in workbench.open_run(tmp_path / "foreign.nc").attrs
+
+
+def test_the_changelog_has_each_version_once_newest_first():
+    changelog = (ROOT / "CHANGELOG.md").read_text()
+    versions = re.findall(r"^## (\d+)\.(\d+)\.(\d+)", changelog, re.M)
+    as_numbers = [tuple(map(int, v)) for v in versions]
+    assert as_numbers == sorted(set(as_numbers), reverse=True), versions
+    assert ".".join(versions[0]) == workbench.__version__

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import warnings
 
-from workbench.cli._console import positive_int
+from workbench.cli._console import add_quiet, positive_int
 from workbench.cli._exit_codes import UsageError
 
 
@@ -210,4 +210,5 @@ def register_cli(sub) -> None:
     )
     p.add_argument("-o", "--output", default=".", metavar="DIR", help="directory for the PNGs")
     p.add_argument("--overwrite", action="store_true", help="replace existing figures")
+    add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_analyse)

@@ -42,7 +42,7 @@ def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[P
     Coulomb coefficient.
 
     The LuGre parameters are normalised by the normal force (the paper's Eqs. 8-10; values of
-    ``shared/spec/ninebar-parameters.md``): mu_k = 0.05, mu_s = 0.15 (the paper), sigma0 =
+    ``docs/ninebar-parameters.md``): mu_k = 0.05, mu_s = 0.15 (the paper), sigma0 =
     1e5 m-1 (the paper), sigma2 = 0.4 s m-1, v_s = 1e-3 m s-1, exponent 2 (Canudas de Wit et
     al. 1995). The bristle damping is ``lugre_sigma1 * exp(-(v / lugre_damping_velocity)^2)``
     (Olsson et al. 1998, Eur. J. Control 4:176) with ``lugre_sigma1`` = 316.2 s m-1 (the

@@ -21,7 +21,7 @@ _CAUSES = """\
 
 1. **Reconstructed geometry.** The paper's tables were lost in extraction; L71, L72, beta, L8,
    the rocker pivot O6, the slider offset S0 and the initial phase are reconstructions
-   (`../shared/spec/ninebar-parameters.md`, doubt 1). The figures can be matched in trend and
+   (`docs/ninebar-parameters.md`, doubt 1). The figures can be matched in trend and
    order of magnitude, not value by value.
 2. **Chaotic impacts.** With clearances the motion is chaotic (Sec. 5 of the paper and our
    LLEs): a perturbation of 1e-9 c of the initial state grows to a sizeable part of c within a

@@ -1,6 +1,6 @@
 """Default geometry and mass properties of the nine-bar mechanism (SI units).
 
-Values and their provenance: ``shared/spec/ninebar-parameters.md`` (tags R read from Chen et al.
+Values and their provenance: ``docs/ninebar-parameters.md`` (tags R read from Chen et al.
 2019, A assumed reconstructions, D derived). Frame: angles counter-clockwise from +X; O1 at the
 origin, O4 at (L5, 0); the slider guide is the line y = y_O6.
 """

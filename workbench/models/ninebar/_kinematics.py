@@ -3,7 +3,7 @@
 Coordinates q = (theta1, theta4, x1, y1, x2, y2) [rad, rad, m, m, m, m]: the crank angles and
 the clearance vectors (journal centre minus bearing centre) of the joints A (crank 1 / link 2)
 and B (crank 4 / link 3); q[2:] = 0 is the ideal mechanism. Frame, branches and symbols:
-``shared/spec/ninebar-parameters.md`` (Chen et al. 2019, Eq. 11).
+``docs/ninebar-parameters.md`` (Chen et al. 2019, Eq. 11).
 
 The mechanism is solved as a chain of Assur groups, each with its own position, velocity and
 acceleration routine (modular kinematics; references: Hartenberg & Denavit, *Kinematic

@@ -98,7 +98,7 @@ class NineBar(Mechanism):
     )
     reference = (
         "Chen, Jiang, Wang & Deng (2019), Multibody Syst. Dyn. 47:317; parameters: "
-        "shared/spec/ninebar-parameters.md"
+        "docs/ninebar-parameters.md"
     )
     parameters = _parameters()
     effects = (
