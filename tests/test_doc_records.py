@@ -1,0 +1,283 @@
+"""The numbers docs/analysis.md and docs/robustness.md quote from benchmark records and from the
+code (the project's rule: the docs quote only what the code produces now, and a test checks
+each number). Each test parses the page and the record of benchmarks/RESULTS.md it names and
+asserts that they agree: a current figure is the newest record of its benchmark (and window),
+a "before" figure the record the page names."""
+
+import json
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "RESULTS.md"
+#: where benchmarks/tangent_speed.py recorded before its runs went to RESULTS.md (from 56c825a)
+TANGENT_RESULTS = ROOT / "benchmarks" / "results" / "tangent_speed.md"
+
+#: `benchmarks/lle.py` records made before the copies were renormalised on shrinkage as well
+#: (25aee46), which docs/analysis.md quotes as "before": the separation scans and the default call
+BEFORE_SHRINK_SCANS = ("d99dfdb", "968e2fe", "968e2fe-dirty")
+BEFORE_SHRINK_CHAOS = "be0fa29"
+
+
+def _page(name: str) -> str:
+    """A page of docs/ with its whitespace collapsed."""
+    return " ".join((ROOT / "docs" / name).read_text().split())
+
+
+def _entries(script: str, path: Path = RESULTS) -> list[str]:
+    """The entries of a results file (benchmarks/RESULTS.md) that ``script`` appended, oldest
+    first."""
+    return [e for e in path.read_text().split("\n## ") if e.startswith(f"{script}: ")]
+
+
+def _commit(entry: str) -> str:
+    """An entry's commit as it writes it (with any "-dirty")."""
+    return re.search(r"commit (\S+)", entry).group(1)
+
+
+def _and(items) -> str:
+    items = list(items)
+    return ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _n(token: str) -> str:
+    """A count as the pages write it: 840832 -> "840 832"."""
+    return f"{int(token):,}".replace(",", " ") if token.isdigit() else token
+
+
+def _e(token: str) -> str:
+    """A relative difference as the pages write it: 0.00029 -> "2.9e-4"."""
+    mantissa, exponent = f"{float(token):.1e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+# -- benchmarks/tangent_speed.py ------------------------------------------------------------------
+_WINDOW = re.compile(
+    r"nine-bar chaos case, ([\d.]+) cycles after the default transient \(t0 = ([\d.]+) s\), "
+    r"DOP853, rtol (\S+), defect (\S+)"
+)
+#: the columns of a run's row: CPU s/cyc, x plain, steps/cyc, rej/cyc, evals/cyc, events/cyc,
+#: QR/cyc, sum, volume rate, rel
+CPU, RATIO, STEPS, EVENTS, QR, REL = 0, 1, 2, 5, 6, 9
+
+
+def _tangent_records() -> list[dict]:
+    """Every ``tangent_speed.py`` entry, oldest first (those of benchmarks/results/
+    tangent_speed.md, then those of RESULTS.md): its file, commit, window and table rows."""
+    records = []
+    for path in (TANGENT_RESULTS, RESULTS):
+        for entry in _entries("tangent_speed.py", path):
+            cycles, t0, rtol, defect = _WINDOW.search(entry).groups()
+            rows = {
+                m.group(1): m.group(2).split()
+                for m in re.finditer(r"^  (plain|m = \d+) +(.*)$", entry, re.M)
+            }
+            records.append(
+                {"file": str(path.relative_to(ROOT)), "commit": _commit(entry), "rows": rows}
+                | {"cycles": cycles, "t0": t0, "rtol": rtol, "defect": defect, "entry": entry}
+            )
+    return records
+
+
+def _date(record: dict) -> str:
+    return re.match(r"tangent_speed\.py: (\S+ \S+) UTC", record["entry"]).group(1)
+
+
+def test_the_tangent_records_are_in_order():
+    """Every entry of benchmarks/results/tangent_speed.md was made before the first of RESULTS.md
+    (from 56c825a on), so that the last of the two lists is the newest."""
+    records = _tangent_records()
+    old = [r for r in records if r["file"] != "benchmarks/RESULTS.md"]
+    new = [r for r in records if r["file"] == "benchmarks/RESULTS.md"]
+    assert old and new and max(map(_date, old)) < min(map(_date, new))
+    assert new[0]["commit"].removesuffix("-dirty") == "56c825a"
+    assert (
+        f"its records from {new[0]['commit']} on are in `benchmarks/RESULTS.md`, the earlier "
+        "ones in `benchmarks/results/tangent_speed.md`"
+    ) in _page("analysis.md")
+
+
+def _newest(records: list[dict], cycles: str, rtol: str, defect: str, run: str) -> dict:
+    """The newest record of a window (cycles, rtol, defect) that has the row ``run``."""
+    return [
+        r
+        for r in records
+        if (r["cycles"], r["rtol"], r["defect"]) == (cycles, rtol, defect) and run in r["rows"]
+    ][-1]
+
+
+def test_the_tangent_cost_is_the_newest_tangent_speed_record():
+    """docs/analysis.md, "What the tangent system costs": the newest record with 1, 4 and 8
+    exponents at the scene's rtol and the default defect; the 2-cycle steps from the newest
+    records of that window; the defect of 1 from the hand-written measurement it names; the
+    located-event "before" from the record that says so."""
+    page = _page("analysis.md")
+    records = _tangent_records()
+    runs = ("m = 1", "m = 4", "m = 8")
+    full = [
+        r
+        for r in records
+        if {"plain", *runs} <= r["rows"].keys() and (r["rtol"], r["defect"]) == ("1e-06", "10")
+    ][-1]
+    plain, rows = full["rows"]["plain"], [full["rows"][run] for run in runs]
+    assert float(full["t0"]) == 20.0  # after the scene's 20 transient cycles of 1 s
+    assert f"at rtol 1e-6, {full['cycles']} cycles after the 20 transient cycles" in page
+    assert f"with 1, 4 and 8 exponents, at {full['commit']} in `{full['file']}`;" in page
+    assert f"the model alone takes {plain[CPU]} s and {_n(plain[STEPS])} steps per cycle" in page
+    assert (
+        f"the tangent run with 1, 4 and 8 exponents {_and(r[CPU] for r in rows)} s per cycle "
+        f"({_and(_n(r[RATIO]) for r in rows)} times the model) and "
+        f"{_and(_n(r[STEPS]) for r in rows)} steps, with {_and(_n(r[QR]) for r in rows)} "
+        "re-orthonormalisations per cycle"
+    ) in page
+
+    two = {run: _newest(records, "2", "1e-06", "10", run) for run in ("plain", *runs)}
+    assert {r["t0"] for r in two.values()} == {full["t0"]}  # the same start
+    events = (two["plain"]["rows"]["plain"][EVENTS], plain[EVENTS])
+    assert f"(the model's events: {_n(events[0])} per cycle against {_n(events[1])})" in page
+    steps = _and(_n(two[run]["rows"][run][STEPS]) for run in runs)
+    assert f"exponents took {steps} steps per cycle" in page
+    assert two["m = 4"]["commit"] == two["m = 8"]["commit"]
+    assert (
+        f"(the newest records of that window: 1 exponent at {two['m = 1']['commit']}, 4 and 8 "
+        f"at {two['m = 8']['commit']})"
+    ) in page
+
+    text = " ".join(RESULTS.read_text().split())  # the hand-written section on the tangent
+    section = "The tangent system re-orthonormalised at step ends"
+    measured_at = re.search(rf"## {section} .*? runs were measured at (\w+),", text).group(1)
+    d10, d1 = re.search(
+        r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
+        r"D = 1 ([\d.e]+) and",
+        text,
+    ).groups()
+    assert (
+        f"a `defect` of 1 took {d1} steps per cycle against {d10} at 10, with 8 exponents over "
+        f'0.1 cycle, measured at {measured_at}: `benchmarks/RESULTS.md`, "{section}")'
+    ) in page
+
+    (before,) = [r for r in records if "re-orthonormalisation by a located event" in r["entry"]]
+    assert before["cycles"] == "2" and (before["rtol"], before["defect"]) == ("1e-06", "10")
+    old, new = before["rows"]["m = 8"], two["m = 8"]["rows"]["m = 8"]
+    assert (
+        f"8 exponents over the 2 cycles took {old[CPU]} s and {_n(old[STEPS])} steps per cycle "
+        f"(the record at {before['commit']} in `{before['file']}`), against {new[CPU]} s and "
+        f"{_n(new[STEPS])} steps "
+        f"at step ends (at {two['m = 8']['commit']})"
+    ) in page
+
+
+def test_the_sum_checks_are_the_newest_tangent_speed_records():
+    """docs/analysis.md, "The sum check": each window's sum check, re-orthonormalisations and
+    steps from the newest record of that window, and the commits it names."""
+    page = _page("analysis.md")
+    records = _tangent_records()
+
+    def rel(r, run="m = 4"):
+        return _e(r["rows"][run][REL])
+
+    short = _newest(records, "0.05", "1e-06", "10", "m = 8")
+    half, two = (_newest(records, c, "1e-06", "10", "m = 8") for c in ("0.5", "2"))
+    # the 0.05-cycle window is tests/test_lyapunov.py::test_ninebar_spectrum_sum_check_closes's
+    assert f"close to {rel(short, 'm = 8')} over 0.05 cycles (`tests/test_lyapunov.py`)" in page
+    assert f"to {rel(half, 'm = 8')} over 0.5 cycles and to {rel(two, 'm = 8')} over 2" in page
+    assert f"the newest records of those windows, at {half['commit']} and {two['commit']};" in page
+
+    a = _newest(records, "2", "1e-06", "10", "m = 4")
+    b = _newest(records, "2", "1e-08", "10", "m = 4")
+    c = _newest(records, "0.5", "1e-06", "10", "m = 4")
+    assert (
+        f"same 2 cycles {rel(a)} at rtol 1e-6 and {rel(b)} at 1e-8 (at {a['commit']} and "
+        f"{b['commit']}), over the 0.5 cycles {rel(c)} at rtol 1e-6"
+    ) in page
+    qr = [r["rows"]["m = 4"][QR] for r in (a, b, c)]
+    assert (
+        f"re-orthonormalised only {qr[0]} and {qr[1]} times per cycle over the 2 cycles, "
+        f"{qr[2]} over the 0.5"
+    ) in page
+
+    d = _newest(records, "0.5", "1e-06", "3", "m = 4")
+    e = _newest(records, "0.5", "1e-08", "3", "m = 4")
+    assert d["commit"] == e["commit"]
+    assert f"close to {rel(d)} at rtol 1e-6 and {rel(e)} at 1e-8 (at {d['commit']}:" in page
+    steps = (d["rows"]["m = 4"][STEPS], c["rows"]["m = 4"][STEPS])
+    assert (
+        f"for {_n(steps[0])} steps per cycle at rtol 1e-6 against {_n(steps[1])} with the "
+        "default defect"
+    ) in page
+
+
+# -- benchmarks/lle.py ---------------------------------------------------------------------------
+def _chaos_numbers(entry: str) -> tuple[str, ...]:
+    """An ``lle.py --chaos`` entry's rtol 1e-6 line: the estimate and its error, the variational
+    exponent, their difference and its error, as the record writes them."""
+    return re.search(
+        r"rtol 1e-06: two trajectories ([\d.]+) \+/- ([\d.]+) 1/s .*?; variational \(same "
+        r"trajectories\) ([\d.]+) \+/- [\d.]+; difference ([+-][\d.]+) \+/- ([\d.]+);",
+        entry,
+    ).groups()
+
+
+def test_the_chaos_case_before_and_now_are_the_lle_records():
+    """docs/analysis.md, "Contracting orbits": the default call on the chaos case before the
+    copies were renormalised on shrinkage (the record it names) and now (the newest)."""
+    page = _page("analysis.md")
+    chaos = [e for e in _entries("lle.py") if "`python benchmarks/lle.py --chaos" in e]
+    (before,) = [e for e in chaos if _commit(e) == BEFORE_SHRINK_CHAOS]
+    b, n = _chaos_numbers(before), _chaos_numbers(chaos[-1])
+    assert (
+        f"before (the `benchmarks/lle.py --chaos` record at {BEFORE_SHRINK_CHAOS} in "
+        f"`benchmarks/RESULTS.md`), {b[0]} +/- {b[1]} 1/s at rtol 1e-6 and the variational "
+        f"exponent on the same trajectories {b[2]} (difference {b[3]} +/- {b[4]}), now (the "
+        f"newest record, at {_commit(chaos[-1])}) {n[0]} +/- {n[1]} and {n[2]} ({n[3]} +/- {n[4]})"
+    ) in page
+
+
+def test_the_noise_floor_before_and_now_are_the_scans():
+    """docs/analysis.md, "One answer from both methods": the noise floor at d0 = 1e-10 and
+    1e-9 over every run of the separation scan (benchmarks/results/lle_separation_scan.json,
+    the newest scans), and before the shrink renormalisation (the ``--scan`` records it names)."""
+    page = _page("analysis.md")
+    scan = json.loads((ROOT / "benchmarks/results/lle_separation_scan.json").read_text())["scan"]
+    at = {
+        d0: [e["mean_difference"][e["separations"].index(d0)] for e in scan.values()]
+        for d0 in (1e-10, 1e-9)
+    }
+    lo, hi = min(at[1e-10]), max(at[1e-10])
+    assert f"a noise floor lifts the estimate by {lo:.0f}-{hi:.0f} 1/s at every tolerance" in page
+    lo, hi = min(at[1e-9]), max(at[1e-9])
+    assert f"at 1e-9 what is left of it is +{lo:.1f}-{hi:.1f} 1/s" in page
+
+    runs = []  # (command, rtol, {d0: mean})
+    for entry in _entries("lle.py"):
+        if _commit(entry) not in BEFORE_SHRINK_SCANS or "--scan" not in entry:
+            continue
+        command = re.search(r"command: `([^`]*)`", entry).group(1)
+        for rtol, block in re.findall(
+            r"rtol (\S+), mean over 4 starts .*?:\n((?:  d0 .*\n)+)", entry
+        ):
+            means = dict(re.findall(r"d0 (\S+): ([+-][\d.]+)", block))
+            runs.append((command, rtol, {d0: float(v) for d0, v in means.items()}))
+    assert len(runs) == 4  # rtol 1e-6 with the step free and capped, 1e-8, 1e-10
+    assert f"the `--scan` records at {_and(BEFORE_SHRINK_SCANS)} in `benchmarks/RESULTS.md`" in page
+    floor = {d0: [means[d0] for _, _, means in runs] for d0 in ("1e-10", "1e-09")}
+    (free,) = [m["1e-08"] for c, r, m in runs if r == "1e-06" and "--max-step" not in c]
+    assert (
+        f"(+{min(floor['1e-10']):.1f}-{max(floor['1e-10']):.1f} 1/s at 1e-10 and "
+        f"+{min(floor['1e-09']):.1f}-{max(floor['1e-09']):.1f} at 1e-9 in every run, "
+        f"+{free:.1f} at 1e-8 at rtol 1e-6 with the step free)"
+    ) in page
+
+
+# -- docs/robustness.md ---------------------------------------------------------------------------
+def test_the_interrupt_figures_are_the_code_s_and_its_test_s():
+    """docs/robustness.md, "Interrupts": the pause is the solver's constant, and the latency it
+    quotes for ``workbench run -q`` is the bound tests/test_faults_run.py asserts."""
+    from workbench.solver import PAUSE_SECONDS
+
+    page = _page("robustness.md")
+    assert f"`workbench.solver.PAUSE_SECONDS` = {PAUSE_SECONDS:g} s of wall time" in page
+    source = (ROOT / "tests" / "test_faults_run.py").read_text()
+    test = source.split("def test_cli_run_quiet_stops_on_a_signal_in_one_line")[1]
+    bound = float(re.search(r"assert latency < ([\d.]+)", test).group(1))
+    assert f"`workbench run: interrupted` within the {bound:g} s from the signal that" in page
