@@ -453,6 +453,31 @@ def test_monodromy_by_copies_agrees_with_the_tangent_system(scene, value, rtol):
     assert va.events == vb.events
 
 
+def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
+    """Why ``monodromy="auto"`` takes copies for the mechanisms: on the nine-bar's orbit in
+    lasting contact at omega = 1.5 pi (Fig. 32's scene) the tangent system, whose Jacobian is
+    differenced along every column, makes the step control take several times the bare model's
+    steps per crank cycle, where the copies take about the bare model's. docs/continuation.md
+    and the StrobeMap module quote the counts."""
+    import re
+
+    scene = workbench.load_scene(ROOT / "studies" / "bifurcation_speed" / "sweep.toml")
+    scene = scene.replace(sweep={}, solver=dict(scene.solver, method="dop853"))
+    w = 1.5 * math.pi
+    steps = {}
+    for monodromy in ("tangent", "copies"):
+        strobe = StrobeMap(scene, "omega", monodromy=monodromy)
+        y, aux = strobe.initial(w)
+        steps["bare"] = int(strobe(y, aux, w, tangent=False).stats["steps"])
+        steps[monodromy] = int(strobe(y, aux, w).stats["steps"])
+    assert steps["tangent"] > 3 * steps["bare"] and steps["copies"] < 1.1 * steps["bare"]
+    page = " ".join((ROOT / "docs" / "continuation.md").read_text().split())
+    quoted = re.search(r"1\.5 pi, ([\d ]+) against ([\d ]+) steps per crank cycle, where the "
+                       r"copies take ([\d ]+) \(", page)  # fmt: skip
+    for text, key in zip(quoted.groups(), ("tangent", "bare", "copies"), strict=True):
+        assert abs(int(text.replace(" ", "")) / steps[key] - 1) < 0.02, (key, steps)
+
+
 def test_detection_rules_of_the_branch():
     """Which sign changes between two branch points name which bifurcation."""
     from workbench.continuation._branch import _detect

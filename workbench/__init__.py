@@ -9,10 +9,11 @@ solver; :mod:`workbench.analysis` identifies chaos in them; runs are archived as
 >>> float(ds.time[-1] - ds.time[0]) == 2 * ds.attrs["forcing_period"]
 True
 
-Layers (each imports only those before it; ``tests/test_layers.py`` checks it):
-solver -> models -> scene -> run -> archive, precision (``accuracy``), analysis, plot ->
-campaign -> verification (``verify``), study -> cli. ``workbench.analysis``, ``workbench.plot``
-and ``verify`` (which needs the optional extra exudyn when called) load on first use.
+Layers, lowest first (each imports only those before it; :data:`workbench._layers.LAYERS`,
+checked by ``tests/test_layers.py``): solver -> models -> scene -> run -> archive -> precision
+(``accuracy``) -> analysis -> plot -> campaign -> continuation -> verification (``verify``) ->
+study -> cli. ``workbench.analysis``, ``workbench.plot`` and ``verify`` (which needs the
+optional extra exudyn when called) load on first use.
 """
 
 from workbench._cache import register_cache_locator

@@ -118,38 +118,39 @@ def lle_from_equations(
     """Largest Lyapunov exponent (1/s) of a scene's model by the two-trajectory method, from
     independent starts, with its convergence shown.
 
-    The measured length is shared among ``starts`` independent starts: realisations 0, 1, ...
-    of the scene (:mod:`workbench.run._ensemble`: initial states perturbed by the scene's
+    The measured length is shared among ``starts`` independent starts: realisations 0, 1, ... of
+    the scene (:mod:`workbench.run._ensemble`: initial states perturbed by the scene's
     ``perturbation``, 1e-9 of each state's size by default, then its transient), whose windows
     are independent once the perturbation has grown to the attractor's size (ln(1/1e-9) / λ,
-    0.8 s on the chaos case). On each start a fiducial trajectory and copies displaced by a
-    scaled separation ``d0`` (each state divided by its size, the model's ``atol_scale``) are
-    integrated side by side in one step sequence; whenever a copy's separation has grown by
-    ``exp(growth)`` or shrunk by the same factor (located as events, so that the copies stay
-    in the linear range through the bursts of stretching at impacts) it adds the log change
-    and is moved back to ``d0`` along its separation. Renormalising on shrinkage as well
-    (Benettin et al. 1980 rescale at every renormalisation, whatever the change) keeps the
-    copies off the integration's noise on a contracting orbit, so that negative exponents
-    (stable equilibria and periodic orbits) are measured: renormalised on growth alone, a
-    copy shrank onto the fiducial trajectory until its separation was noise, and the noise's
-    growth was read as the exponent (on the nine-bar's stable orbit at omega = 0.5 pi,
-    c = 20 um, whose Floquet exponent is -75.9 1/s: ~0 1/s over one cycle, +3.3e4 1/s from
-    copies at d0 = 1e-11), or it coincided with the fiducial trajectory and the run failed
-    (a damped linear oscillator); on that nine-bar orbit they now read -67.9 1/s over one
-    cycle, 8 % above the variational exponent on the same trajectory (-74.2), a gap that
-    depends on neither d0, tolerance nor step and is not yet explained (docs/analysis.md).
-    The trigger is the same both ways, so that a copy's
+    0.8 s on the chaos case at its λ = 25.66 1/s: the newest ``benchmarks/lle.py --chaos``
+    record, at 2e994d4-dirty, rtol 1e-6). On each start a fiducial trajectory and copies
+    displaced by a scaled separation ``d0`` (each state divided by its size, the model's
+    ``atol_scale``) are integrated side by side in one step sequence; whenever a copy's
+    separation has grown by ``exp(growth)`` or shrunk by the same factor (located as events, so
+    that the copies stay in the linear range through the bursts of stretching at impacts) it
+    adds the log change and is moved back to ``d0`` along its separation. Renormalising on
+    shrinkage as well (Benettin et al. 1980 rescale at every renormalisation, whatever the
+    change) keeps the copies off the integration's noise on a contracting orbit, so that
+    negative exponents (stable equilibria and periodic orbits) are measured: renormalised on
+    growth alone, a copy shrank onto the fiducial trajectory until its separation was noise, and
+    the noise's growth was read as the exponent (on the nine-bar's stable period-1 orbit at
+    omega = 0.5 pi, c = 20 um), or it coincided with the fiducial trajectory and the run failed
+    (a damped linear oscillator); on that nine-bar orbit they now read -67.9 1/s over one cycle
+    against -74.2 1/s for the variational exponent on the same trajectory
+    (tests/test_lyapunov.py), a gap that depends on neither d0, tolerance nor step and is not
+    yet explained (docs/analysis.md). The trigger is the same both ways, so that a copy's
     separation stays within a band symmetric about ``d0`` in the log: the default ``d0``
-    balances round-off (relative error eps / d) against curvature (relative error ~d), and
-    the band keeps both within the same factor ``exp(growth)`` of that balance (on the chaos
-    case the noise floor at d0 = 1e-10 fell from ~6.6 to ~4.5 1/s, and 44 % of the
-    renormalisations are shrinkages; docs/analysis.md). Five copies run at once:
-    ``(d0, growth)`` (the estimate), ``(d0 / 2, growth)``, ``(2 d0, growth)``,
-    ``(d0, growth / 2)`` and ``(d0, 2 growth)``. The windows then grow
-    (their lengths doubled, the runs continued) until the pooled estimate's standard error is
-    below ``target`` of its magnitude or the ``budget`` is spent. The standard error is the
-    larger of the spread across the starts and the starts' batch means (10 per start) combined
-    (:func:`workbench.analysis._convergence.pooled`).
+    balances round-off (relative error eps / d) against curvature (relative error ~d), and the
+    band keeps both within the same factor ``exp(growth)`` of that balance (on the chaos case
+    the noise floor at d0 = 1e-10 fell from +6.2-6.8 1/s, the ``benchmarks/lle.py --scan``
+    records at d99dfdb, 968e2fe and 968e2fe-dirty, to 4-5 1/s, the newest, at 2e994d4-dirty; at
+    rtol 1e-6, 3555 of 8002 renormalisations were shrinkages, the ``--chaos`` record at
+    2e994d4-dirty; docs/analysis.md). Five copies run at once: ``(d0, growth)`` (the estimate),
+    ``(d0 / 2, growth)``, ``(2 d0, growth)``, ``(d0, growth / 2)`` and ``(d0, 2 growth)``. The
+    windows then grow (their lengths doubled, the runs continued) until the pooled estimate's
+    standard error is below ``target`` of its magnitude or the ``budget`` is spent. The standard
+    error is the larger of the spread across the starts and the starts' batch means (10 per
+    start) combined (:func:`workbench.analysis._convergence.pooled`).
 
     The reference is the variational exponent, carried by the same fiducial trajectories
     (``lle_variational``): the two-trajectory estimate is a forward difference of the flow

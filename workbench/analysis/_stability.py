@@ -230,6 +230,10 @@ def floquet(
         Refine the orbit's state (else the multipliers of the map at the transient's end).
     tolerance : float
         Newton stops when the scaled residual |P^k(x) - x| / s is below this.
+    max_iterations : int
+        Newton's iterations at most; when they run out, the multipliers are those at the last
+        state (no error: ``residual`` and the attribute ``newton_iterations`` say how close
+        and how many).
     rtol : float, optional
         Integration tolerance (default min(scene's rtol, 1e-10)).
 
@@ -352,6 +356,9 @@ def floquet_sweep(
         Its values, in the order of the continuation.
     periods : int
         The orbit's period in forcing periods.
+    rtol : float, optional
+        Integration tolerance of every value's :func:`floquet` (default min(scene's rtol,
+        1e-10)).
 
     Returns
     -------

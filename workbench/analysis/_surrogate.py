@@ -32,10 +32,10 @@ PREDICTION_POINTS = 1000
 #: first few; the rank order rarely settles exactly in a long series)
 IAAFT_ITERATIONS = 16
 #: the test reads at most this many samples from the start of a series, cut to a length whose
-#: FFT is fast (5-smooth; a 100 001-sample series, whose length is 11 x 9091, took 16 s of CPU,
-#: 4 s cut to 100 000). Not fewer: its neighbours must come from other passes of the orbit (a
-#: nine-bar series at 10 000 samples per crank cycle cut to its first 16 384 samples, 1.6
-#: cycles, was not told from its surrogates; its 10 cycles were, by a factor 1.4-3.4)
+#: FFT is fast (5-smooth: a length with a large prime factor, such as 100 001 = 11 x 9091,
+#: makes every FFT of the IAAFT iterations slower). Not fewer: its neighbours must come from
+#: other passes of the orbit (a nine-bar series at 10 000 samples per crank cycle cut to its
+#: first 16 384 samples, 1.6 cycles, was not told from its surrogates; its 10 cycles were)
 MAX_SAMPLES = 131072
 
 

@@ -46,9 +46,9 @@ def save_run(
     needed and the bytes free; ``ds`` is untouched, to be written elsewhere. Float variables
     are zlib-compressed (level 4, lossless) when ``compress``.
     ``classic`` writes the netCDF-3 64-bit-offset format instead (no compression, 64-bit
-    integers stored as 32-bit where their values fit) with scipy's writer: faster than netCDF-4
-    for a small file, whose cost is mostly HDF5's per-variable overhead (the campaign's block
-    files; measured in the README, "Campaigns"); the files read back identical.
+    integers stored as 32-bit where their values fit) with scipy's writer: a flat file without
+    HDF5's per-variable overhead, meant for many small files (the campaign's block files); the
+    files read back identical.
 
     The file carries the global attribute ``format_version`` (:data:`workbench.FORMAT_VERSION`),
     added if ``ds`` lacks it.

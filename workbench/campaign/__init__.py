@@ -44,8 +44,8 @@ Store layout
   the blocks cost about the same (a sweep over the forcing frequency cut into contiguous
   blocks would end waiting for its low-frequency block). They start longest first, the
   longest-processing-time rule (Graham 1969).
-* Block files are netCDF-3 (64-bit offset, scipy's writer; a third of the write time of
-  netCDF-4 for small files, whose cost is HDF5's per-variable overhead); the task also
+* Block files are netCDF-3 (64-bit offset, scipy's writer: small files without HDF5's
+  per-variable overhead); the task also
   returns a small block (up to 32 MiB) to the client with its summary, so that the client
   assembles what this call computed without reading those files again. Only blocks of an
   earlier, interrupted call are read from disk.

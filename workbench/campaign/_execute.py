@@ -11,10 +11,11 @@ that finishes a block starts its next one at once instead of idling through the 
 the client (its result, the commit, the next submission: scheduling latencies of a loaded
 machine; benchmarks/campaign_cluster.py reports the idle time between blocks, "dispatch").
 
-The local pool is not a ``distributed.LocalCluster``, which costs seconds to import and to start
-its workers (README, "Campaigns"), against milliseconds for workers forked from a server that
-has already imported workbench and loaded the campaign's compiled kernel (``_preload``). The
-workers of a cluster get the same before their first block from a worker plugin (``_cluster``).
+The local pool is not a ``distributed.LocalCluster``, which imports dask's distributed machinery
+and starts a scheduler and worker processes that each have to import workbench and load the
+kernel; the pool's workers are forked from a server that has already imported workbench and
+loaded the campaign's compiled kernel (``_preload``). The workers of a cluster get the same
+before their first block from a worker plugin (``_cluster``).
 """
 
 from __future__ import annotations

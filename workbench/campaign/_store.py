@@ -9,8 +9,8 @@ Layout (``store`` is the path of the assembled archive, e.g. ``omega.nc``)::
                               (written first, atomically), and the SHA-256 of every committed
                               block (rewritten on each)
         block-00000.nc        up to chunk points, dealt by estimated cost (``_schedule``; one
-                              file per task, written atomically; netCDF-3 64-bit offset, half
-                              the write time of netCDF-4)
+                              file per task, written atomically; netCDF-3 64-bit offset,
+                              without HDF5's per-variable overhead)
         block-00001.nc        ...
 
 A block is *committed* when its checksum is in the manifest; on resume a block is reused only

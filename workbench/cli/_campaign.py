@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import warnings
 from pathlib import Path
 
@@ -48,6 +47,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
+    if scene.continuation:
+        _check_continued(args)
     if args.scheduler and args.workers is not None:
         raise CampaignError(
             f"--workers {args.workers} sizes the local pool, but --scheduler "
@@ -58,9 +59,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     client = None
     try:
         if args.scheduler:
+            # the dashboard link is a notice: run_campaign (continued_sweep) prints it above its
+            # progress bar unless -q
             client = _client(args.scheduler, args.scheduler_timeout)
-            if args.quiet:  # otherwise run_campaign prints it above its progress bar
-                print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
         else:
             compile_kernel(scene, quiet=args.quiet)
         with warnings.catch_warnings():  # the summary below lists every failed point
@@ -102,15 +103,30 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     return code
 
 
-def _continued(scene, args: argparse.Namespace, client):
-    """A continued sweep (``[sweep] continuation``): segments, not chunks, make its tasks."""
-    from workbench.continuation import continued_sweep
-
+def _check_continued(args: argparse.Namespace) -> None:
+    """Refuse, before any work, the options a continued sweep (``[sweep] continuation``) does
+    not take: ``--chunk`` (segments, not chunks, make its tasks) and ``--max-memory``
+    (:func:`workbench.continuation.continued_sweep` takes no memory limit)."""
     if args.chunk is not None:
         raise UsageError(
             f"--chunk {args.chunk}: a continued sweep ([sweep] continuation) is cut into "
             "segments, not chunks; set sweep.continuation.segments in the scene instead"
         )
+    if args.max_memory is not None:
+        from workbench.run import format_bytes
+
+        raise UsageError(
+            f"--max-memory {format_bytes(args.max_memory)}: a continued sweep ([sweep] "
+            "continuation) takes no memory limit; drop --max-memory (each point's run is still "
+            "checked against $WORKBENCH_MAX_MEMORY, else half of the machine's memory)"
+        )
+
+
+def _continued(scene, args: argparse.Namespace, client):
+    """A continued sweep (``[sweep] continuation``; its options checked by
+    :func:`_check_continued`)."""
+    from workbench.continuation import continued_sweep
+
     return continued_sweep(
         scene,
         args.output,
@@ -156,5 +172,7 @@ def register_cli(sub) -> None:
         "--restart", action="store_true", help="discard a stored campaign and start afresh"
     )
     add_quiet(p)
-    max_memory_option(p, "the campaign's archive (or one point's records)")
+    max_memory_option(
+        p, "the campaign's archive (or one point's records; not with [sweep] continuation)"
+    )
     p.set_defaults(func=_cmd_campaign)

@@ -29,11 +29,16 @@ __all__ = [
     "save_with_figure",
 ]
 
-# What the first compile of a model's kernel took, measured with a cold cache on the shared
-# 2-core machine: Duffing 15 s and the mechanisms 28 s at a load of 5; the mechanisms 74-95 s
-# when more processes than cores were running. It is CPU-bound: it scales with the
-# share of a core the process gets.
-_COMPILE_SECONDS = {"ninebar": "30-95 s", "slider_crank": "30-95 s"}  # the others 15-40 s
+# What the first compile of a model's kernel took on the shared 2-core machine, wall time:
+# with an empty cache, Duffing 15 s and the mechanisms 28 s at a load of 5, the mechanisms
+# 74-95 s when more processes than cores were running (benchmarks/RESULTS.md, "Compile times
+# and the kernel cache"); Duffing's kernel alone 40 s at a load of 15 (the benchmarks/cache.py
+# record at e59ae2d, benchmarks/results/cache-duffing.md: the process that recompiled it took
+# 46.5 s, one that loaded it 6.6 s). It is CPU-bound: it scales with the share of a core the
+# process gets. tests/test_docstring_records.py holds the figures to those records.
+_COMPILE_SECONDS = {"ninebar": "28-95 s", "slider_crank": "28-95 s"}
+#: the other models, measured on Duffing
+_COMPILE_SECONDS_OTHERS = "15-40 s"
 
 
 def positive_int(text: str) -> int:
@@ -96,7 +101,7 @@ def compile_kernel(scene, *, quiet: bool = False) -> float | None:
 
     if kernel_cached(scene) is not False:
         return None
-    seconds = _COMPILE_SECONDS.get(scene.model, "15-40 s")
+    seconds = _COMPILE_SECONDS.get(scene.model, _COMPILE_SECONDS_OTHERS)
     say = (lambda s: None) if quiet else (lambda s: print(s, file=sys.stderr, flush=True))
     say(
         f"compiling the {scene.model} kernel (first run only: measured {seconds} on a 2-core "

@@ -95,11 +95,13 @@ def register_cli(sub) -> None:
     """Add the ``study`` subcommand."""
     p = sub.add_parser(
         "study",
-        help="run a study of the paper (or 'all'; 'report' writes studies/REPORT.md)",
+        help="run a study of the paper (or 'all'; 'report' writes the report)",
         description="Run one of the paper's studies (scenes under studies/NAME/): archives, "
         "figures named for the paper's figures, and a summary of paper values and claims. "
-        "NAME 'all' runs every study and writes the report; 'report' only writes "
-        "studies/REPORT.md from stored summaries; 'list' lists the studies.",
+        "NAME 'all' runs every study and writes the report; 'report' only writes the report "
+        "from the summaries stored under OUTPUT; 'list' lists the studies. The report goes to "
+        "studies/REPORT.md in a repository checkout, else (an installed package) to "
+        "OUTPUT/REPORT.md; the command prints where.",
     )
     p.add_argument("name", help="study name, 'all', 'report' or 'list'")
     p.add_argument("-o", "--output", default="out/studies", help="directory (default out/studies)")

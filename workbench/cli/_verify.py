@@ -110,7 +110,10 @@ def register_cli(sub) -> None:
         help="exudyn's fixed steps, s, comma-separated (default 4e-6,2e-6,1e-6)",
     )
     p.add_argument(
-        "--record-dt", type=positive_float, help="record interval, s (default: coarsest step)"
+        "--record-dt",
+        type=positive_float,
+        help="record interval, s, a whole multiple of every step (default: the coarsest step "
+        "for a scene with clearance joints, else 1e-3)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     add_quiet(p, "accepted by every command; this one prints only its results")

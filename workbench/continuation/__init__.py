@@ -3,8 +3,8 @@ settled state, up, down or both ways), periodic orbits of the stroboscopic map b
 with their Floquet multipliers, pseudo-arclength branches with labelled bifurcations, and
 chaos indicators per campaign point.
 
-Above the run and analysis layers, beside campaign (whose store, executors and block files it
-uses for its parallel parts).
+Its own layer, directly above campaign (whose store, executors and block files it uses for its
+parallel parts) and below verification and study (:data:`workbench._layers.LAYERS`).
 """
 
 from workbench.continuation._exponent import PointExponent, exponent_method, point_exponent

@@ -393,6 +393,13 @@ def switch_at_doubling(
     return double, first, away / np.linalg.norm(away)
 
 
-def start_point(smap: StrobeMap, y, aux, p: float, cfg: Settings) -> OrbitPoint:
-    """The converged orbit at ``p`` from the guess (y, aux)."""
-    return orbit_at(smap, y, aux, p, tolerance=cfg.tolerance, max_iterations=30)
+#: Newton's iterations at most for the first orbit of a branch (from a guess, not a prediction)
+START_ITERATIONS = 30
+
+
+def start_point(
+    smap: StrobeMap, y, aux, p: float, cfg: Settings, max_iterations: int = START_ITERATIONS
+) -> OrbitPoint:
+    """The converged orbit at ``p`` from the guess (y, aux), in at most ``max_iterations``
+    Newton iterations (:class:`NewtonFailure` otherwise)."""
+    return orbit_at(smap, y, aux, p, tolerance=cfg.tolerance, max_iterations=max_iterations)

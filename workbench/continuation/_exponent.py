@@ -9,8 +9,9 @@ method is slower there and, on the nine-bar, biased: the two-trajectory method
 (:func:`workbench.analysis.lle_from_equations`) renormalises a copy when its separation grows
 or shrinks by a set factor (renormalised on growth alone, every copy shrank onto a contracting
 orbit until its separation was the integration's noise, and the nine-bar's omega = 0.5 pi,
-c = 20 um read 3.34e4 +- 53 1/s, the noise's rate); it now reads -67.9 1/s over one cycle
-there, 8 % above the variational exponent on the same trajectory (-74.2 1/s).
+c = 20 um read 3.34e4 +- 53 1/s, the noise's rate: the ``benchmarks/continuation.py --parts
+chaos_maps`` record at cf87888); it now reads -67.9 1/s over one cycle there, against -74.2
+1/s for the variational exponent on the same trajectory (tests/test_lyapunov.py).
 
 So where the strobe samples repeat with period k (:func:`workbench.continuation.strobe_period`)
 the exponent is Floquet's. Its check: with the monodromy by copies (the mechanisms), the
@@ -20,8 +21,9 @@ matrix again with a 100x larger difference step, which leaves a true multiplier 
 the error. Where the largest multiplier falls by more than 10x with the larger step it was the
 noise floor of the differences, and the exponent is only bounded: ``ln |mu_max| / (k T)`` at
 the larger step is an upper bound (``bound``). The nine-bar's point above is such an orbit:
-the copies' Jacobian there is noise (entries ~1e-5 of no structure at step 1e-6), and the
-variational monodromy of :func:`workbench.analysis.floquet` puts its exponent at -76 1/s.
+the copies' Jacobian there is noise (entries of no structure), the bound is -3.8 1/s
+(tests/test_continuation.py), and the variational monodromy of
+:func:`workbench.analysis.floquet` puts its exponent below it.
 
 The Floquet exponent is ``converged`` where it is not a bound and its check moved it by at most
 :data:`~workbench.analysis._convergence.TRUST` (20 %) of its value.
@@ -31,11 +33,10 @@ variational one for a model with an analytic Jacobian
 (:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms,
 :func:`workbench.analysis.lle_from_equations`) with the variational exponent carried by the
 same trajectories as its check, with its batch-means standard error. The copies alone are not
-enough on the nine-bar: at omega = 2.2 pi, c = 0.1 mm they read 30.4 +- 5.0 1/s after 4 x 40
-cycles (variants spread 25 %) against 36.7 +- 1.0 with the tangent vector after 4 x 10 (2 %);
-at omega = 2 pi, c = 60 um, c_f = 0.25, 314 +- 86 with one start at 56 (27 %) against 398 +- 5
-(0.2 %). The tangent vector in the error norm takes ~35 % more steps, on which the copies'
-differences stay accurate.
+enough on the nine-bar: at omega = 2.2 pi, c = 0.1 mm they read 30.4 +- 5.0 1/s within a
+budget of 4 x 40 cycles, their variants spread by more than 20 %, against 36.7 +- 1.0 1/s,
+converged, with the tangent vector (tests/test_continuation.py). The tangent vector in the
+error norm takes more steps, on which the copies' differences stay accurate.
 Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve with the
 model's Jacobian, not the derived system's. A point's budget leaves out one check of each
 estimator (:data:`NOT_RUN`: the run at rtol / 100); the estimate is ``converged`` where every
@@ -162,7 +163,7 @@ def floquet_exponent(
     """``ln |mu_max| / (k T)`` of the period-``k`` orbit Newton finds from ``state`` (state
     units; default the state after ``start_cycles`` forcing periods of the scene, default its
     transient), checked as the module docstring says (error, or an upper bound). Raises
-    :class:`~workbench.continuation.NewtonFailure` where Newton does not converge."""
+    :class:`~workbench.continuation._newton.NewtonFailure` where Newton does not converge."""
     smap = StrobeMap(scene, None, periods=period)
     if state is None:
         y, aux = smap.initial(math.nan, start_cycles)

@@ -223,6 +223,29 @@ def chaos_map(
     The scene should record per forcing period (``record.samples_per_period = 1``) at least
     100 cycles (the 0-1 test needs 100 samples). Draw the maps with
     :func:`workbench.plot.chaos_map_figure`.
+
+    Parameters
+    ----------
+    scene : Scene, path or mapping
+        A forced model with a ``[sweep]`` (without ``continuation``).
+    store : str or PathLike
+        Path of the campaign archive; blocks and manifest go to ``<store>.blocks/``.
+    client : dask.distributed.Client, optional
+        Run the blocks on this cluster (default: a local process pool).
+    workers : int, optional
+        Processes of the local pool (default: the CPUs available); not with ``client``.
+    chunk : int, optional
+        Points per block (task); default about four blocks per worker.
+    restart : bool
+        Discard whatever the store holds and start afresh.
+    progress : bool
+        Show a progress bar over points.
+
+    Returns
+    -------
+    xarray.Dataset
+        The campaign (:func:`workbench.run_campaign`) with the indicators of
+        :func:`chaos_indicators` over the parameter dims.
     """
     scene = load_scene(scene)
     return run_campaign(

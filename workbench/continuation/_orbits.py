@@ -11,6 +11,7 @@ import xarray as xr
 
 from workbench.continuation._branch import (
     LABELS,
+    START_ITERATIONS,
     Settings,
     Traced,
     start_point,
@@ -65,7 +66,7 @@ def periodic_orbit(
     state=None,
     discrete_state=None,
     tolerance: float = 1e-8,
-    max_iterations: int = 30,
+    max_iterations: int = START_ITERATIONS,
     rtol: float | None = None,
     monodromy: str = "auto",
 ) -> xr.Dataset:
@@ -86,6 +87,9 @@ def periodic_orbit(
         The discrete state to start from (default the model's initial one, or the transient's).
     tolerance : float
         Newton stops when the scaled residual ``max |P^k(x) - x| / s`` is below this.
+    max_iterations : int
+        Newton's iterations at most (0: only check that the start is an orbit within
+        ``tolerance``); each costs one evaluation of the map and its Jacobian.
     rtol : float, optional
         Integration tolerance (default ``min(scene rtol, 1e-9)``).
     monodromy : str
@@ -96,7 +100,17 @@ def periodic_orbit(
     Returns
     -------
     xarray.Dataset
-        One point of :func:`continue_orbit`'s layout (dim ``point`` of size 1).
+        One point of :func:`continue_orbit`'s layout (dim ``point`` of size 1); attributes
+        ``tolerance`` and ``max_iterations`` as given (``newton_iterations`` says how many it
+        took).
+
+    Raises
+    ------
+    ValueError
+        ``max_iterations`` is not a non-negative integer.
+    RuntimeError
+        Newton's method did not reach ``tolerance`` within ``max_iterations`` iterations (the
+        message gives the residual reached), or the map failed on the way.
 
     Examples
     --------
@@ -105,13 +119,20 @@ def periodic_orbit(
     >>> bool(r.stable[0]), int(r.newton_iterations[0]) <= 5
     (True, True)
     """
+    integer = isinstance(max_iterations, int | np.integer) and not isinstance(max_iterations, bool)
+    if not integer or max_iterations < 0:
+        raise ValueError(
+            f"max_iterations={max_iterations!r}: must be a non-negative integer (Newton's "
+            "iterations at most)"
+        )
     smap = StrobeMap(scene, None, periods=periods, rtol=rtol, monodromy=monodromy)
     t0 = time.perf_counter()
     y, aux = _guess(smap, math.nan, state, discrete_state, None)
-    pt = start_point(smap, y, aux, math.nan, Settings(1.0, (-math.inf, math.inf), tolerance))
+    cfg = Settings(1.0, (-math.inf, math.inf), tolerance)
+    pt = start_point(smap, y, aux, math.nan, cfg, max_iterations=int(max_iterations))
     tr = Traced(smap, [pt], ["start"], [complex(np.nan, np.nan)], "one orbit", pt.evaluations)
     tr.wall_time = time.perf_counter() - t0
-    return _dataset([tr], None, tolerance, max_iterations)
+    return _dataset([tr], None, tolerance, max_iterations=int(max_iterations))
 
 
 def continue_orbit(
@@ -231,7 +252,7 @@ def continue_orbit(
             last.ended += f"; switching at the period doubling failed ({exc})"
             break
         branches.append(trace(double, pt, away, cfg, label="start"))
-    ds = _dataset(branches, parameter, tolerance, max_points)
+    ds = _dataset(branches, parameter, tolerance, max_points=max_points)
     ds.attrs["wall_time"] = time.perf_counter() - t0
     return ds
 
@@ -249,9 +270,15 @@ METHOD = (
 
 
 def _dataset(
-    branches: list[Traced], parameter: str | None, tolerance: float, max_points: int
+    branches: list[Traced],
+    parameter: str | None,
+    tolerance: float,
+    *,
+    max_points: int | None = None,
+    max_iterations: int | None = None,
 ) -> xr.Dataset:
-    """The branches as one dataset (layout: :func:`continue_orbit`)."""
+    """The branches as one dataset (layout: :func:`continue_orbit`); the attributes
+    ``max_points`` (of a branch) and ``max_iterations`` (of one orbit) where given."""
     smap = branches[0].smap
     pb = smap.prepared(smap.value).problem
     states = [q for q in pb.states if not q.name.startswith("_")]
@@ -396,8 +423,11 @@ def _dataset(
         map_evaluations=int(sum(tr.evaluations for tr in branches)),
         branch_wall_time=" ".join(f"{tr.wall_time:.6g}" for tr in branches),
         branch_ended=" | ".join(tr.ended or "-" for tr in branches),
-        max_points=max_points,
     )
+    if max_points is not None:
+        ds.attrs["max_points"] = max_points
+    if max_iterations is not None:
+        ds.attrs["max_iterations"] = max_iterations
     return ds
 
 

@@ -158,7 +158,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
             workers=min(n_workers, len(todo)) if client is None else n_workers,
             cid=cid,
             on_done=commit,
-            announce=progress,
+            announce=progress and stats["rounds"] == 0,  # the dashboard link once
             runner=run_segment,
         )
         stats["computed"] += len(todo)

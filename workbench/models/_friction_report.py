@@ -24,11 +24,11 @@ largest coefficient is taken at the records, whose spacing bounds what it can se
 The coefficient is the law's on the invariant set of its bristles because an explicit method
 at its stability bound (DOP853 on LuGre, benchmarks/lugre_stiffness.py) integrates the stiff
 bristle state accurately at its steps but not in between: its stages, and its dense output at
-the records, can put z far outside the set (measured: up to 20 times it at 139 of 10^6 records
-of a default Sec. 4.2 run with DOP853 at rtol 1e-6; none with ARK548, which integrates the
-bristles implicitly). Those values are the integrator's error, and ``friction_force`` (and what
-depends on it at the records: torques, accelerations) carries it there; the law's coefficient
-does not. :func:`friction_summary` puts the diagnostics in the run's summary line and
+the records, can put z outside the set (measured: at a small fraction of the records of a
+default Sec. 4.2 run with DOP853 at rtol 1e-6, at none with ARK548, which integrates the
+bristles implicitly). Those values are the integrator's error, and ``friction_force`` (and
+what depends on it at the records: torques, accelerations) carries it there; the law's
+coefficient does not. :func:`friction_summary` puts the diagnostics in the run's summary line and
 :func:`friction_warnings` says where a run leaves the envelope and why, and where the records'
 bristle deflection left its invariant set.
 """

@@ -194,9 +194,10 @@ def lugre_diagnostic(vt, z, decay, s0, s1, fp):
     1995, Property 1: the exact solution never leaves it). Where the integration is accurate
     it is -F_t / F_n; a z beyond the set is the integrator's error, not the law's (a stage of
     an explicit step, or the dense output of the stiff bristle state between two steps of
-    DOP853 at its stability bound, measured up to 20 times the set), and is not the friction
-    law leaving its physics. ``decay`` is the relaxation rate a (s-1), s0 (m-1) and the damping
-    in effect s1 (s m-1) as in :func:`workbench.models.friction.lugre_coefficient`."""
+    DOP853 at its stability bound: :mod:`workbench.models._friction_report`), and is not the
+    friction law leaving its physics. ``decay`` is the relaxation rate a (s-1), s0 (m-1) and
+    the damping in effect s1 (s m-1) as in :func:`workbench.models.friction.lugre_coefficient`.
+    """
     zmax = max(fp[FRICTION.mu_s], fp[FRICTION.mu_k]) / s0
     zc = min(max(z, -zmax), zmax)
     return lugre_coefficient(vt, zc, vt - decay * zc, s0, s1, fp[FRICTION.sigma2])
@@ -319,11 +320,12 @@ def spd4_solve(m00, m10, m11, m20, m21, m22, m30, m31, m32, m33, b0, b1, b2, b3)
     with the Schur complement S = C - B^T A^-1 B, then x_1 = A^-1 (b_1 - B x_2), each 2 x 2
     inverse by its adjugate (block LU factorisation: Golub & Van Loan 2013, *Matrix
     Computations*, 4th ed., Sec. 3.2). Two divisions and no square root on the critical path
-    (an unrolled Cholesky factorisation chains four square roots and ten divisions: measured
-    0.07 us of a 0.33 us right-hand side). M is positive definite exactly when A and S are
-    (Horn & Johnson 2013, *Matrix Analysis*, 2nd ed., Sec. 7.7), i.e. when m00, det A, s00
-    and det S are positive. A smaller system is solved by padding it with identity rows (zero
-    off-diagonal entries, 1 on the diagonal, 0 right-hand side).
+    (an unrolled Cholesky factorisation chains four square roots and ten divisions, and cost
+    0.07 us: benchmarks/RESULTS.md, "Before 0.2.0", "Cost of an evaluation"). M is positive
+    definite exactly when A and S are (Horn & Johnson 2013, *Matrix Analysis*, 2nd ed., Sec.
+    7.7), i.e. when m00, det A, s00 and det S are positive. A smaller system is solved by
+    padding it with identity rows (zero off-diagonal entries, 1 on the diagonal, 0 right-hand
+    side).
 
     Returns
     -------

@@ -1,7 +1,13 @@
 """Figures (PNG, labelled axes with units) of runs, campaigns, studies and analyses.
 
-Every function returns a :class:`matplotlib.figure.Figure` (or writes PNG files and returns their
-paths); nothing is shown on screen.
+Every ``*_figure`` function returns a :class:`matplotlib.figure.Figure`, and :func:`run_figures`
+writes PNG files and returns their paths; nothing is shown on screen. The helpers beside them
+return no figure: :func:`display_scale` (the factor and SI-prefixed unit to show values with),
+:func:`coarse_sampling` (the largest jump between records, and when), :func:`wrap_title` (a
+title broken into lines), :func:`failure_note` and :func:`run_status_note` (text on failed
+points or a failed run), :func:`mark_failed` (marks failed parameter values on given axes and
+returns a note), :func:`run_figure_names` (the file names :func:`run_figures` writes) and
+:func:`register_overview` (a decorator that adds a model's overview to :func:`run_figures`).
 """
 
 from workbench.plot._accuracy import work_precision_figure

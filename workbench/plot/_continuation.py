@@ -60,10 +60,11 @@ def branch_figure(
 ):
     """A branch of periodic orbits (from :func:`workbench.continuation.continue_orbit`) over an
     orbit diagram: each orbit's strobe samples of ``state`` against the parameter, solid where
-    the orbit is stable and dashed where not, its labelled points marked (LP fold, BP branch
-    point, PD period doubling, NS Neimark-Sacker, G grazing); under it, when given, the strobe
-    samples of a sweep (:func:`workbench.analysis.bifurcation_diagram` of a campaign or a
-    continued sweep, one colour per direction).
+    the orbit is stable and dashed where not, its labelled points marked as in
+    :data:`LABEL_MARKS` (LP fold, BP branch point, PD period doubling, NS Neimark-Sacker, G
+    grazing, NF nonsmooth fold); under it, when given, the strobe samples of a sweep
+    (:func:`workbench.analysis.bifurcation_diagram` of a campaign or a continued sweep, one
+    colour per direction).
 
     ``scale`` multiplies the parameter on the x axis (e.g. ``1 / pi``, with ``xlabel``).
     """

@@ -88,6 +88,12 @@ class Scene:
     continuation : Mapping
         The ``[sweep]`` table's ``continuation`` settings, defaults filled in (empty: every point
         of the sweep starts from the scene's initial state; see :mod:`workbench.continuation`).
+    title : str
+        The top-level ``title`` ('' if none): the ``title`` attribute of the scene's runs and
+        campaigns (without it, one that names the model).
+    description : str
+        The top-level ``description`` ('' if none): free text, kept in the scene's TOML (which
+        every run and campaign stores in its ``scene`` attribute).
     """
 
     model: str

@@ -72,9 +72,8 @@ FAC_GROW = 8.0
 FAC_SHRINK = 5.0
 #: the Jacobian is kept while the Newton iteration contracts faster than this (RADAU5's THET:
 #: 0.001 for cheap Jacobians, larger where they are costly); an analytic Jacobian costs no
-#: evaluation, a finite-difference one 2n (measured: Van der Pol, analytic, 0.001 saves 20 %
-#: of the evaluations against 0.1; the nine-bar, differenced, 0.3 saves 15-50 % against 0.1
-#: and 0.001)
+#: evaluation, a finite-difference one 2n (measured: on Van der Pol, analytic, 0.001 took
+#: fewer evaluations than 0.1; on the nine-bar, differenced, 0.3 fewer than 0.1 and 0.001)
 THETA_KEEP_ANALYTIC = 0.001
 THETA_KEEP_DIFFERENCED = 0.3
 #: the step (and with it the LU factors) is kept while the controller asks for a ratio in
@@ -94,10 +93,10 @@ FAILED = 2  # diverging, a model failure or a non-finite stage: retry with half 
 
 #: Hairer's stiffness test (his code DOP853) counts a step as stability-bound where
 #: |h lambda| > 6.1, DOP853's stability bound on the negative real axis. On the nine-bar in
-#: contact (0.1 pi, a lightly damped contact mode at ~7e3 1/s) DOP853's steps settle at
-#: |h lambda| = 3.9-4.1 with no rejections: the bound there is that of the error estimator,
-#: which the 6.1 test never sees. A step counts as stability-bound above EXPLICIT_TRIGGER, and
-#: the explicit method's stability-bound step is taken as EXPLICIT_STEP / rho.
+#: contact (0.1 pi, a lightly damped contact mode at ~7e3 1/s) DOP853's steps settle below
+#: 6.1 with no rejections: the bound there is that of the error estimator, which the 6.1 test
+#: never sees. So a step counts as stability-bound above EXPLICIT_TRIGGER, below 6.1, and the
+#: explicit method's stability-bound step is taken as EXPLICIT_STEP / rho.
 EXPLICIT_TRIGGER = 3.5
 EXPLICIT_STEP = 4.0
 #: the problem is declared stiff after STIFF_HITS positive tests with fewer than
@@ -274,8 +273,8 @@ def newton_limit(rc, h, h_next):
     bound that relaxes by NEWTON_RELAX per accepted step. Where a contact's or a friction law's
     steep rate limits the Newton iteration, not the error, the error-based controller keeps
     proposing steps 2-4x larger than the iteration converges for, each failure costing a
-    Jacobian and two iterations (measured on the nine-bar at 0.1 pi: a Newton failure on 2 of
-    every 3 steps without this bound)."""
+    Jacobian and two iterations (measured on the nine-bar at 0.1 pi: without this bound most
+    steps failed their Newton iteration first)."""
     h_fail = rc[RC_H_FAIL]
     if h_fail <= 0.0:
         return h_next

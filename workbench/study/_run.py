@@ -55,8 +55,8 @@ def run_study(
         paper's figures), ``summary.json`` (what the report reads) and ``summary.nc`` (the
         returned dataset).
     quick : bool
-        Much shorter runs and at most 4 realisations (:func:`workbench.study.quick_study`),
-        for smoke tests only.
+        Much shorter runs and at most 4 realisations
+        (:func:`workbench.study._spec.quick_study`), for smoke tests only.
     workers : int, optional
         Processes for the campaigns (default: all CPUs).
     progress : bool
