@@ -281,3 +281,12 @@ def test_the_interrupt_figures_are_the_code_s_and_its_test_s():
     test = source.split("def test_cli_run_quiet_stops_on_a_signal_in_one_line")[1]
     bound = float(re.search(r"assert latency < ([\d.]+)", test).group(1))
     assert f"`workbench run: interrupted` within the {bound:g} s from the signal that" in page
+
+
+def test_the_models_page_quotes_the_lugre_damping_record():
+    """docs/models.md: the paper's constant bristle damping takes |F_t|/F_n to the peak that the
+    hand-written ``lugre_damping.py`` section of benchmarks/RESULTS.md records."""
+    record = " ".join(RESULTS.read_text().split())
+    peak = re.search(r"constant damping \(316\.2 s/m\) reaches ([\d.]+),", record).group(1)
+    assert f"|F_t|/F_n to tens ({peak} on the paper's Sec. 4.2 case" in _page("models.md")
+    assert 10 <= float(peak) < 100  # "tens"
