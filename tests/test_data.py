@@ -86,8 +86,8 @@ def test_a_stale_archive_fails_the_check(tmp_path):
         _same_structure(stale, fresh, "stale")
 
 
-#: the chaos maps whose archives data/ ships (omega_clearance: not recomputed on 0.5.0 yet)
-MAPS = ("clearance_friction",)
+#: the chaos maps whose archives data/ ships (``make chaos-maps``)
+MAPS = ("omega_clearance", "clearance_friction")
 
 
 def _map_quotes(maps: xr.Dataset) -> list[str]:
@@ -160,3 +160,19 @@ def test_the_chaos_maps_the_docs_quote(name):
         first = lle.isel(friction_coefficient=1) > lle.isel(friction_coefficient=0)
         assert first.clearance[~first].values.tolist() == [4e-5]  # ... from 0.01 but at 40 um
         assert (lle.sel(friction_coefficient=slice(0.18, None)) > 100).all()  # s-1
+    if name == "omega_clearance":
+        period = maps.strobe_period.transpose("clearance", "omega")
+        slow = period.omega < 1.8 * np.pi
+        assert (period[:, slow] == 1).all() and (period[:, ~slow] == 0).all()
+        lle = maps.lle.transpose("clearance", "omega")
+        at = {k: lle.sel(omega=k * np.pi, method="nearest") for k in (2, 3)}
+        assert f"from {at[2].min():.0f}-{at[2].max():.0f} 1/s at 2 pi" in section
+        assert f"to {at[3].min():.0f}-{at[3].max():.0f} 1/s at 3 pi" in section
+        assert (at[3].diff("clearance") > 0).all()  # "where they grow with the clearance"
+        assert (lle[:, slow] < 0).all()  # Floquet's, all negative
+        bound = maps.lle_status.transpose("clearance", "omega") == 2
+        assert f"{int(bound.sel(clearance=2e-5).sum())} of them at 20 um" in section
+        # "the same scenes give the same numbers": the c_f = 0.01 row of the other map
+        other = workbench.open_run(DATA / "clearance_friction_map.nc")
+        row = other.lle.sel(friction_coefficient=0.01, method="nearest")
+        np.testing.assert_array_equal(row.values, at[2].values)
