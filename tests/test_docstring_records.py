@@ -271,12 +271,19 @@ def test_the_point_exponent_docstring_quotes_its_record_and_tests():
         r"round\(e\.value, 1\) == ([\d.]+) and round\(e\.error, 1\) == ([\d.]+)", test
     )
     assert "e.converged" in test
+    tight = re.search(
+        r"round\(float\(tight\.lle\), 1\) == ([\d.]+) and round\(float\(tight\.stderr\), 1\) "
+        r"== ([\d.]+)",
+        test,
+    )
+    assert "variational=False, rtol=1e-8" in test
     starts = _benettin.STARTS
     assert (
         f"at omega = 2.2 pi, c = 0.1 mm they read {alone[0]} +- {alone[1]} 1/s within a budget of "
         f"{starts} x {budget // starts} cycles, their variants spread by more than "
         f"{spread * 100:.0f} %, against {tangent[1]} +- {tangent[2]} 1/s, converged, with the "
-        "tangent vector (tests/test_continuation.py)"
+        f"tangent vector, and {tight[1]} +- {tight[2]} 1/s alone at rtol 1e-8 "
+        "(tests/test_continuation.py)"
     ) in doc
     assert cycles == 40 and budget == 160
 
