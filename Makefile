@@ -43,7 +43,7 @@ studies: $(STAMP)
 	$(PY) docs/hooks.py $(OUT)/studies
 
 # Chaos indicators of the nine-bar over (omega, c) and (c, c_f): campaigns whose workers measure
-# the strobe period, 0-1 K and largest exponent (their cost per point: `python
+# the strobe period, 0-1 K and largest exponent (what their corner points cost: `python
 # benchmarks/continuation.py --parts chaos_maps`, recorded in benchmarks/RESULTS.md). Each map
 # runs under GNU time (its CPU, with the load before and after) and its indicators go to
 # data/<map>_map.nc (docs/continuation.md quotes them; tests/test_data.py checks the quotes),

@@ -18,8 +18,10 @@
 3. ``chaos_maps``: what a point of the nine-bar's chaos maps (``make chaos-maps``:
    ``studies/chaos_maps/*.toml``) costs: the run and its indicators
    (:func:`workbench.continuation.chaos_indicators`: strobe period, 0-1 K, largest exponent)
-   at ``--map-points`` (2) corners of each grid in this process, CPU time per point, scaled to
-   the whole grid on ``--workers`` workers.
+   at ``--map-points`` (2) corners of each grid in this process, CPU time per point, beside
+   the mean point of the whole map as ``make chaos-maps`` measured it (``data/<map>_map.nc``,
+   the points' wall times). Corners are no estimate of a map: a periodic point takes seconds, a
+   chaotic one minutes, more with more friction.
 
 Prints every figure with the CPU time (``time.process_time``), the wall time and the load
 (appended to ``benchmarks/RESULTS.md``, :mod:`_results`); writes the continued diagram to
@@ -166,13 +168,24 @@ def chaos_maps(args) -> None:
                 f"{int(found.strobe_period)}, K {float(found.zero_one_K):.2f}, lle "
                 f"{float(found.lle):.3g} +- {float(found.lle_stderr):.2g} s-1)"
             )
-        each = float(np.mean(cpu))
         shape = " x ".join(f"{d} {len(v)}" for d, v in zip(dims, grid, strict=True))
+        shipped = ROOT / "data" / f"{path.stem}_map.nc"
+        measured = "no archive in data/"
+        if shipped.exists():
+            maps = workbench.open_run(shipped)
+            if workbench.scene_from_toml(maps.attrs["scene"]).to_toml() == scene.to_toml():
+                wall = maps.point_wall_time.values
+                measured = (
+                    f"the whole map (make chaos-maps): {wall.mean():.1f} s per point, "
+                    f"{wall.min():.1f}-{wall.max():.1f} s, {wall.sum() / 60:.0f} min of the "
+                    f"workers' time"
+                )
+            else:
+                measured = "data/ holds another grid's map"
         print(
             f"chaos map {path.stem} ({shape} = {size} points, "
-            f"{scene.run['transient_cycles']} + {scene.run['cycles']} cycles): "
-            f"{each:.1f} s CPU per point -> {each * size / 60:.1f} min CPU, "
-            f"{each * size / args.workers / 60:.1f} min on {args.workers} idle workers; "
+            f"{scene.run['transient_cycles']} + {scene.run['cycles']} cycles): corners "
+            f"{float(np.mean(cpu)):.1f} s CPU per point; {measured}; "
             f"load {os.getloadavg()[0]:.1f}"
         )
 
