@@ -116,3 +116,23 @@ def test_notebook_text_quotes_no_number_of_its_own():
             text = re.sub(r"```.*?```", "", cell.source, flags=re.S)  # code shown, not run
             text = allowed.sub("", text)
             assert not re.findall(r"\b\d+(?:\.\d+)?\b", text), (path.name, text[:200])
+
+
+@pytest.mark.slow
+def test_notebook_04_quotes_the_chaos_maps(executed):
+    out = _stdout(executed["04_chaos_maps"][1])
+    maps = workbench.open_run(ROOT / "data" / "omega_clearance_map.nc")
+    period = maps.strobe_period
+    assert f"periodic points: {int((period > 0).sum())} of {period.size}" in out
+    unmet = maps.lle_unmet.values.astype(int)
+    meanings = maps.lle_unmet.attrs["flag_meanings"].split()
+    for name, mask in zip(meanings, maps.lle_unmet.attrs["flag_masks"], strict=True):
+        n = int(((unmet & mask) != 0).sum())
+        assert (f"{name}: {n} points" in out) == (n > 0), name
+    assert "shared points identical: True" in out
+
+
+def test_the_readme_counts_the_notebooks():
+    words = {3: "three", 4: "four", 5: "five", 6: "six"}
+    readme = (ROOT / "README.md").read_text()
+    assert f"`notebooks/` ({words[len(NOTEBOOKS)]} notebooks" in readme
