@@ -47,7 +47,8 @@ studies: $(STAMP)
 # benchmarks/continuation.py --parts chaos_maps`, recorded in benchmarks/RESULTS.md). Each map
 # runs under GNU time (its CPU, with the load before and after) and its indicators go to
 # data/<map>_map.nc (docs/continuation.md quotes them; tests/test_data.py checks the quotes),
-# its figure to docs/figures/chaos-map-<map>.png (shown on the site).
+# its figure to docs/figures/chaos-map-<map>.png (shown on the site). Then the end of the
+# periodic motion per clearance, in steps of 0.01 pi up and down (data/periodic_end.nc).
 MAPS := omega_clearance clearance_friction
 chaos-maps: $(STAMP)
 	mkdir -p $(OUT)/chaos_maps
@@ -60,6 +61,7 @@ chaos-maps: $(STAMP)
 		$(PY) data/regenerate.py --chaos-map $(OUT)/chaos_maps/$$m.nc $(OUT)/chaos_maps/$$m.log && \
 		cp $(OUT)/chaos_maps/$$m.png docs/figures/chaos-map-$$m.png || exit 1; \
 	done
+	$(PY) data/regenerate.py --periodic-end
 
 # The small archives the notebooks open (tests/test_data.py fails when they are stale), and the
 # notebooks executed in place on them (committed with their outputs: the site shows them).

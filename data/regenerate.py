@@ -12,8 +12,8 @@ Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), th
 code writes.
 
 - ``<map>_map.nc``: a chaos map of ``studies/chaos_maps/<map>.toml`` (``make chaos-maps``
-  computes both, each of order an hour of CPU; data/ ships ``clearance_friction_map.nc``, the
-  5 x 5 map over c and c_f) without its strobe samples: the
+  computes both, each of order an hour of CPU; data/ ships both) without its strobe
+  samples: the
   per-point indicators (strobe period, 0-1 K, largest exponent with its error, method, status
   and convergence flags), the points' status and solver statistics, and the cost of the run
   from its log (attributes ``measured_*``: the workers' time, the wall time of GNU
@@ -22,6 +22,10 @@ code writes.
   ``make chaos-maps`` under ``/usr/bin/time -v`` with ``uptime`` before and after in LOG:
   ``python data/regenerate.py --chaos-map out/chaos_maps/clearance_friction.nc LOG`` (the
   archive is named after the map: ``data/<map>_map.nc``).
+- ``periodic_end.nc``: the strobe period of every point of the continued sweep of
+  ``studies/periodic_end.toml`` (omega 1.75-2 pi in steps of 0.01 pi, up and down, at the
+  maps' clearances) and its cost; ``python data/regenerate.py --periodic-end`` (``make
+  chaos-maps`` runs it; minutes on 2 workers).
 """
 
 from __future__ import annotations
@@ -93,8 +97,62 @@ def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
     return target
 
 
+def periodic_end(target: Path, workers: int = 2) -> Path:
+    """The continued sweep of studies/periodic_end.toml (up and down over omega, per clearance)
+    reduced to the strobe period of every point (:func:`workbench.continuation.strobe_period`
+    of its clearance coordinates at A and B), with the sweep's cost as attributes, written to
+    ``target``."""
+    import tempfile
+
+    import numpy as np
+    import xarray as xr
+
+    from workbench.continuation import continued_sweep, strobe_period
+
+    scene = workbench.load_scene(ROOT / "studies" / "periodic_end.toml")
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = continued_sweep(scene, Path(tmp) / "sweep.nc", workers=workers, progress=False)
+    dims = ("direction", "omega", "clearance")
+    samples = xr.concat([ds.clearance_x, ds.clearance_y], "variable")
+    samples = samples.transpose(*dims, "time", "joint", "variable")
+    period = np.zeros([ds.sizes[d] for d in dims], dtype=np.int8)
+    for index in np.ndindex(period.shape):
+        s = samples.values[index].reshape(ds.sizes["time"], -1)
+        period[index] = strobe_period(s[np.isfinite(s).all(axis=1)])
+    out = xr.Dataset(
+        {
+            "strobe_period": (
+                dims,
+                period,
+                {
+                    "units": "1",
+                    "long_name": "period of the strobe samples in forcing periods "
+                    "(0: none up to 16)",
+                },
+            ),
+            "status": ds.status.transpose(*dims),
+        },
+        coords={d: ds[d] for d in dims},
+        attrs={
+            k: ds.attrs[k]
+            for k in ds.attrs
+            if k in ("title", "scene", "format_version", "package_versions", "model", "code_digest")
+            or k.startswith("continuation_")
+        },
+    )
+    out.attrs.update(
+        measured_worker_time=float(ds.attrs["campaign_cpu_time"]),
+        measured_wall_time=float(ds.attrs["campaign_wall_time"]),
+        measured_workers=workers,
+    )
+    workbench.save_run(out, target, classic=True)
+    return target
+
+
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--chaos-map"]:
+    if sys.argv[1:2] == ["--periodic-end"]:
+        print(periodic_end(DATA / "periodic_end.nc"))
+    elif sys.argv[1:2] == ["--chaos-map"]:
         source = Path(sys.argv[2])
         print(chaos_map_summary(source, Path(sys.argv[3]), DATA / f"{source.stem}_map.nc"))
     else:

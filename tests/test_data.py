@@ -176,3 +176,41 @@ def test_the_chaos_maps_the_docs_quote(name):
         other = workbench.open_run(DATA / "clearance_friction_map.nc")
         row = other.lle.sel(friction_coefficient=0.01, method="nearest")
         np.testing.assert_array_equal(row.values, at[2].values)
+
+
+def test_the_end_of_the_periodic_motion_the_docs_quote():
+    """data/periodic_end.nc is the strobe period of every point of studies/periodic_end.toml's
+    continued sweep (``python data/regenerate.py --periodic-end``), and docs/continuation.md
+    quotes where the periodic motion ends per clearance both ways, the hysteresis and the
+    sweep's cost."""
+    ends = workbench.open_run(DATA / "periodic_end.nc")
+    scene = workbench.load_scene(DATA.parent / "studies" / "periodic_end.toml")
+    assert workbench.scene_from_toml(ends.attrs["scene"]).to_toml() == scene.to_toml()
+    assert (ends.status.values == 0).all()
+    assert ends.strobe_period.attrs["units"] == "1"
+    omega = ends.omega.values / np.pi
+    last, first = {}, {}
+    for d in ("up", "down"):
+        for c in ends.clearance.values:
+            periodic = ends.strobe_period.sel(direction=d, clearance=c).values > 0
+            k = int(periodic.sum())
+            assert periodic[:k].all() and not periodic[k:].any(), (d, c)  # one end, no return
+            last[d, c], first[d, c] = omega[k - 1], omega[k]
+    cs = ends.clearance.values
+    text = " ".join((DATA.parent / "docs" / "continuation.md").read_text().split())
+    section = text[text.index("`periodic_end`") :][:1500]
+    listed = " / ".join(f"{c * 1e6:.0f}" for c in cs)
+    up = " / ".join(f"{last['up', c]:.2f}" for c in cs)
+    down = " / ".join(f"{last['down', c]:.2f}" for c in cs)
+    assert f"period-1 up to {up} pi at c = {listed} um" in section
+    assert f"coming down it is period-1 again from {down} pi" in section
+    differ = [c for c in cs if last["up", c] != last["down", c]]
+    assert [f"{c * 1e6:.0f}" for c in differ] == ["80"]
+    c = differ[0]
+    assert f"at 80 um the two directions differ between {first['up', c]:.2f} and " in section
+    assert f"{last['down', c]:.2f} pi" in section
+    assert last["up", 1e-4] == last["down", 1e-4]  # "At 100 um ... the two agree"
+    a = ends.attrs
+    wall, workers = a["measured_wall_time"] / 60, a["measured_workers"]
+    assert f"took {wall:.0f} min wall on {workers} workers" in section
+    assert f"{a['measured_worker_time'] / 60:.0f} min of the workers' CPU" in section
