@@ -181,35 +181,39 @@ def test_the_chaos_maps_the_docs_quote(name):
 def test_the_end_of_the_periodic_motion_the_docs_quote():
     """data/periodic_end.nc is the strobe period of every point of studies/periodic_end.toml's
     continued sweep (``python data/regenerate.py --periodic-end``), and docs/continuation.md
-    quotes where the periodic motion ends per clearance both ways, the hysteresis and the
-    sweep's cost."""
+    quotes where the periodic motion ends per clearance both ways, the one clearance whose end
+    is not clean, and the sweep's cost."""
     ends = workbench.open_run(DATA / "periodic_end.nc")
     scene = workbench.load_scene(DATA.parent / "studies" / "periodic_end.toml")
     assert workbench.scene_from_toml(ends.attrs["scene"]).to_toml() == scene.to_toml()
     assert (ends.status.values == 0).all()
     assert ends.strobe_period.attrs["units"] == "1"
-    omega = ends.omega.values / np.pi
-    last, first = {}, {}
-    for d in ("up", "down"):
-        for c in ends.clearance.values:
-            periodic = ends.strobe_period.sel(direction=d, clearance=c).values > 0
-            k = int(periodic.sum())
-            assert periodic[:k].all() and not periodic[k:].any(), (d, c)  # one end, no return
-            last[d, c], first[d, c] = omega[k - 1], omega[k]
-    cs = ends.clearance.values
+    omega = np.round(ends.omega.values / np.pi, 2)
+    rows = {
+        (d, round(float(c) * 1e6)): ends.strobe_period.sel(direction=d, clearance=c).values
+        for d in ("up", "down")
+        for c in ends.clearance.values
+    }
+
+    def end(row):
+        """The last omega / pi of a clean end (period 1, then no period), else None."""
+        k = int((row > 0).sum())
+        return omega[k - 1] if (row[:k] == 1).all() and not row[k:].any() else None
+
+    clean = [c for c in (20, 40, 60, 80, 100) if end(rows["up", c]) == end(rows["down", c])]
+    clean = [c for c in clean if end(rows["up", c]) is not None]
+    assert clean == [20, 40, 60, 100]
     text = " ".join((DATA.parent / "docs" / "continuation.md").read_text().split())
-    section = text[text.index("`periodic_end`") :][:1500]
-    listed = " / ".join(f"{c * 1e6:.0f}" for c in cs)
-    up = " / ".join(f"{last['up', c]:.2f}" for c in cs)
-    down = " / ".join(f"{last['down', c]:.2f}" for c in cs)
-    assert f"period-1 up to {up} pi at c = {listed} um" in section
-    assert f"coming down it is period-1 again from {down} pi" in section
-    differ = [c for c in cs if last["up", c] != last["down", c]]
-    assert [f"{c * 1e6:.0f}" for c in differ] == ["80"]
-    c = differ[0]
-    assert f"at 80 um the two directions differ between {first['up', c]:.2f} and " in section
-    assert f"{last['down', c]:.2f} pi" in section
-    assert last["up", 1e-4] == last["down", 1e-4]  # "At 100 um ... the two agree"
+    section = text[text.index("`periodic_end`") :][:1800]
+    listed = " / ".join(str(c) for c in clean)
+    last = " / ".join(f"{end(rows['up', c]):.2f}" for c in clean)
+    assert f"At c = {listed} um the strobe is period-1 up to {last} pi" in section
+    assert end(rows["up", 100]) == 1.86 and end(rows["up", 100]) + 0.01 == omega[12]
+    up, down = rows["up", 80], rows["down", 80]
+    at = {w: int(np.flatnonzero(omega == w)[0]) for w in (1.84, 1.85, 1.86)}
+    assert [int(up[at[w]]) for w in (1.84, 1.85, 1.86)] == [0, 1, 8]
+    assert "no period at 1.84 pi, period 1 at 1.85 pi and period 8 at 1.86 pi" in section
+    assert end(down) == 1.85 and "going down it is period-1 from 1.85 pi" in section
     a = ends.attrs
     wall, workers = a["measured_wall_time"] / 60, a["measured_workers"]
     assert f"took {wall:.0f} min wall on {workers} workers" in section
