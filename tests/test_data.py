@@ -172,6 +172,9 @@ def test_the_chaos_maps_the_docs_quote(name):
         assert (lle[:, slow] < 0).all()  # Floquet's, all negative
         bound = maps.lle_status.transpose("clearance", "omega") == 2
         assert f"{int(bound.sel(clearance=2e-5).sum())} of them at 20 um" in section
+        report = " ".join((DATA.parent / "studies" / "REPORT.md").read_text().split())
+        assert "period-1 up to 1.86 pi and not at 1.87 pi" in report  # "between 1.86 and 1.87"
+        assert "locates it between 1.86 and 1.87 pi" in section
         # "the same scenes give the same numbers": the c_f = 0.01 row of the other map
         other = workbench.open_run(DATA / "clearance_friction_map.nc")
         row = other.lle.sel(friction_coefficient=0.01, method="nearest")
