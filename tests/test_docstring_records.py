@@ -231,7 +231,9 @@ def test_the_point_exponent_docstring_quotes_its_record_and_tests():
     exponents from tests/test_lyapunov.py; its Floquet bound and the copies-alone and
     tangent-vector exponents at omega = 2.2 pi from tests/test_continuation.py."""
     doc = _doc(_exponent)
-    (entry,) = [e for e in _entries("continuation.py") if "--parts chaos_maps" in e]
+    # the "before" figure: the oldest chaos_maps record (two-trajectory copies on that orbit;
+    # later records give its Floquet bound)
+    entry = next(e for e in _entries("continuation.py") if "--parts chaos_maps" in e)
     rate, err = re.search(
         r"omega_clearance at omega=1\.571, clearance=2e-05: .*?lle ([\d.e+]+) \+- (\d+) s-1", entry
     ).groups()
