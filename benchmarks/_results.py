@@ -103,6 +103,7 @@ def recording(script: str) -> Iterator[None]:
     RESULTS.md; a body that raises is recorded as failed and the error goes on."""
     path = results_path()
     started = datetime.datetime.now(datetime.UTC)
+    measured = commit()  # the code that runs: the tree may move on during a long run
     load_before, cpu0, wall0 = _load(), time.process_time(), time.perf_counter()
     tee = _Tee(sys.stdout)
     outcome = "completed"
@@ -117,7 +118,7 @@ def recording(script: str) -> Iterator[None]:
             name = Path(script).name
             command = " ".join(["python", f"benchmarks/{name}", *sys.argv[1:]])
             entry = (
-                f"\n## {name}: {started:%Y-%m-%d %H:%M} UTC, commit {commit()}\n\n"
+                f"\n## {name}: {started:%Y-%m-%d %H:%M} UTC, commit {measured}\n\n"
                 f"- command: `{command}` ({outcome})\n"
                 f"- machine: {machine()}\n"
                 f"- load average (1/5/15 min) before: {load_before}, "
