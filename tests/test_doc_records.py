@@ -51,6 +51,23 @@ def _e(token: str) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
+#: the hand-written section of benchmarks/RESULTS.md on the tangent's re-orthonormalisation
+DEFECT_SECTION = "The tangent system re-orthonormalised at step ends"
+
+
+def defect_record() -> tuple[str, str, str, str]:
+    """That section's title, the commit it was measured at, and the steps per cycle it gives
+    for ``defect`` 10 and 1 (8 exponents over 0.1 cycle)."""
+    text = " ".join(RESULTS.read_text().split())
+    found = re.search(rf"## {DEFECT_SECTION} .*? runs were measured at (\w+),", text)
+    d10, d1 = re.search(
+        r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
+        r"D = 1 ([\d.e]+) and",
+        text,
+    ).groups()
+    return DEFECT_SECTION, found.group(1), d10, d1
+
+
 # -- benchmarks/tangent_speed.py ------------------------------------------------------------------
 _WINDOW = re.compile(
     r"nine-bar chaos case, ([\d.]+) cycles after the default transient \(t0 = ([\d.]+) s\), "
@@ -143,14 +160,7 @@ def test_the_tangent_cost_is_the_newest_tangent_speed_record():
         f"at {two['m = 8']['commit']})"
     ) in page
 
-    text = " ".join(RESULTS.read_text().split())  # the hand-written section on the tangent
-    section = "The tangent system re-orthonormalised at step ends"
-    measured_at = re.search(rf"## {section} .*? runs were measured at (\w+),", text).group(1)
-    d10, d1 = re.search(
-        r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
-        r"D = 1 ([\d.e]+) and",
-        text,
-    ).groups()
+    section, measured_at, d10, d1 = defect_record()
     assert (
         f"a `defect` of 1 took {d1} steps per cycle against {d10} at 10, with 8 exponents over "
         f'0.1 cycle, measured at {measured_at}: `benchmarks/RESULTS.md`, "{section}")'

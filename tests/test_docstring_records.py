@@ -22,6 +22,7 @@ from test_doc_records import (
     _n,
     _newest,
     _tangent_records,
+    defect_record,
 )
 
 from workbench.analysis import _benettin, _embedding, _lyapunov, _surrogate
@@ -311,14 +312,7 @@ def test_the_defect_comment_quotes_the_tangent_speed_records():
     benchmarks/RESULTS.md it names, the sum checks and steps from the newest tangent_speed
     record of each window, with their commits (as docs/analysis.md quotes them)."""
     comment = _comment(_lyapunov, "DEFECT")
-    text = _flat(RESULTS.read_text())
-    section = "The tangent system re-orthonormalised at step ends"
-    measured_at = re.search(rf"## {section} .*? runs were measured at (\w+),", text).group(1)
-    d10, d1 = re.search(
-        r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
-        r"D = 1 ([\d.e]+) and",
-        text,
-    ).groups()
+    section, measured_at, d10, d1 = defect_record()
     assert (
         f"(chaos case, 8 exponents over 0.1 cycle, rtol 1e-6: D = 1 took {d1} steps per cycle "
         f'against {d10} at D = 10, measured at {measured_at}: benchmarks/RESULTS.md, "{section}")'
