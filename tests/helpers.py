@@ -26,3 +26,16 @@ def energy_residual(ds: xr.Dataset) -> xr.DataArray:
         - (ds.kinetic_energy - ds.kinetic_energy[0])
         - (ds.potential_energy - ds.potential_energy[0])
     )
+
+
+#: how many combined standard errors two estimates of one chaotic or statistical quantity may
+#: differ by: about a 0.3 % chance for two independent Gaussian estimates of the same value
+AGREE_SIGMAS = 3.0
+
+
+def agrees(value: float, error: float, quoted: float, quoted_error: float) -> bool:
+    """Whether an estimate and a quoted one (each with its standard error) agree within
+    AGREE_SIGMAS combined errors: how a chaotic or statistical number computed now is checked
+    against the figure a page quotes, which another processor computed (its rounding sends a
+    chaotic trajectory elsewhere within a few periods: the digits differ, the value does not)."""
+    return abs(value - quoted) <= AGREE_SIGMAS * math.hypot(error, quoted_error)

@@ -4,10 +4,9 @@ flag in the API and the CLI (issue 26 item 3).
 The issue's cases: a constant series was told to "record a longer series"; a near-constant one
 failed with "scale_min=0.0 and scale_max=0.0" (3 001 samples) or ran for more than 300 s
 (30 001); white noise of amplitude 1e-9 read "Wolf LLE 3.73 1/s" on the command line with no
-warning. Each case here must give its verdict within seconds.
+warning. Each case here must give its verdict at once: a per-test timeout (a hang guard far
+above the seconds they take, not a speed figure) fails one that regresses to minutes.
 """
-
-import time
 
 import numpy as np
 import pytest
@@ -48,6 +47,7 @@ DEGENERATE = {
 }
 
 
+@pytest.mark.timeout(120)
 @pytest.mark.parametrize("case", sorted(DEGENERATE))
 def test_a_series_without_dynamics_gets_its_verdict_at_once(case):
     make, words = DEGENERATE[case]
@@ -59,10 +59,8 @@ def test_a_series_without_dynamics_gets_its_verdict_at_once(case):
         lambda: embedding_cao(x, delay=1),
         lambda: rosenstein_lle(x, dt=0.01),
     ):
-        start = time.process_time()
         with pytest.raises(ValueError, match=words):
-            estimate()
-        assert time.process_time() - start < 2.0  # was > 300 s (spike, 30 001 samples)
+            estimate()  # was > 300 s (spike, 30 001 samples)
 
 
 def test_a_moving_series_has_dynamics():
@@ -102,13 +100,12 @@ def test_surrogate_test_tells_determinism_from_linear_noise():
         surrogate_test(ar, dim=2, delay=1, surrogates=5)
 
 
+@pytest.mark.timeout(120)
 def test_tiny_white_noise_is_flagged_in_seconds():
     """The issue's case: white noise of amplitude 1e-9 sampled at 0.01 s. A positive exponent
     comes out (any estimator finds one in noise), flagged by Cao's E2 and by the surrogates."""
     x = 1e-9 * np.random.default_rng(2).standard_normal(3001)
-    start = time.process_time()
     r = wolf_lle(x, dt=0.01)
-    assert time.process_time() - start < 10
     assert float(r.lle) > 0 and not bool(r.reliable)
     assert int(r.stochastic) == 1 and int(r.surrogate_stochastic) == 1
     reasons = r.reliable.attrs["reasons"].splitlines()
@@ -147,11 +144,10 @@ def test_cli_prints_the_flag_of_noise(tmp_path, capsys):
     assert "Rosenstein LLE (nolds" in out
 
 
+@pytest.mark.timeout(120)
 def test_cli_says_a_constant_series_has_no_dynamics(tmp_path, capsys):
     path = _run_file(tmp_path, np.full(N, 2.5e-4))
-    start = time.perf_counter()
     assert main(["analyse", path, "--var", "x", "-o", str(tmp_path / "figs")]) == 0
-    assert time.perf_counter() - start < 10
     out = capsys.readouterr().out
     assert out.strip() == "x is constant (0.00025 m at all 30001 samples): no dynamics to analyse"
     assert not (tmp_path / "figs").exists()

@@ -180,8 +180,8 @@ def test_an_error_stops_the_blocks_in_flight(tmp_path, monkeypatch):
         }
     )
     store = tmp_path / "c.nc"
-    # compile the model's kernel first (forked workers inherit it): the time bound below is
-    # for stopping the blocks, not for a cold compile on a loaded machine
+    # compile the model's kernel first (forked workers inherit it): the time bound below
+    # tells a stopped block from one waited for (minutes), not a speed; not a cold compile
     workbench.simulate(scene.replace(sweep={}, run={"duration": 1e-3}, record={"dt": 5e-4}))
 
     def full_disk(ds, path, **kwargs):

@@ -51,9 +51,14 @@ def test_workers_load_the_kernel_before_their_first_block():
 
 @pytest.mark.slow
 def test_one_worker_with_two_threads_integrates_two_points_at_once(tmp_path):
-    """Two long points, one block each, on one worker of two threads: with kernels that hold
-    the GIL the integrations take turns (their summed solver time is at most the task phase);
-    released, they overlap (the sum approaches twice the phase)."""
+    """Two long points, one block each, on one worker of two threads: both threads hold a block
+    at once (their spans overlap), and what lets their integrations run side by side holds:
+    the compiled loop's entry points, which run the whole integration, release the GIL
+    (``nogil``). A count and a property, not a speed-up: how much two threads gain is a
+    benchmark's figure (benchmarks/campaign_cluster.py), which depends on the machine."""
+    from workbench.models import get_model
+    from workbench.solver._compile import kernel_for
+
     spec = {**SCENE, "run": {"cycles": 50, "transient_cycles": 30000}}
     scene = workbench.load_scene(spec)
     workbench.simulate(scene.with_parameters(gamma=0.3).replace(run={"cycles": 1}))
@@ -66,14 +71,18 @@ def test_one_worker_with_two_threads_integrates_two_points_at_once(tmp_path):
     ):
         ds = workbench.run_campaign(scene, store, client=client, chunk=1)
     assert int(ds.status.sum()) == 0
-    spans, solver, threads = [], 0.0, set()
+    spans, threads = [], set()
     for path in store_paths(store)["blocks"].glob("block-*.nc"):
         b = workbench.open_run(path)
         start = float(b.attrs["block_started"])
         spans.append((start, start + float(b.attrs["block_wall_time"])))
-        solver += float(b.solver_wall_time.sum())
         threads.add((int(b.attrs["worker_pid"]), int(b.attrs["worker_thread"])))
     assert len(threads) == 2  # one process, two threads
-    phase = max(e for _, e in spans) - min(s for s, _ in spans)
-    assert solver / phase > 1.5, (solver, phase)
+    (s1, e1), (s2, e2) = sorted(spans)
+    assert s2 < e1  # both blocks were running at once
     np.testing.assert_array_less(0.0, ds.solver_wall_time.values)
+    model = get_model("duffing")
+    hooks = model.problem(model.default_parameters(), {}, {}, ("x", "v")).hooks
+    kernel = kernel_for(hooks)
+    for entry in ("start", "initial_step", "advance"):
+        assert getattr(kernel, entry).targetoptions.get("nogil") is True, entry

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import xarray as xr
 from _harmonic_balance import folds as hb_folds
+from helpers import agrees
 from scipy.optimize import brentq
 
 import workbench
@@ -590,12 +591,14 @@ def test_the_copies_alone_go_wrong_on_the_chaotic_nine_bar_and_the_tangent_vecto
             point, cycles=40, budget=160, check=False, tighten=False, variational=False
         )
     assert float(alone.spread) > 0.2 and not bool(alone.converged)
-    assert round(float(alone.lle), 1) == 30.4 and round(float(alone.stderr), 1) == 5.0
+    # the page's figures (one processor's): another rounds differently and its chaotic run
+    # goes elsewhere, so each is checked within its own and the quoted standard error
+    assert agrees(float(alone.lle), float(alone.stderr), 30.4, 5.0), alone
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
         e = point_exponent(point, period=0, cycles=40)
     assert e.method == "copies" and e.converged and e.unmet == ()
-    assert round(e.value, 1) == 36.7 and round(e.error, 1) == 1.0
+    assert agrees(e.value, e.error, 36.7, 1.0), e
     # why: the copies' differences are only as accurate as the step control holds the states
     # (rtol of their size, not of the separation); at a 100x tighter tolerance the copies alone
     # agree with the tangent vector's estimate, their variants within 5 %
@@ -605,8 +608,8 @@ def test_the_copies_alone_go_wrong_on_the_chaotic_nine_bar_and_the_tangent_vecto
             point, cycles=40, budget=160, check=False, tighten=False, variational=False, rtol=1e-8
         )
     assert float(tight.spread) < 0.05
-    assert abs(float(tight.lle) - e.value) < 2 * math.hypot(float(tight.stderr), e.error)
-    assert round(float(tight.lle), 1) == 36.1 and round(float(tight.stderr), 1) == 0.8
+    assert agrees(float(tight.lle), float(tight.stderr), e.value, e.error)
+    assert agrees(float(tight.lle), float(tight.stderr), 36.1, 0.8), tight
     page = " ".join((ROOT / "docs" / "continuation.md").read_text().split())
     assert "read 30.4 +- 5.0 1/s after 4 x 40 cycles" in page
     assert "together read 36.7 +- 1.0 1/s" in page and "36.1 +- 0.8 1/s at rtol 1e-8" in page

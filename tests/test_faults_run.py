@@ -12,6 +12,7 @@ import subprocess
 import sys
 import threading
 import time
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -21,9 +22,12 @@ import workbench
 from workbench import SceneError, Status
 from workbench.models import get_model
 from workbench.run import MemoryLimitError, prepare
-from workbench.solver import PAUSE_SECONDS, integrate
+from workbench.solver import integrate
 
 DUFFING = {"model": {"name": "duffing"}, "run": {"cycles": 5}}
+#: seconds: an interrupt must land long before a LONG run ends (a guard that tells the next
+#: pause from the run's end, not a speed figure)
+HANG_GUARD = 5.0
 # about 20 s of integration on an idle core (rtol 1e-12, 100 000 periods, 1 record each)
 LONG = {
     "model": {"name": "duffing"},
@@ -70,10 +74,14 @@ def test_a_nan_transient_is_refused():
 def test_records_beyond_the_memory_limit_are_refused_before_any_allocation(
     spec, key, bytes_at_least
 ):
-    t0 = time.process_time()
-    with pytest.raises(MemoryLimitError) as info:
-        prepare(spec)
-    assert time.process_time() - t0 < 2  # counted, not built
+    tracemalloc.start()
+    try:
+        with pytest.raises(MemoryLimitError) as info:
+            prepare(spec)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 * 2**20  # bytes: counted, not built (the records would take terabytes)
     exc = info.value
     assert exc.key == key and exc.needed >= bytes_at_least and exc.needed > exc.limit
     text = str(exc)
@@ -113,7 +121,7 @@ def test_a_campaign_archive_beyond_the_limit_is_refused_before_anything_runs(tmp
 
 # -- the compiled loop ends on NaN and inf -------------------------------------------------------
 _HANG_SCRIPT = """
-import json, sys, time
+import json, sys
 import numpy as np
 from workbench.models import get_model
 from workbench.solver import integrate
@@ -121,13 +129,12 @@ m = get_model("duffing")
 out = []
 for method in ("dop853", "dopri5", "ark548", "radau", "auto", "scipy:RK45", "scipy:LSODA"):
     prob = m.problem(m.default_parameters(), {}, {}, ("x", "v"))
-    integrate(prob, [0.0, 1.0], method=method)  # load the kernel: not part of the timing
+    integrate(prob, [0.0, 1.0], method=method)  # load the kernel first
     for y0 in ([np.nan, 0.0], [np.inf, 0.0], [0.0, -np.inf], [1e50, 0.0]):
         prob = m.problem(m.default_parameters(), {}, {}, ("x", "v"))
         prob.y0[:] = y0
-        t0 = time.monotonic()
         r = integrate(prob, np.linspace(0.0, 50.0, 11), method=method, max_steps=1000)
-        out.append([method, repr(y0), r.status.label, r.message, time.monotonic() - t0])
+        out.append([method, repr(y0), r.status.label, r.message, int(r.stats["steps"])])
 print(json.dumps(out))
 """
 
@@ -139,12 +146,12 @@ def test_a_non_finite_or_huge_initial_state_fails_at_once_with_every_method():
         [sys.executable, "-c", _HANG_SCRIPT], capture_output=True, text=True, timeout=120
     )
     assert done.returncode == 0, done.stderr
-    for method, y0, label, message, seconds in json.loads(done.stdout.splitlines()[-1]):
+    for method, y0, label, message, steps in json.loads(done.stdout.splitlines()[-1]):
         assert label == "non_finite", (method, y0, message)
         assert message.startswith("the run cannot start at t = 0 s: "), message
         why = "initial step cannot be formed" if "1e+50" in y0 else "initial state is not finite"
         assert why in message, message
-        assert seconds < 1.0, (method, y0, seconds)
+        assert steps == 0, (method, y0, steps)  # at once: not one step taken
 
 
 @pytest.mark.parametrize("method", ["dop853", "scipy:RK45", "scipy:Radau"])
@@ -155,11 +162,9 @@ def test_max_steps_bounds_every_backend(method):
     m = get_model("duffing")
     prob = m.problem(m.default_parameters(), {}, {}, ("x", "v"))
     prob.y0[:] = [1e30, 0.0]
-    t0 = time.process_time()
     r = integrate(prob, np.linspace(0.0, 5.0, 3), method=method, max_steps=2000)
     assert r.status is Status.MAX_STEPS, r.message
     assert "raise solver.max_steps" in r.message and r.stats["rhs_evaluations"] <= 40_001
-    assert time.process_time() - t0 < 10
 
 
 def test_a_nan_derivative_mid_run_ends_with_non_finite():
@@ -227,14 +232,16 @@ def _interrupt_after(seconds: float, sent: list):
 @pytest.mark.parametrize("progress", [False, True], ids=["quiet", "progress bar"])
 def test_ctrl_c_stops_a_run_within_a_second(progress):
     """The issue: without a progress bar, Ctrl-C waited for the end of the integration (16.6 s
-    of an 18-s run). Now the compiled loop pauses every PAUSE_SECONDS either way."""
+    of an 18-s run). Now the compiled loop pauses every PAUSE_SECONDS of wall time either way,
+    so the interrupt lands at the next pause, whatever the processor: the bound (5 s) only
+    tells that apart from waiting for the run's end, with room for a loaded machine."""
     sent: list = []
     t0 = time.monotonic()
     with _interrupt_after(1.0, sent), pytest.raises(KeyboardInterrupt):
         workbench.simulate(LONG, progress=progress)
     latency = time.monotonic() - sent[0]
     print(f"KeyboardInterrupt {latency:.3f} s after SIGINT, {time.monotonic() - t0:.2f} s in")
-    assert latency < 1.0 + 10 * PAUSE_SECONDS
+    assert latency < HANG_GUARD
 
 
 def test_ctrl_c_stops_a_work_precision_study_and_keeps_its_runs(tmp_path):
@@ -243,7 +250,7 @@ def test_ctrl_c_stops_a_work_precision_study_and_keeps_its_runs(tmp_path):
     with _interrupt_after(1.0, sent), pytest.raises(KeyboardInterrupt):  # tens of seconds
         workbench.accuracy(LONG, methods=["dop853"], tolerances=[1e-10], store=store)
     latency = time.monotonic() - sent[0]
-    assert latency < 2.0
+    assert latency < HANG_GUARD
     assert store.is_dir()  # what was finished stays for the resume
 
 

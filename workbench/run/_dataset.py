@@ -11,6 +11,7 @@ from importlib.metadata import version
 import numpy as np
 import xarray as xr
 
+from workbench._processor import processor_attrs
 from workbench._sources import code_digest
 from workbench._version import FORMAT_VERSION, __version__
 from workbench.models import get_model
@@ -146,6 +147,7 @@ def provenance(scene: Scene, *, by: str = "workbench.simulate") -> dict:
         "scene": scene.to_toml(),
         "package_versions": versions,
         "code_digest": results_digest(scene.model),
+        **processor_attrs(),
         "format_version": np.int32(FORMAT_VERSION),
     }
 
@@ -156,7 +158,8 @@ def results_digest(model: str, *modules: str) -> str:
     module, the compiled kernels' templates and everything they import, and ``modules`` (e.g.
     the campaign's block task), with the versions of Python, numba and NumPy
     (:func:`workbench._sources.code_digest`; docstrings and comments do not count). Equal
-    digests: the same scene gives the same numbers."""
+    digests and the same compile target (:func:`workbench._processor.processor_attrs`): the
+    same scene gives the same numbers; on another target they agree within their errors."""
     model_module = type(get_model(model)).__module__
     return code_digest("workbench.run", model_module, *TEMPLATE_MODULES, *modules)
 
