@@ -359,6 +359,7 @@ def test_chaos_map_indicators_against_floquet_and_a_chaotic_point(tmp_path):
     assert (maps.lle_status == 0).all()
 
 
+@pytest.mark.chaotic
 def test_a_chaos_map_says_which_exponents_converged(tmp_path):
     """Over 100 cycles (the exponent over 20, its window grown to at most 160) the default
     Duffing's chaotic point at gamma = 0.5 reads 0.10 +- 0.017 1/s: 17 % error, above the 3 %
@@ -493,6 +494,7 @@ def test_detection_rules_of_the_branch():
     assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
 
 
+@pytest.mark.chaotic
 def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
     """The nine-bar at omega = 0.5 pi, c = 20 um (studies/chaos_maps/omega_clearance.toml) is on
     a period-1 orbit that contracts beyond what differences resolve. The two-trajectory method
@@ -516,8 +518,9 @@ def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
     assert ind.lle_method.attrs["flag_meanings"].split()[int(ind.lle_method)] == "floquet"
     assert ind.lle_status.attrs["flag_meanings"].split()[int(ind.lle_status)] == "upper_bound"
     assert int(ind.lle_converged) == 0 and int(ind.lle_unmet) == 32  # a bound, not an estimate
-    # docs/continuation.md quotes the bound, -3.8 1/s
-    assert float(ind.lle) == pytest.approx(-3.8, abs=0.05) and np.isnan(float(ind.lle_stderr))
+    # docs/continuation.md quotes the bound, -3.8 1/s: the rate of the copies' noise over the
+    # 4-s period, which another processor's rounding moves (within 1/s: noise within e^4)
+    assert abs(float(ind.lle) - -3.8) < 1.0 and np.isnan(float(ind.lle_stderr))
     assert -75.93 < float(ind.lle)
 
 
@@ -569,6 +572,7 @@ def test_a_held_onset_velocity_makes_a_family_of_lasting_contact_orbits():
     assert 1e-7 < spread < 1e-6, spread  # m (6.3e-7 measured): within 1 % of c = 1e-4 m
 
 
+@pytest.mark.chaotic
 @pytest.mark.slow  # ~3 min of CPU: the copies alone (4 x 40 cycles, then at rtol 1e-8), the map's
 def test_the_copies_alone_go_wrong_on_the_chaotic_nine_bar_and_the_tangent_vector_catches_it():
     """At omega = 2.2 pi (Fig. 32's scene, c = 0.1 mm, c_f = 0.01) the two-trajectory copies

@@ -107,6 +107,7 @@ def same_run_as_reference(monkeypatch, scene, *, rtol: float, early: float) -> t
     return float(diff[t_rec <= early].max()), float(diff.max())
 
 
+@pytest.mark.chaotic
 def test_same_events_as_the_reference_over_a_regular_horizon(monkeypatch):
     """At omega = pi the motion stays regular (see test_ninebar): over 0.5 s at rtol 1e-10 the
     lean and the reference right-hand sides give the same 88 events. Their rounding-level

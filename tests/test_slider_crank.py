@@ -109,6 +109,7 @@ def test_lean_rhs_equals_the_reference(friction, gravity):
     assert lean_against_reference(scene) < 1e-12
 
 
+@pytest.mark.chaotic
 def test_same_events_as_the_reference(monkeypatch):
     """Integrated by the same solver (scipy's DOP853, rtol 1e-10) over 3 cycles, the lean and
     the reference right-hand sides give the same 65 events, and their records differ by less

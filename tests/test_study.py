@@ -490,6 +490,7 @@ def test_exponent_report_of_an_older_summary_claims_nothing():
     assert "this is the exponent" not in text
 
 
+@pytest.mark.chaotic
 @pytest.mark.slow
 def test_exponent_table_of_the_chaos_case_at_small_size():
     """The chaos study's exponent table over 2 cycles (no room to grow): every estimate from the

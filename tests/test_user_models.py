@@ -10,6 +10,7 @@ events, the discrete state and derived outputs against the closed-form bounce ti
 
 import contextlib
 import io
+import math
 import re
 import subprocess
 import sys
@@ -91,6 +92,7 @@ def test_a_model_in_main_is_refused_with_the_remedy():
         InMain().problem({}, {}, {}, ())
 
 
+@pytest.mark.chaotic
 @pytest.mark.slow
 def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     ns, lines = run_block("rossler")
@@ -100,7 +102,7 @@ def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     assert abs(lam[2] - SPROTT[2]) < 0.02 * abs(SPROTT[2])
     assert abs(lam[1]) < 0.02 * SPROTT[0]  # the flow direction: zero
     # the window grew until the blocks' standard error was below the 1 % asked for
-    assert err[0] < 0.01 * lam[0] and spectrum.attrs["duration"] > 20000.0
+    assert err[0] < 0.01 * lam[0] and spectrum.attrs["duration"] >= 20000.0
     # the sum of the spectrum is the mean phase-space contraction (mean trace of the Jacobian)
     assert abs(lam.sum() - float(spectrum.divergence)) < 1e-6 * abs(float(spectrum.divergence))
     run = ns["run"]
@@ -119,10 +121,11 @@ def test_the_rossler_spectrum_matches_the_published_one(user_modules):
     for i in range(3):
         assert agrees(lam[i], err[i], quoted[i], quoted_err[i]), (i, lam, err, shown_lam)
     # the numbers of the page's text
-    assert 100 * abs(lam[2] / SPROTT[2] - 1) < 0.01
-    # measured 2.3e-7 at rtol 1e-9: the volume rate carries the vectors' mutual parts, known to
-    # rtol e^D between re-orthonormalisations (defect D = 10), so its precision is rtol e^D
-    assert float(spectrum.sum_check) < 1e-6
+    assert 100 * abs(lam[2] / SPROTT[2] - 1) < 0.03  # three of its standard errors (5e-4)
+    # the volume rate carries the vectors' mutual parts, known to rtol e^D between
+    # re-orthonormalisations (defect D = 10), so its precision is rtol e^D (one processor
+    # measured 2.3e-7 at rtol 1e-9)
+    assert float(spectrum.sum_check) < 1e-9 * math.exp(10)
 
 
 def test_events_discrete_state_and_outputs_of_a_user_model(user_modules):

@@ -95,6 +95,7 @@ def duffing_section():
     return flow_series("duffing", 2000, DUFFING_PERIOD, seed=66, method="LSODA")
 
 
+@pytest.mark.chaotic
 def test_heldout_duffing_section(duffing_section):
     ref = duffing_section
     per_period = ref.lle * DUFFING_PERIOD
@@ -128,6 +129,7 @@ def flow_windows():
     return out
 
 
+@pytest.mark.chaotic
 @pytest.mark.parametrize("name, dt", [(c[0], c[2]) for c in HELD_OUT_FLOWS], ids=str)
 def test_heldout_flows(flow_windows, name, dt):
     """Within 10 % of the window's own finite-time exponent (a gross miss), flagged reliable."""
@@ -166,6 +168,7 @@ def test_coarse_sampling_is_flagged():
     assert not bool(wolf_lle(duf.x).reliable)
 
 
+@pytest.mark.chaotic
 def test_heldout_flows_meet_the_bound_but_one(flow_windows):
     """At most FLOW_MISSES of the six windows beyond 5 % of their own exponent."""
     errors = {k: float(r.lle) / ref.lle - 1 for k, (ref, r) in flow_windows.items()}
