@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import numpy as np
 import xarray as xr
 
 from workbench.analysis._sections import poincare_section
+from workbench.archive import status_flags
+from workbench.solver import Status
 
 __all__ = ["bifurcation_diagram"]
 
@@ -33,7 +36,11 @@ def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) ->
     Raises
     ------
     ValueError
-        If ``param`` is not a swept dim, ``var`` is missing, or the runs have no strobe grid.
+        If ``param`` is not a swept dim, ``var`` is missing, the runs have no strobe grid, or
+        no sample of ``var`` is finite (nothing to draw: the message says whether every point
+        failed or the values are inf or NaN).
+    workbench.archive.ArchiveError
+        A flag of ``status`` is not a whole number (NaN: the archive was altered or damaged).
     """
     swept = [d for d in runs.dims if d in runs.coords and d not in ("time", "joint", "crank")]
     if param is None:
@@ -47,8 +54,23 @@ def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) ->
         raise ValueError(f"{param!r} is not a parameter dim of the campaign; dims: {swept!r}")
     if var not in runs:
         raise ValueError(f"no variable {var!r}; variables: {sorted(runs.data_vars)}")
+    flags = status_flags(runs["status"], "the campaign") if "status" in runs else None
     samples = poincare_section(runs, var).transpose(param, "strobe", ...)
-    if "status" in runs:  # which points failed (their samples are NaN), for the figure
+    values = samples[var].values
+    if not np.isfinite(values).any():
+        ran = (Status.OK, Status.TERMINATED)
+        n_failed = 0 if flags is None else int((~np.isin(flags, ran)).sum())
+        why = (
+            f"every one of its {flags.size} points failed"
+            if flags is not None and n_failed == flags.size
+            else f"its {values.size} samples are all inf or NaN "
+            f"({int(np.isinf(values).sum())} inf, {int(np.isnan(values).sum())} NaN)"
+        )
+        raise ValueError(
+            f"no finite sample of {var!r} to draw: {why}; choose another variable, or "
+            "recompute the campaign"
+        )
+    if flags is not None:  # which points failed (their samples are NaN), for the figure
         samples["status"] = runs["status"]
     samples.attrs.update(diagram_parameter=param, diagram_variable=var)
     return samples

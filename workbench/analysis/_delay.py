@@ -8,7 +8,11 @@ import xarray as xr
 
 from workbench.analysis._series import as_series, require_samples
 
-__all__ = ["delay_ami", "delay_acf", "mutual_information"]
+__all__ = ["MIN_ACF_SAMPLES", "delay_ami", "delay_acf", "mutual_information"]
+
+#: the shortest series :func:`delay_acf` (and :func:`delay_ami`) reads a delay from: with fewer
+#: samples the lags up to N // 4 are too few, and each too poorly estimated, to place one
+MIN_ACF_SAMPLES = 20
 
 
 def mutual_information(x: np.ndarray, lag: int, bins: int) -> float:
@@ -78,7 +82,7 @@ def delay_ami(
     True
     """
     s = as_series(x, dt)
-    require_samples(s, 20, "delay_ami")
+    require_samples(s, MIN_ACF_SAMPLES, "delay_ami")
     n = s.values.size
     max_lag = max(n // 10, 2) if max_lag is None else int(max_lag)
     if not 1 <= max_lag < n:
@@ -123,8 +127,28 @@ def delay_acf(x, *, dt: float | None = None, rule: str = "1/e", max_lag: int | N
     """Embedding delay from the autocorrelation function: first lag where it falls below 1/e
     (``rule="1/e"``) or crosses zero (``rule="zero"``).
 
-    Returns an ``xarray.Dataset`` with ``delay`` (samples), ``delay_time`` and the curve ``acf``
-    over ``lag``.
+    Parameters
+    ----------
+    x : array or DataArray
+        Scalar series (a DataArray with ``time`` gives dt), at least :data:`MIN_ACF_SAMPLES`
+        samples (as :func:`delay_ami` needs) and not constant.
+    dt : float, optional
+        Sampling step (s) of a plain array.
+    rule : {"1/e", "zero"}
+        Where the delay is read off the autocorrelation.
+    max_lag : int, optional
+        Largest lag tried (samples), 1 <= max_lag < N; default N // 4.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``delay`` (samples), ``delay_time`` and the curve ``acf`` over ``lag``.
+
+    Raises
+    ------
+    ValueError
+        The series is shorter than :data:`MIN_ACF_SAMPLES` (an empty one too), constant (its
+        autocorrelation is undefined), or ``max_lag`` or ``rule`` is out of range.
 
     Examples
     --------
@@ -136,11 +160,19 @@ def delay_acf(x, *, dt: float | None = None, rule: str = "1/e", max_lag: int | N
     if rule not in ("1/e", "zero"):
         raise ValueError(f"rule={rule!r}; allowed: '1/e' or 'zero'")
     s = as_series(x, dt)
+    require_samples(s, MIN_ACF_SAMPLES, "delay_acf")
     v = s.values - s.values.mean()
     n = v.size
-    max_lag = max_lag or max(n // 4, 2)
+    max_lag = max(n // 4, 2) if max_lag is None else int(max_lag)
+    if not 1 <= max_lag < n:
+        raise ValueError(f"max_lag={max_lag!r}; allowed: 1 <= max_lag < {n} (the series length)")
     f = np.fft.rfft(v, 2 * n)
     acf = np.fft.irfft(f * np.conj(f))[: max_lag + 1]
+    if not acf[0] > 0:
+        raise ValueError(
+            f"x ({s.name!r}) is constant: its autocorrelation is undefined, and so is a delay "
+            "read from it"
+        )
     acf = acf / acf[0]
     level = 1 / np.e if rule == "1/e" else 0.0
     below = np.flatnonzero(acf <= level)

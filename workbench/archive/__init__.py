@@ -1,18 +1,21 @@
 """netCDF archives of runs and campaigns: atomic writing (a temporary file, then a rename that
-never replaces a file unless asked to, a full disk in one line, no stale temporaries), exact
-reading, output paths checked before any work, the integrity of stores (one writer at a time,
-checksummed files), and the archive format (``format_version`` on every archive; older formats
-upgraded or refused with a message)."""
+never replaces a file unless asked to and never a device; a full disk or any other failed write
+in one line naming the path; no stale temporaries), exact reading, output paths checked before
+any work, the integrity of stores (one writer at a time, checksummed files), and the archive
+format (``format_version`` on every archive; older formats upgraded or refused with a
+message)."""
 
 from workbench.archive._atomic import (
     DiskFull,
     OutputExists,
+    WriteFailed,
     atomic_path,
     keep_elsewhere,
     remove_stale_temporaries,
+    save_figure,
     write_text_atomic,
 )
-from workbench.archive._format import stamp_format, upgrade_archive
+from workbench.archive._format import stamp_format, status_flags, upgrade_archive
 from workbench.archive._integrity import (
     ArchiveError,
     StoreLocked,
@@ -32,6 +35,7 @@ __all__ = [
     "OutputExists",
     "StoreLocked",
     "StoreWarning",
+    "WriteFailed",
     "atomic_path",
     "check_output_directory",
     "check_output_file",
@@ -41,9 +45,11 @@ __all__ = [
     "open_run",
     "read_manifest",
     "remove_stale_temporaries",
+    "save_figure",
     "save_run",
     "sha256_file",
     "stamp_format",
+    "status_flags",
     "store_lock",
     "upgrade_archive",
     "write_text_atomic",

@@ -9,20 +9,26 @@ intact. On top of the rename:
   rename, atomically (a hard link, which fails if the name exists): a file that another process
   wrote there meanwhile is left alone, and the finished result is kept beside it
   (``NAME.kept-PID.nc``) and named in :class:`OutputExists`.
-- *A full disk is one line.* A write that fails for lack of space (``ENOSPC``, ``EDQUOT``, or
-  the netCDF library's "HDF error" with the file system full) raises :class:`DiskFull` naming
-  the path, the bytes needed and the bytes free.
+- *A failed write is one line naming the target.* A write that fails for lack of space
+  (``ENOSPC``, ``EDQUOT``, or the netCDF library's "HDF error" with the file system full)
+  raises :class:`DiskFull` naming the path, the bytes needed and the bytes free; one that fails
+  for any other reason (``EACCES``, ``EROFS``, ``EIO``, a netCDF library error, ...) raises
+  :class:`WriteFailed` naming the path and the reason, never the temporary file.
+- *Only a regular file is replaced.* A device, FIFO or socket at the target (or a symbolic
+  link to one) is refused before the write and again at the rename (:class:`WriteFailed`).
 - *No stale temporaries.* A process killed mid-write (``kill -9``) leaves its temporary file;
   the next write of the same target removes those whose process (on this host) is gone.
 
-:func:`keep_elsewhere` writes a result that could not be written where asked to a place that
-has room (the temporary directory, the home directory), so that a computed run is never thrown
-away without saying where it is.
+:func:`keep_elsewhere` writes a result that could not be written where asked (any
+:class:`WriteFailed`) to a place that has room (the temporary directory, the home directory, the
+working directory), so that a computed run is never thrown away without saying where it is.
+:func:`save_figure` writes a matplotlib figure through the same atomic path.
 """
 
 from __future__ import annotations
 
 import contextlib
+import copy
 import errno
 import glob
 import hashlib
@@ -30,6 +36,7 @@ import os
 import re
 import shutil
 import socket
+import stat
 import tempfile
 import warnings
 from collections.abc import Callable, Iterator
@@ -41,9 +48,12 @@ from workbench.run import format_bytes
 __all__ = [
     "DiskFull",
     "OutputExists",
+    "WriteFailed",
     "atomic_path",
     "keep_elsewhere",
+    "not_a_regular_file",
     "remove_stale_temporaries",
+    "save_figure",
     "write_text_atomic",
 ]
 
@@ -66,7 +76,26 @@ class OutputExists(ArchiveError):
         return (type(self), (str(self), self.kept))
 
 
-class DiskFull(ArchiveError):
+class WriteFailed(ArchiveError):
+    """A write of ``path`` failed (the message names the path and the reason; ``errno`` is
+    the operating system's error number, None where there is none): nothing was written
+    there, and what was to be written is still in the caller's hands."""
+
+    def __init__(self, message: str, path: str | None = None, code: int | None = None) -> None:
+        super().__init__(message)
+        self.path, self.errno = path, code
+
+    def __reduce__(self):  # a campaign's worker raises it in another process
+        return (type(self), (str(self), self.path, self.errno))
+
+    def reworded(self, message: str) -> WriteFailed:
+        """The same failure with another message (e.g. one that adds where the work is)."""
+        new = copy.copy(self)
+        new.args = (message,)
+        return new
+
+
+class DiskFull(WriteFailed):
     """A write failed for lack of space: ``path``, ``needed`` and ``free`` (bytes; None where
     unknown) are in the message."""
 
@@ -77,11 +106,46 @@ class DiskFull(ArchiveError):
         needed: float | None = None,
         free: float | None = None,
     ) -> None:
-        super().__init__(message)
-        self.path, self.needed, self.free = path, needed, free
+        super().__init__(message, path, errno.ENOSPC)
+        self.needed, self.free = needed, free
 
-    def __reduce__(self):  # a campaign's worker raises it in another process
+    def __reduce__(self):
         return (type(self), (str(self), self.path, self.needed, self.free))
+
+
+_KINDS = (
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISSOCK, "a socket"),
+    (stat.S_ISDIR, "a directory"),
+)
+
+
+def _kind(mode: int) -> str:
+    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
+
+
+def not_a_regular_file(path: str | os.PathLike) -> str | None:
+    """What is at ``path`` when it is something a write must not replace: a device, a FIFO, a
+    socket, a directory, or a symbolic link to one (e.g. ``"a symbolic link to a character
+    device ('/dev/null')"``); None when nothing is there, or a regular file, or a symbolic link
+    to a regular file or to nothing (replacing such a link replaces the link alone)."""
+    try:
+        mode = os.lstat(path).st_mode
+    except OSError:  # nothing there, or under something that is not a directory
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    if not stat.S_ISLNK(mode):
+        return _kind(mode)
+    try:
+        target = os.stat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(target):
+        return None
+    return f"a symbolic link to {_kind(target)} ({os.readlink(path)!r})"
 
 
 def _temporary_prefix(path: Path) -> str:
@@ -143,22 +207,78 @@ def _free_bytes(directory: Path) -> float | None:
         return None
 
 
+def _os_errors(exc: BaseException) -> list[int]:
+    """The operating system's error numbers in the chain of ``exc`` (the netCDF library's
+    negative codes left out: they do not say why)."""
+    found = (getattr(e, "errno", None) for e in _chain(exc))
+    return [e for e in found if isinstance(e, int) and e > 0]
+
+
 def _lack_of_space(exc: BaseException, directory: Path) -> bool:
-    """Whether a failed write failed for lack of space."""
-    if any(getattr(e, "errno", None) in _FULL for e in _chain(exc)):
+    """Whether a failed write failed for lack of space: the operating system says so, or it
+    names no reason (the netCDF library's "HDF error") and the file system is nearly full."""
+    errors = _os_errors(exc)
+    if any(e in _FULL for e in errors):
         return True
-    if isinstance(exc, OSError | RuntimeError):
+    if not errors and isinstance(exc, OSError | RuntimeError):
         free = _free_bytes(directory)
         return free is not None and free < _LOW_SPACE
     return False
 
 
-def _disk_full(path: Path, tmp: Path, size: float | None, exc: BaseException) -> DiskFull:
-    written = tmp.stat().st_size if tmp.exists() else 0
-    with contextlib.suppress(OSError):
-        # the netCDF library may keep the failed file open: emptying it frees its space now
-        os.truncate(tmp, 0)
-    tmp.unlink(missing_ok=True)
+def _a_write_failure(exc: BaseException) -> bool:
+    """Whether an exception raised while writing is the write failing (the operating system's
+    or the netCDF library's error), not a bug of the writer."""
+    return isinstance(exc, OSError) or str(exc).startswith("NetCDF:")
+
+
+def os_reason(exc: BaseException) -> str:
+    """Why an operation failed, in words, without the file name: the operating system's reason
+    with its symbol (``EACCES: permission denied``), else the library's message."""
+    errors = _os_errors(exc)
+    if errors:
+        code = errors[0]
+        return f"{errno.errorcode.get(code, code)}: {os.strerror(code).lower()}"
+    return str(getattr(exc, "strerror", None) or exc).splitlines()[0]
+
+
+def _write_failed(path: Path, tmp: Path | None, size: float | None, exc: BaseException):
+    """The one-line error of a failed write of ``path`` (:class:`DiskFull` for lack of space),
+    the temporary file removed; the message names ``path``, never the temporary file."""
+    if _lack_of_space(exc, path.parent):
+        return _disk_full(path, tmp, size, exc)
+    if tmp is not None:
+        tmp.unlink(missing_ok=True)
+    errors = _os_errors(exc)
+    reason = os_reason(exc)
+    if tmp is not None:
+        reason = reason.replace(str(tmp), str(path))
+    return WriteFailed(
+        f"cannot write {str(path)!r}: {reason}",
+        str(path),
+        errors[0] if errors else None,
+    )
+
+
+def _refuse_special(path: Path) -> None:
+    """WriteFailed if ``path`` is something a write must not replace (a device, ...)."""
+    kind = not_a_regular_file(path)
+    if kind is not None:
+        raise WriteFailed(
+            f"cannot write {str(path)!r}: it is {kind}, not a regular file, and workbench "
+            "replaces only regular files; choose another path",
+            str(path),
+        )
+
+
+def _disk_full(path: Path, tmp: Path | None, size: float | None, exc: BaseException) -> DiskFull:
+    written = 0
+    if tmp is not None:
+        with contextlib.suppress(OSError):
+            written = tmp.stat().st_size
+            # the netCDF library may keep the failed file open: emptying it frees its space now
+            os.truncate(tmp, 0)
+        tmp.unlink(missing_ok=True)
     free = _free_bytes(path.parent)
     if size is not None:
         needed = f"needs up to {format_bytes(size)}"
@@ -221,9 +341,9 @@ def atomic_path(
     path : str or PathLike
         The file to write.
     overwrite : bool
-        Replace a file at ``path``. Without it the name is given only if it is still free at
-        the rename (checked atomically): if another process wrote ``path`` meanwhile, the
-        finished file is kept beside it and :class:`OutputExists` names where.
+        Replace a regular file at ``path``. Without it the name is given only if it is still
+        free at the rename (checked atomically): if another process wrote ``path`` meanwhile,
+        the finished file is kept beside it and :class:`OutputExists` names where.
     size : float, optional
         Bytes the file may take (for the message of a full disk).
 
@@ -232,25 +352,36 @@ def atomic_path(
     DiskFull
         The write failed for lack of space (the message names the path, the bytes needed and
         the bytes free); nothing is left behind.
+    WriteFailed
+        The write failed for another reason of the operating system or the netCDF library
+        (the message names ``path`` and the reason), or ``path`` is a device, a FIFO, a socket
+        or a link to one (refused before the write and again at the rename, whatever
+        ``overwrite`` says); nothing is left behind.
     OutputExists
         ``overwrite`` is false and ``path`` appeared meanwhile.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(path)
-    fd, name = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    _refuse_special(path)
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(path)
+        fd, name = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=path.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise _write_failed(path, None, size, exc) from None
     tmp = Path(name)
     try:
         try:
             yield tmp
         except Exception as exc:
-            if _lack_of_space(exc, path.parent):
-                raise _disk_full(path, tmp, size, exc) from None
+            if _lack_of_space(exc, path.parent) or _a_write_failure(exc):
+                raise _write_failed(path, tmp, size, exc) from None
             raise
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
+        _refuse_special(path)  # a device put there meanwhile: never replaced
         if overwrite:
             os.replace(tmp, path)
             return
@@ -266,10 +397,7 @@ def atomic_path(
             ) from None
         tmp.unlink(missing_ok=True)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        if _lack_of_space(exc, path.parent):
-            raise _disk_full(path, tmp, size, exc) from None
-        raise
+        raise _write_failed(path, tmp, size, exc) from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -282,14 +410,26 @@ def write_text_atomic(path: str | os.PathLike, text: str, *, overwrite: bool = T
     return Path(path)
 
 
+def save_figure(fig, path: str | os.PathLike, **savefig: object) -> Path:
+    """Write a matplotlib figure to ``path`` atomically (see :func:`atomic_path`; a regular
+    file there is replaced), in the format of its suffix (PNG without one); ``savefig`` are
+    :meth:`matplotlib.figure.Figure.savefig`'s options (e.g. ``dpi``)."""
+    path = Path(path)
+    form = path.suffix.lstrip(".").lower() or "png"
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=form, **savefig)
+    return path
+
+
 def keep_elsewhere(
     write: Callable[[Path], object], path: str | os.PathLike, size: float
 ) -> Path | None:
-    """Write a result that could not be written at ``path`` (a full disk) where there is room:
-    ``write(p)`` writes it to ``p``, a file named like ``path`` with ``.kept-PID`` in the
-    system's temporary directory, else the home directory, else the working directory, on a
-    file system with ``size`` bytes (and 10 %) free. Returns the path written, or None if
-    nowhere had room (or every write failed)."""
+    """Write a result that could not be written at ``path`` (a full disk, a directory that
+    refuses it, a failing device: any :class:`WriteFailed`) where there is room: ``write(p)``
+    writes it to ``p``, a file named like ``path`` with ``.kept-PID`` in the system's
+    temporary directory, else the home directory, else the working directory, on a file system
+    with ``size`` bytes (and 10 %) free. Returns the path written, or None if nowhere had room
+    (or every write failed)."""
     path = Path(path)
     seen = set()
     for directory in (Path(tempfile.gettempdir()), Path.home(), Path.cwd()):

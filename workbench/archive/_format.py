@@ -20,7 +20,7 @@ from workbench._version import FORMAT_VERSION, __version__
 from workbench.archive._integrity import ArchiveError
 from workbench.solver import Status
 
-__all__ = ["stamp_format", "upgrade_archive"]
+__all__ = ["stamp_format", "status_flags", "upgrade_archive"]
 
 #: format 1's status labels and what they are in format 2 (None: no single counterpart)
 FORMAT1_STATUS = {
@@ -65,12 +65,16 @@ def upgrade_archive(ds: xr.Dataset, path: str) -> xr.Dataset:
             return ds
         found = 1
     try:
+        whole = float(found) == int(found)
         found = int(found)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
+        whole = False
+    if not whole or found < 1:
         raise ArchiveError(
-            f"{path!r} has format_version {found!r}; allowed: a whole number (this workbench "
-            f"{__version__} writes format {FORMAT_VERSION})"
-        ) from None
+            f"{path!r} has format_version {found!r}; allowed: a whole number from 1 (the first "
+            f"archive format) to {FORMAT_VERSION} (this workbench {__version__}): the attribute "
+            "was altered, or the file was not written by workbench"
+        )
     if found > FORMAT_VERSION:
         raise ArchiveError(
             f"{path!r} has archive format {found}, newer than this workbench {__version__} "
@@ -122,3 +126,40 @@ def _upgrade_from_1(ds: xr.Dataset, path: str) -> xr.Dataset:
     ds.attrs["format_version"] = np.int32(FORMAT_VERSION)
     ds.attrs["upgraded_from_format"] = np.int32(1)
     return ds
+
+
+def status_flags(status: xr.DataArray, where: str) -> np.ndarray:
+    """The flags of a status variable (a campaign's ``status``: one :class:`workbench.Status`
+    code per point, or ``invalid_parameters`` 6, ``error`` 7) as whole numbers.
+
+    Parameters
+    ----------
+    status : xarray.DataArray
+        The variable.
+    where : str
+        What it was read from, for the message (e.g. the archive's path).
+
+    Raises
+    ------
+    ArchiveError
+        A flag is not a whole number (NaN, inf, 0.5, text): the message names the variable,
+        how many flags are wrong and one of them.
+    """
+    values = np.asarray(status.values)
+    name = status.name or "status"
+    if values.dtype.kind in "iub":
+        return values.astype(np.int64)
+    if values.dtype.kind == "f":
+        with np.errstate(invalid="ignore"):
+            bad = ~np.isfinite(values) | (values != np.round(values))
+    else:
+        bad = np.ones(values.shape, dtype=bool)
+    if bad.any():
+        example = values[bad].ravel()[:1].tolist()[0]
+        raise ArchiveError(
+            f"{where}: {int(bad.sum())} of the {values.size} flags of its {name!r} variable are "
+            f"not status codes (e.g. {example!r}); allowed: the whole numbers of "
+            f"its flag_values ({status.attrs.get('flag_meanings', 'workbench.Status')}): the "
+            "archive was altered or damaged; recompute it"
+        )
+    return values.astype(np.int64)

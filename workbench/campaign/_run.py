@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench.archive import DiskFull, open_run, save_run
+from workbench.archive import DiskFull, WriteFailed, open_run, save_run
 from workbench.campaign._assemble import assemble
 from workbench.campaign._block import BlockTask, failed
 from workbench.campaign._errors import CampaignError, CampaignWarning
@@ -297,7 +297,7 @@ def _run_locked(
                 on_done=commit,
                 announce=progress,
             )
-        except DiskFull as exc:  # a block's write (in a worker)
+        except WriteFailed as exc:  # a block's write (in a worker): a full disk, ...
             raise _resumable(exc, st) from None
         finally:
             if bar is not None:
@@ -331,7 +331,7 @@ def _run_locked(
     )
     try:
         save_run(ds, st.archive)
-    except DiskFull as exc:
+    except WriteFailed as exc:
         raise _resumable(exc, st) from None
     ds = open_run(st.archive)
     if ds.attrs["failed_points"]:
@@ -357,14 +357,13 @@ def _warn_disk(st: Store, size: float) -> None:
         )
 
 
-def _resumable(exc: DiskFull, st: Store) -> DiskFull:
-    """A full disk during a campaign, with where its finished work is and how to resume."""
-    return DiskFull(
-        f"{exc}; the finished blocks are kept in {str(st.blocks_dir)!r}: free some space and "
-        "run the campaign again to compute the rest and assemble the archive",
-        exc.path,
-        exc.needed,
-        exc.free,
+def _resumable(exc: WriteFailed, st: Store) -> WriteFailed:
+    """A failed write during a campaign (a full disk, ...), with where its finished work is and
+    how to resume."""
+    fix = "free some space" if isinstance(exc, DiskFull) else "remove the cause"
+    return exc.reworded(
+        f"{exc}; the finished blocks are kept in {str(st.blocks_dir)!r}: {fix} and run the "
+        "campaign again to compute the rest and assemble the archive"
     )
 
 

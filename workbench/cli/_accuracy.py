@@ -6,6 +6,7 @@ import argparse
 
 from workbench.cli._console import (
     add_quiet,
+    check_store_output,
     compile_kernel,
     float_list,
     output_and_figure,
@@ -26,6 +27,7 @@ def _cmd_accuracy(args: argparse.Namespace) -> int:
     methods = [m.strip() for m in args.methods.split(",")] if args.methods else DEFAULT_METHODS
     tolerances = args.tolerances or DEFAULT_TOLERANCES
     out, figure = output_and_figure(args.output, args.overwrite)
+    check_store_output(out, ".runs")
     store = out.with_name(out.name + ".runs")
     compile_kernel(scene, quiet=args.quiet)
     try:

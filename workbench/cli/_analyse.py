@@ -29,6 +29,42 @@ def _series(ds, var: str, select: list[str]):
     return da
 
 
+def _before_failure(ds, da, run: str):
+    """A failed run's series cut to its records before the failure (the records after it are
+    NaN), and the line that says so; a run that did not fail: the series as it is and ''."""
+    import numpy as np
+
+    from workbench.solver import Status
+
+    label = ds.attrs.get("run_status")
+    if label is None:
+        return da, ""
+    try:
+        status = Status.from_label(str(label))
+    except ValueError:
+        raise UsageError(
+            f"{run!r} has run_status {label!r}, which is not a status of workbench "
+            f"({', '.join(s.label for s in Status)}); analyse a run written by 'workbench run'"
+        ) from None
+    if not status.failed:
+        return da, ""
+    finite = np.isfinite(da.values)
+    n = int(finite.argmin()) if not finite.all() else finite.size
+    if n == 0:
+        raise UsageError(
+            f"{run!r} is a failed run (status {status.label}) with no finite record of "
+            f"{da.name!r}: nothing to analyse; {ds.attrs.get('run_message', '')}".rstrip("; ")
+        )
+    part = da.isel(time=slice(0, n))
+    rest = da.sizes["time"] - n
+    left_out = f"; the {rest} records after it (NaN) are left out" if rest else ""
+    return part, (
+        f"the run failed (status {status.label}): only its {n} records before the failure "
+        f"(t = {float(part.time[0]):.6g} to {float(part.time[-1]):.6g} s) are "
+        f"analysed{left_out}"
+    )
+
+
 def _surrogates(text: str) -> int:
     """argparse type of --surrogates: 0 or a whole number >= 19."""
     try:
@@ -70,7 +106,7 @@ def _surrogate_line(wolf) -> str:
 
 def _cmd_analyse(args: argparse.Namespace) -> int:
     from workbench import analysis, plot
-    from workbench.archive import check_output_directory, open_run
+    from workbench.archive import check_output_directory, open_run, save_figure
     from workbench.scene import scene_from_toml
 
     ds = open_run(args.run)
@@ -81,7 +117,14 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
         )
     da = _series(ds, args.var, args.select or [])
     label = args.var + "".join(f"[{s}]" for s in args.select or [])
-    verdict = analysis.no_dynamics(da)
+    da, failure = _before_failure(ds, da, args.run)
+    if failure:
+        print(f"{label}: {failure}")
+        ds = ds.isel(time=slice(0, da.sizes["time"]))  # the strobe samples too
+    try:
+        verdict = analysis.no_dynamics(da)
+    except ValueError as exc:  # e.g. a non-finite value in a run that did not fail
+        raise UsageError(f"--var {label}: {exc}") from None
     if verdict:  # nothing to estimate: say so at once, write nothing
         print(verdict.replace(f"{da.name} ", f"{label} ", 1))
         return 0
@@ -159,10 +202,8 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
             figures["zero_one"] = plot.zero_one_figure(z)
         else:
             print(f"  0-1 test: skipped ({strobe.sizes['strobe']} strobe samples, needs 100)")
-    out.mkdir(parents=True, exist_ok=True)
     for name, fig in figures.items():
-        path = out / f"{stem}-{name}.png"
-        fig.savefig(path, dpi=120)
+        path = save_figure(fig, out / f"{stem}-{name}.png", dpi=120)
         print(f"figure: {path}")
     return 0
 

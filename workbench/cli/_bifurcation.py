@@ -49,7 +49,7 @@ def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple
 
 
 def _cmd_bifurcation(args: argparse.Namespace) -> int:
-    from workbench.archive import check_output_file, open_run
+    from workbench.archive import check_output_file, open_run, save_figure, status_flags
 
     out = Path(
         args.output
@@ -61,6 +61,13 @@ def _cmd_bifurcation(args: argparse.Namespace) -> int:
             f"{args.campaign!r} is not a campaign archive (no 'campaign_dims' attribute); write "
             "one with 'workbench campaign'"
         )
+    if "status" not in ds:
+        raise UsageError(
+            f"{args.campaign!r} has no 'status' variable (the outcome of each point), so its "
+            "failed points cannot be told from the others: the archive was altered or is not "
+            "complete; recompute it with 'workbench campaign'"
+        )
+    status_flags(ds["status"], repr(args.campaign))  # whole numbers (not NaN), or one line
     check_output_file(out, "-o/--output", overwrite=args.overwrite)
     from workbench.analysis import bifurcation_diagram
     from workbench.plot import bifurcation_figure
@@ -70,10 +77,8 @@ def _cmd_bifurcation(args: argparse.Namespace) -> int:
         diagram = bifurcation_diagram(ds, args.var, param)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    fig = bifurcation_figure(diagram)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=150)
-    n_failed = int(failed(ds["status"].values).sum())
+    save_figure(bifurcation_figure(diagram), out, dpi=150)
+    n_failed = int(failed(status_flags(ds["status"], repr(args.campaign))).sum())
     note = f" ({n_failed} failed points left out)" if n_failed else ""
     print(f"bifurcation diagram of {args.var} over {param}{note}: {out}")
     return 0

@@ -41,9 +41,8 @@ def _client(address: str, timeout: float):
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from workbench.archive import check_output_file
     from workbench.campaign import CampaignError, run_campaign, summary
-    from workbench.cli._console import compile_kernel
+    from workbench.cli._console import check_store_output, compile_kernel
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -54,8 +53,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             f"--workers {args.workers} sizes the local pool, but --scheduler "
             f"{args.scheduler!r} brings its own workers; give one of them"
         )
-    # existence is the store's business (resume, or refuse another campaign); the path's is here
-    check_output_file(args.output, "-o/--output", overwrite=True)
+    check_store_output(args.output)
     client = None
     try:
         if args.scheduler:

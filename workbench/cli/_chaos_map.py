@@ -14,15 +14,15 @@ __all__ = ["register_cli"]
 
 
 def _cmd_chaos_map(args: argparse.Namespace) -> int:
-    from workbench.archive import check_output_file
+    from workbench.archive import check_output_file, save_figure
     from workbench.campaign import summary
     from workbench.cli._campaign import campaign_exit_code
-    from workbench.cli._console import compile_kernel
+    from workbench.cli._console import check_store_output, compile_kernel
     from workbench.continuation import chaos_map
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
-    check_output_file(args.output, "-o/--output", overwrite=True)
+    check_store_output(args.output)
     if args.figure:
         check_output_file(args.figure, "--figure", overwrite=True)
     compile_kernel(scene, quiet=args.quiet)
@@ -50,8 +50,7 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
 
         scales = {d: 1 / math.pi for d in ds.attrs["campaign_dims"].split() if d == "omega"}
         labels = {"omega": "crank speed omega / pi"} if scales else {}
-        Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
-        chaos_map_figure(ds, scales=scales, labels=labels).savefig(args.figure, dpi=150)
+        save_figure(chaos_map_figure(ds, scales=scales, labels=labels), args.figure, dpi=150)
         print(f"figure: {args.figure}")
     print(f"-> {Path(args.output)}")
     return campaign_exit_code(ds["status"].values)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 __all__ = [
     "add_quiet",
+    "check_store_output",
     "compile_kernel",
     "float_list",
     "max_memory_option",
@@ -121,6 +122,20 @@ def add_quiet(parser: argparse.ArgumentParser, what: str = "no progress and no n
     parser.add_argument("-q", "--quiet", action="store_true", help=f"quiet: {what}")
 
 
+def check_store_output(output, store: str = ".blocks") -> None:
+    """Check before any work the ``-o/--output`` of a command that keeps its finished work in a
+    directory beside it (``OUTPUT.blocks/`` of a campaign or a chaos map, ``OUTPUT.runs/`` of a
+    work-precision study): whether the output or that directory exists is the store's business
+    (resume it, or refuse another computation); that both can be written is checked here
+    (:func:`workbench.archive.check_output_file`, ``check_output_directory``)."""
+    from workbench.archive import check_output_directory, check_output_file
+
+    out = check_output_file(output, "-o/--output", overwrite=True)
+    check_output_directory(
+        out.with_name(out.name + store), f"-o/--output (its {store.lstrip('.')})", overwrite=True
+    )
+
+
 def output_and_figure(output, overwrite: bool) -> tuple[Path, Path]:
     """The netCDF file of ``-o/--output`` and the PNG beside it, both checked before any work
     (:func:`workbench.archive.check_output_file`)."""
@@ -136,11 +151,13 @@ def output_and_figure(output, overwrite: bool) -> tuple[Path, Path]:
 def save_with_figure(
     ds, out: Path, figure: Path, what: str, draw: Callable, *, overwrite: bool = True
 ) -> None:
-    """Write ``ds`` to ``out`` (:func:`save_or_keep`) and ``draw(ds)`` to ``figure``, saying
-    where each went."""
+    """Write ``ds`` to ``out`` (:func:`save_or_keep`) and ``draw(ds)`` to ``figure``
+    (:func:`workbench.archive.save_figure`), saying where each went."""
+    from workbench.archive import save_figure
+
     save_or_keep(ds, out, overwrite=overwrite, what=what)
     print(f"{what} -> {out}")
-    draw(ds).savefig(figure, dpi=120)
+    save_figure(draw(ds), figure, dpi=120)
     print(f"figure: {figure}")
 
 
@@ -167,20 +184,23 @@ def memory_size(text: str) -> float:
 
 
 def save_or_keep(ds, output, *, overwrite: bool, what: str) -> Path:
-    """Write a computed dataset to ``output`` (atomically; replacing a file there only with
-    ``overwrite``). When that fails for lack of space, write it where there is room and say
-    where in the error; a file that appeared at ``output`` meanwhile is never replaced (the
-    result is kept beside it, :class:`workbench.archive.OutputExists` says where)."""
-    from workbench.archive import ArchiveError, DiskFull, keep_elsewhere, save_run
+    """Write a computed dataset to ``output`` (atomically; replacing a regular file there only
+    with ``overwrite``). When that fails for any reason (a full disk, a directory that refuses
+    the file, an input/output error: :class:`workbench.archive.WriteFailed`), write it where
+    there is room and say where in the error; a file that appeared at ``output`` meanwhile is
+    never replaced (the result is kept beside it, :class:`workbench.archive.OutputExists` says
+    where)."""
+    from workbench.archive import ArchiveError, WriteFailed, keep_elsewhere, save_run
 
     try:
         return save_run(ds, output, overwrite=overwrite)
-    except DiskFull as exc:
+    except WriteFailed as exc:
         kept = keep_elsewhere(lambda p: save_run(ds, p, overwrite=False), output, ds.nbytes)
         where = (
             f"the computed {what} was kept at {str(kept)!r}"
             if kept is not None
-            else f"no file system had room for the computed {what}: it is lost"
+            else f"no other place (the temporary, home or working directory) could take the "
+            f"computed {what} either: it is lost"
         )
         raise ArchiveError(f"{exc}; {where}") from None
 

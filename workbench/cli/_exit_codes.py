@@ -9,9 +9,11 @@ code  class                       outcomes
 1     unexpected error            any other exception (a bug or a broken setup; Python's own);
                                   a campaign point flagged ``error`` (it raised one)
 2     invalid input               a scene error, a refused campaign store (another scene, or
-                                  in use by another process), a missing or unreadable file, an
-                                  output that exists (without ``--overwrite``) or cannot be
-                                  written, a bad argument; a campaign point with
+                                  in use by another process), a missing, unreadable or altered
+                                  file, an output that exists (without ``--overwrite``), is a
+                                  device, FIFO or socket, or cannot be written (checked before
+                                  the work), a write that failed after it (the result kept
+                                  elsewhere, and named), a bad argument; a campaign point with
                                   ``invalid_parameters``
 3     solver limit                ``max_steps`` (raise ``solver.max_steps``)
 4     integration failure         ``step_underflow``, ``non_finite``

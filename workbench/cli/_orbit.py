@@ -4,7 +4,6 @@ multipliers, labelled bifurcations; :func:`workbench.continuation.continue_orbit
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from workbench.cli._console import add_quiet, positive_float, positive_int
 from workbench.cli._exit_codes import UsageError
@@ -28,8 +27,8 @@ def _range(scene, param: str, start: float | None, stop: float | None) -> tuple[
 
 
 def _cmd_orbit(args: argparse.Namespace) -> int:
-    from workbench.archive import check_output_file, open_run, save_run
-    from workbench.cli._console import compile_kernel
+    from workbench.archive import check_output_file, open_run, save_figure
+    from workbench.cli._console import compile_kernel, save_or_keep
     from workbench.continuation import branch_bifurcations, continue_orbit
     from workbench.scene import load_scene
 
@@ -58,7 +57,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    out = save_run(branch, args.output)
+    out = save_or_keep(branch, args.output, overwrite=args.overwrite, what="branch")
     found = [
         f"{b['type']} at {args.param} = {b['value']:.8g} (multiplier "
         f"{b['critical'].real:+.4f}{b['critical'].imag:+.4f}i)"
@@ -93,8 +92,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
                 sweep = sweep.sel({dim: sel}, method="nearest" if isinstance(sel, float) else None)
             diagram = bifurcation_diagram(sweep, args.var, args.param)
         fig = branch_figure(branch, args.state, diagram=diagram)
-        Path(args.figure).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(args.figure, dpi=150)
+        save_figure(fig, args.figure, dpi=150)
         print(f"figure: {args.figure}")
     return 0
 

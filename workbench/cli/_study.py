@@ -50,6 +50,10 @@ def _cmd_study(args: argparse.Namespace) -> int:
             f"no study {unknown[0]!r}; available: {', '.join(available_studies())} (or 'all', "
             "'report', 'list', or the directory of a study)"
         )
+    from workbench.archive import check_output_directory
+
+    # each study's files (archives, figures, summary) go to OUTPUT/NAME/, replaced as it reruns
+    check_output_directory(args.output, "-o/--output", overwrite=True)
     t_all = _time.perf_counter()
     runs, n_failed, code = 0, 0, 0
     for name in names:

@@ -14,6 +14,7 @@ from collections import Counter
 import numpy as np
 import xarray as xr
 
+from workbench.archive import status_flags
 from workbench.solver import Status
 
 __all__ = ["FAILED_STYLE", "failed_mask", "failure_note", "mark_failed", "run_status_note"]
@@ -34,13 +35,15 @@ def _meanings(status: xr.DataArray) -> dict[int, str]:
 
 def failed_mask(ds: xr.Dataset) -> tuple[xr.DataArray | None, Counter]:
     """Which points of a campaign failed (bool over its parameter dims; None without a
-    ``status`` variable) and how many of each status."""
+    ``status`` variable) and how many of each status. A flag that is not a whole number (NaN)
+    is an :class:`workbench.archive.ArchiveError` naming the variable."""
     if "status" not in ds:
         return None, Counter()
     status = ds["status"]
     meanings = _meanings(status)
+    flags = status_flags(status, "the campaign")
     labels = np.vectorize(lambda v: meanings.get(int(v), f"status {int(v)}"), otypes=[object])(
-        status.values
+        flags
     )
     failed = ~np.isin(labels, _NOT_FAILED)
     return status.copy(data=failed), Counter(labels[failed].tolist())

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench.archive import save_figure
 from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
 from workbench.plot._base import (
     axis_label,
@@ -268,7 +269,7 @@ def run_figures(ds: xr.Dataset, directory: Path) -> list[Path]:
     written = []
     for name, fig in zip(names, figures, strict=True):
         path = directory / name
-        fig.savefig(path, dpi=120)
+        save_figure(fig, path, dpi=120)
         plt.close(fig)
         written.append(path)
     return written

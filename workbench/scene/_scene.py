@@ -18,7 +18,6 @@ import importlib
 import math
 import os
 import sys
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,6 +42,7 @@ from workbench.scene._tables import (
     validate_solver,
     validate_sweep,
 )
+from workbench.scene._text import check_nesting, parse_toml, read_scene_file
 
 __all__ = ["Scene", "SceneSource", "load_scene", "scene_from_toml"]
 
@@ -201,7 +201,7 @@ def load_scene(source: SceneSource) -> Scene:
     if isinstance(source, Scene):
         return source
     if isinstance(source, Mapping):
-        return _validate(dict(source))
+        return _validate(dict(check_nesting(source)))
     if not isinstance(source, str | os.PathLike):
         raise SceneError(
             "", f"a scene is a Scene, a TOML file path or a mapping; got {type(source).__name__}"
@@ -218,7 +218,7 @@ def load_scene(source: SceneSource) -> Scene:
             else ""
         )
         raise SceneError("", f"scene file {str(source)!r} does not exist{hint}")
-    return _parse(path.read_text(), repr(str(path)), path.resolve().parent)
+    return _parse(read_scene_file(path), repr(str(path)), path.resolve().parent)
 
 
 def scene_from_toml(text: str) -> Scene:
@@ -233,11 +233,7 @@ def scene_from_toml(text: str) -> Scene:
 
 
 def _parse(text: str, where: str, directory: Path | None = None) -> Scene:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError("", f"{where} is not valid TOML: {exc}") from None
-    return _validate(data, directory)
+    return _validate(parse_toml(text, where), directory)
 
 
 def _import_model_module(module: Any, directory: Path | None) -> str:
