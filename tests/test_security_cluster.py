@@ -75,6 +75,34 @@ def _refused(address: str, marker: Path, **kwargs) -> str:
     return refusal
 
 
+def _refused_without_certificate(address: str) -> str:
+    """Speak TLS to the scheduler without presenting a certificate (and trusting any server's),
+    then ask it who it is; the error if refused."""
+    import asyncio
+    import ssl
+
+    from distributed.comm import connect
+
+    ctx = ssl.create_default_context(ssl.Purpose.SERVER_AUTH)
+    ctx.check_hostname = False
+    ctx.verify_mode = ssl.CERT_NONE
+
+    async def ask():
+        comm = await connect(address, timeout=5, ssl_context=ctx)
+        try:
+            await comm.write({"op": "identity"})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        answer = asyncio.run(ask())
+    except Exception as exc:
+        return f"{type(exc).__name__}: {exc}"
+    assert not answer, answer  # the scheduler answered: it is open
+    return ""
+
+
 def _assert_closed(address: str, tmp_path: Path) -> None:
     """No client without the cluster's credentials gets in (the scheduler at ``address``)."""
     assert address.startswith("tls://"), address
@@ -90,6 +118,7 @@ def _assert_closed(address: str, tmp_path: Path) -> None:
     for who, (addr, kwargs) in intruders.items():
         assert _refused(addr, marker, **kwargs), f"{who} got into the scheduler"
     assert not marker.exists()
+    assert _refused_without_certificate(address), "a TLS client without a certificate got in"
 
 
 @pytest.mark.timeout(120)
@@ -304,7 +333,8 @@ def test_a_dask_config_naming_a_ca_but_not_every_certificate_is_refused(tmp_path
     with (
         dask.config.set(config),
         pytest.raises(
-            ValueError, match=r"^the dask config's distributed.comm.tls. lacks client.cert: "
+            ValueError,
+            match=r"^the dask config lacks distributed.comm.tls.client.cert: a cluster's",
         ),
     ):
         cluster_security()

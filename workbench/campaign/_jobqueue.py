@@ -126,8 +126,9 @@ def cluster_security(security=None):
                     "'workbench[cluster]' (or cryptography), or name certificates in the dask "
                     "config (distributed.comm.tls.*)"
                 ) from exc
-        security, where = Security(), "the dask config's distributed.comm.tls."
+        security, where = Security(), "the dask config"
         keys = {"ca_file": "ca-file", **{r: f"{r}.cert" for r in ROLES}}
+        keys = {k: f"distributed.comm.tls.{v}" for k, v in keys.items()}
     elif not isinstance(security, Security):
         raise ValueError(
             f"security={security!r} must be a distributed.Security with TLS certificates, or "
@@ -240,7 +241,7 @@ def local_cluster(
     _check_protocol(options)
     preload = [PRELOAD, *(options.pop("preload", None) or [])]
     options.setdefault("host", "127.0.0.1")
-    board = dashboard_options(dashboard)
+    scheduler = {**dashboard_options(dashboard), **(options.pop("scheduler_kwargs", None) or {})}
     with dask.config.set(dict(dask_config)):
         return LocalCluster(
             n_workers=workers,
@@ -248,7 +249,7 @@ def local_cluster(
             processes=True,
             protocol="tls://",
             security=cluster_security(security),
-            dashboard_address=board["dashboard_address"] if board["dashboard"] else None,
+            scheduler_kwargs=scheduler,
             preload=preload,
             **options,
         )
