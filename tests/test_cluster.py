@@ -1,5 +1,6 @@
-"""Campaigns on a dask cluster: workers ready before their first block (the worker plugin), and
-one worker's threads integrating points at once (the kernels release the GIL)."""
+"""Campaigns on a dask cluster (workbench's own: ``local_cluster``, closed by TLS): workers ready
+before their first block (the worker plugin), and one worker's threads integrating points at once
+(the kernels release the GIL)."""
 
 import sys
 
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 
 import workbench
-from workbench.campaign import store_paths
+from workbench.campaign import local_cluster, store_paths
 from workbench.campaign._cluster import plugin_name, ready_workers
 
 distributed = pytest.importorskip("distributed")
@@ -32,9 +33,7 @@ def test_workers_load_the_kernel_before_their_first_block():
     first = scene.with_parameters(gamma=0.3).to_toml()
     workbench.simulate(workbench.scene_from_toml(first))  # the kernel cached: workers load it
     with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster,
+        local_cluster(1, dashboard=None) as cluster,
         distributed.Client(cluster) as client,
     ):
         assert all(v == [] for v in client.run(_kernels_loaded).values())  # a fresh worker
@@ -64,9 +63,7 @@ def test_one_worker_with_two_threads_integrates_two_points_at_once(tmp_path):
     workbench.simulate(scene.with_parameters(gamma=0.3).replace(run={"cycles": 1}))
     store = tmp_path / "threads.nc"
     with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None
-        ) as cluster,
+        local_cluster(1, threads_per_worker=2, dashboard=None) as cluster,
         distributed.Client(cluster) as client,
     ):
         ds = workbench.run_campaign(scene, store, client=client, chunk=1)

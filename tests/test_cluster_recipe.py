@@ -66,7 +66,13 @@ def _set(code: str, name: str, value: str) -> str:
 def test_jobqueue_cluster_job_script(tmp_path):
     cache = tmp_path / "cache"
     cluster = jobqueue_cluster(
-        "slurm", cores=8, memory="16GB", cache_dir=cache, queue="compute", walltime="01:00:00"
+        "slurm",
+        cores=8,
+        memory="16GB",
+        cache_dir=cache,
+        interface="lo",
+        queue="compute",
+        walltime="01:00:00",
     )
     try:
         script = cluster.job_script()
@@ -79,11 +85,11 @@ def test_jobqueue_cluster_job_script(tmp_path):
     assert "export DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False" in script
     assert "export DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL=1s" in script
     command = script.strip().splitlines()[-1]
-    assert command.startswith(f"{sys.executable} -m distributed.cli.dask_worker tcp://")
+    assert command.startswith(f"{sys.executable} -m distributed.cli.dask_worker tls://")
     assert "--nthreads 1" in command and "--nworkers 8" in command
     assert "--preload workbench.campaign._cluster" in command
     threaded = jobqueue_cluster(
-        "pbs", cores=8, memory="16GB", cache_dir=cache, threads_per_worker=4
+        "pbs", cores=8, memory="16GB", cache_dir=cache, interface="lo", threads_per_worker=4
     )
     try:
         command = threaded.job_script().strip().splitlines()[-1]
@@ -104,6 +110,7 @@ def test_jobqueue_cluster_job_script(tmp_path):
 )
 def test_jobqueue_cluster_refuses_bad_input(kwargs, match):
     args = {"system": "slurm", "cores": 8, "memory": "1GB", "cache_dir": "/shared/cache"}
+    args["interface"] = "lo"
     with pytest.raises(ValueError, match=match):
         jobqueue_cluster(**{**args, **kwargs})
 
@@ -117,6 +124,7 @@ def test_the_guides_recipe_runs_a_campaign_on_the_job_scripts_workers(tmp_path, 
     first = _set(first, "SCENE", repr(str(scene)))
     first = _set(first, "STORE", repr(str(store)))
     first = _set(first, "CORES, JOBS", "2, 1")
+    first = _set(first, "INTERFACE", repr("lo"))  # the job runs on this host
     # the cache this test session has warmed, as the guide's shell would export it
     monkeypatch.setenv("WORKBENCH_CACHE_DIR", str(cache_root()))
     namespace: dict = {}
@@ -126,6 +134,9 @@ def test_the_guides_recipe_runs_a_campaign_on_the_job_scripts_workers(tmp_path, 
         script = cluster.job_script()
         assert f"export WORKBENCH_CACHE_DIR={cache_root()}" in script
         assert "--nworkers 2" in script and "--nthreads 1" in script
+        # closed: the job's workers reach the scheduler on the named interface, with TLS
+        assert cluster.scheduler_address.startswith("tls://127.0.0.1:")
+        assert "--interface lo --protocol tls://" in script and "--tls-key " in script
         # what sbatch would run: the job script itself, here by bash
         job = subprocess.Popen(
             ["bash", "-c", script],

@@ -22,7 +22,9 @@ and code digest), ``_store`` (the store on disk), ``_errors``,
 (one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_warm`` (the kernel loaded
 once; :func:`warm_kernel` compiles it into the cache before a cluster's workers start),
 ``_preload`` (the fork server), ``_cluster`` (the worker plugin of a dask cluster),
-``_jobqueue`` (:func:`jobqueue_cluster`: workers on a batch system, docs/cluster.md),
+``_jobqueue`` (the clusters workbench starts, closed: TLS, named interfaces:
+:func:`local_cluster`, and :func:`jobqueue_cluster` for workers on a batch system,
+docs/cluster.md),
 ``_lifeline`` (processes that die with the campaign).
 
 Store layout
@@ -113,7 +115,7 @@ from workbench.campaign._grid import (
     expand_sweep,
     parameter_attrs,
 )
-from workbench.campaign._jobqueue import DASK_CONFIG, jobqueue_cluster
+from workbench.campaign._jobqueue import DASK_CONFIG, jobqueue_cluster, local_cluster
 from workbench.campaign._run import run_campaign, store_paths
 from workbench.campaign._store import Store
 from workbench.campaign._warm import warm_kernel
@@ -135,6 +137,7 @@ __all__ = [
     "failed",
     "invalid_outcome",
     "jobqueue_cluster",
+    "local_cluster",
     "parameter_attrs",
     "run_campaign",
     "run_outcome",
