@@ -61,6 +61,9 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     found = [
         f"{b['type']} at {args.param} = {b['value']:.8g} (multiplier "
         f"{b['critical'].real:+.4f}{b['critical'].imag:+.4f}i)"
+        if b["resolved"]
+        else f"unresolved: a {b['type']} suspected at {args.param} = {b['value']:.8g}, not "
+        "confirmed by its defining quantity (bracket and value in the archive)"
         for b in branch_bifurcations(branch, args.param)
     ]
     print(

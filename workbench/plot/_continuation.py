@@ -20,6 +20,7 @@ LABEL_MARKS = {
     "neimark_sacker": ("^", "NS", "tab:orange"),
     "grazing": ("v", "G", "tab:brown"),
     "nonsmooth_fold": ("X", "NF", "tab:pink"),
+    "unresolved": ("x", "?", "tab:gray"),
 }
 #: the mark of an exponent that is only an upper bound on a chaos map
 BOUND_MARK = r"$\leq$"
@@ -62,9 +63,9 @@ def branch_figure(
     orbit diagram: each orbit's strobe samples of ``state`` against the parameter, solid where
     the orbit is stable and dashed where not, its labelled points marked as in
     :data:`LABEL_MARKS` (LP fold, BP branch point, PD period doubling, NS Neimark-Sacker, G
-    grazing, NF nonsmooth fold); under it, when given, the strobe samples of a sweep
-    (:func:`workbench.analysis.bifurcation_diagram` of a campaign or a continued sweep, one
-    colour per direction).
+    grazing, NF nonsmooth fold, ? a bifurcation bracketed but not confirmed); under it, when
+    given, the strobe samples of a sweep (:func:`workbench.analysis.bifurcation_diagram` of a
+    campaign or a continued sweep, one colour per direction).
 
     ``scale`` multiplies the parameter on the x axis (e.g. ``1 / pi``, with ``xlabel``).
     """
