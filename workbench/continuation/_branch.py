@@ -133,6 +133,8 @@ class Special:
     event: int = -1
     phase: float = math.nan
     note: str = ""
+    #: for a grazing, how the orbit passes it (see :func:`_beyond_grazing`)
+    transition: str = ""
 
 
 @dataclass
@@ -416,6 +418,170 @@ def _on_bound(smap, A: OrbitPoint, B: OrbitPoint, bound: float, cfg: Settings) -
     return pt
 
 
+#: how far past a grazing (a fraction of the parameter's range) the orbits on its other side
+#: are sought when the branch cannot be stepped through it
+BEYOND = 1e-5
+#: transitions at a grazing (``transition`` of a grazing bifurcation): the orbit crosses it with
+#: the new contact (persistent); the branch turns back at it (a nonsmooth fold, di Bernardo et
+#: al. 2008, Sec. 3.5); no orbit of the branch's period beyond it, the motion there of another
+#: period (a border collision, with the period in the text) or of none up to 16
+TRANSITIONS = ("persistent", "nonsmooth_fold", "border_collision", "not_typed")
+
+
+def _attractor_period(smap: StrobeMap, y, aux, p: float, cycles: int = 200) -> int:
+    """The period (in forcing periods, 0: none up to 16) of the motion from (y, aux) at ``p``
+    after ``cycles`` forcing periods, from its next 64 strobe samples."""
+    from workbench.continuation._indicators import strobe_period
+
+    one = smap.with_periods(1)
+    y, aux = np.array(y, float), np.array(aux, float)
+    for _ in range(cycles):
+        v = one(y, aux, p, tangent=False)
+        y, aux = v.y1, v.aux1
+    samples = []
+    for _ in range(64):
+        v = one(y, aux, p, tangent=False)
+        y, aux = v.y1, v.aux1
+        samples.append(y / one.scale())
+    return strobe_period(np.array(samples))
+
+
+def _beyond_grazing(
+    smap: StrobeMap, A: OrbitPoint, G: OrbitPoint, cfg: Settings
+) -> tuple[str, OrbitPoint | None, str]:
+    """What lies past the grazing ``G``, reached from ``A``, where the branch cannot be stepped
+    through it: the orbit a little further on with the new contact (``persistent``: returned,
+    for the branch to go on from), or the same a little back (``nonsmooth_fold``: the branch
+    turns at the grazing), or neither (``border_collision``: the motion beyond has another
+    period, said in the text, or none); Newton from the grazing orbit, continued along the
+    branch's tangent into the contact."""
+    lo, hi = cfg.bounds
+    ahead = math.copysign(1.0, G.p - A.p)
+    counts = sequence_of(smap, A).counts
+    s = smap.scale()
+    n = G.y.size
+    for side in (ahead, -ahead):
+        p = G.p + side * BEYOND * cfg.pscale
+        if not lo <= p <= hi:
+            continue
+        # the state a little past the grazing along the branch's tangent: into the contact
+        y = G.y + s * (BEYOND * G.tau[:n] / max(abs(G.tau[-1]), 1e-3))
+        try:
+            pt = orbit_at(
+                smap, y, G.aux, p, tolerance=cfg.tolerance, max_iterations=START_ITERATIONS
+            )
+        except NewtonFailure:
+            continue
+        if sequence_of(smap, pt).counts != counts:  # the new contact: the other side's orbit
+            kind = "persistent" if side == ahead else "nonsmooth_fold"
+            return kind, pt, f"an orbit with the new contact at {p:.10g}"
+    p = G.p + ahead * BEYOND * cfg.pscale
+    if lo <= p <= hi:
+        try:
+            k = _attractor_period(smap, G.y, G.aux, p)
+        except Exception as exc:  # noqa: BLE001 - the reason is reported
+            return "not_typed", None, f"the motion past it failed ({exc})"
+        what = f"period {k}" if k else "no period up to 16"
+        return "border_collision", None, f"no period-{smap.periods} orbit past it; {what} there"
+    return "not_typed", None, "its other side lies outside the parameter's range"
+
+
+def _with_tangent(smap: StrobeMap, pt: OrbitPoint, orientation: np.ndarray, cfg: Settings):
+    """``pt`` with its parameter column and unit tangent (oriented along ``orientation``)."""
+    if pt.Pp is None:
+        pt.Pp = smap.parameter_derivative(pt.y, pt.aux, pt.p, pt.value.live, cfg.pscale)
+        pt.evaluations += 2
+    pt.tau = tangent(pt, orientation)
+    return pt
+
+
+def _grazing_ahead(smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settings):
+    """The grazing the branch runs into after A, where its steps collapsed: the smallest margin
+    of A's orbit followed at fixed parameter values (Newton at each) by the Illinois method on
+    the secant through prev and A; the :class:`Special` (confirmed by its margin) or None."""
+    seq = sequence_of(smap, A)
+    k, phase, value = seq.smallest_margin()
+    if k < 0 or abs(value) > 1e-2 * float(seq.scale[k]):
+        return None
+    kind = float(seq.extrema[k][np.argmin(np.abs(seq.extrema[k][:, 1] - value)), 2])
+    margin = _extremum_value(smap, k, phase, kind)
+    pts = [prev, A]
+    f = [margin(prev), margin(A)]
+    if not (np.isfinite(f[0]) and np.isfinite(f[1])) or f[0] == f[1]:
+        return None
+    lo, hi = cfg.bounds
+    best = A
+    for _ in range(40):
+        p = pts[1].p - f[1] * (pts[1].p - pts[0].p) / (f[1] - f[0])
+        p = min(max(p, lo), hi)
+        w = (p - pts[0].p) / (pts[1].p - pts[0].p)
+        y = pts[0].y + w * (pts[1].y - pts[0].y)
+        try:
+            pt = orbit_at(smap, y, pts[1].aux, p, tolerance=cfg.tolerance, max_iterations=12)
+        except NewtonFailure:  # no orbit of this family there: halve towards the last one
+            p = 0.5 * (p + pts[1].p)
+            try:
+                pt = orbit_at(smap, pts[1].y, pts[1].aux, p, tolerance=cfg.tolerance)
+            except NewtonFailure:
+                return None
+        fp = margin(pt)
+        if not np.isfinite(fp):
+            return None
+        best = pt
+        if abs(fp) <= MARGIN_TOLERANCE * float(sequence_of(smap, pt).scale[k]):
+            break
+        if np.sign(fp) != np.sign(f[1]):
+            pts, f = [pts[1], pt], [f[1], fp]
+        else:
+            pts, f = [pts[0], pt], [f[0] / 2.0, fp]  # Illinois: the stale end counts half
+    else:
+        return None
+    fb = margin(best)
+    ok = abs(fb) <= MARGIN_TOLERANCE * float(sequence_of(smap, best).scale[k])
+    if not ok:
+        return None
+    _with_tangent(smap, best, A.tau, cfg)
+    return Special(
+        "grazing", best, 0.0, best.p, best.p, True, fb, complex(np.nan, np.nan), k, phase
+    )
+
+
+#: how often a branch is taken through a grazing it could not be stepped through
+MAX_RESUMES = 20
+
+
+def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: Settings) -> OrbitPoint | None:
+    """Where the steps collapsed at A: the grazing ahead, located and typed
+    (:func:`_grazing_ahead`, :func:`_beyond_grazing`) and stored; the orbit on its other side
+    to go on from (its tangent set), or None (the branch ends there)."""
+    prev = next((q for q in reversed(out.points[:-1]) if q is not A and abs(q.p - A.p) > 0), None)
+    if prev is None:
+        return None
+    G = _grazing_ahead(smap, prev, A, cfg)
+    if G is None:
+        return None
+    transition, pt, text = _beyond_grazing(smap, A, G.point, cfg)
+    G.transition, G.note = transition, text
+    if not any(sp.point is G.point for sp in out.specials):
+        out.points.append(G.point)
+        out.labels.append("grazing")
+        out.critical.append(G.critical)
+        out.specials.append(G)
+    if pt is None:
+        return None
+    ahead = math.copysign(1.0, pt.p - G.point.p)
+    direction = np.zeros(pt.value.M.shape[0] + 1)
+    direction[-1] = ahead
+    try:
+        _with_tangent(smap, pt, direction, cfg)
+    except (NewtonFailure, SceneError, SolverError):
+        return None
+    out.points.append(pt)
+    out.labels.append("regular")
+    out.critical.append(complex(np.nan, np.nan))
+    return pt
+
+
 def trace(
     smap: StrobeMap, first: OrbitPoint, direction: np.ndarray, cfg: Settings, label="start"
 ) -> Traced:
@@ -438,27 +604,31 @@ def trace(
     events = smap.prepared(first.p).problem.event_direction.size > 0
     h = cfg.step
     A = first
+    resumed = 0
     while len(out.points) < cfg.max_points:
         try:
             B = _at(smap, A, h, cfg)
+            sharp = float(A.tau @ B.tau) < 0.5  # too sharp a turn: halve
+            failure = "the branch turns sharply however short the step" if sharp else ""
         except NewtonFailure as exc:
+            B, sharp, failure = None, True, f"the corrector failed at the smallest step ({exc})"
+        if sharp:
             h /= 2.0
             if h < cfg.min_step:
-                out.ended = f"the corrector failed at the smallest step ({exc})"
-                _mark_end(smap, A, h, cfg, out)
-                break
-            continue
-        out.evaluations += B.evaluations
-        if float(A.tau @ B.tau) < 0.5:  # too sharp a turn: halve
-            h /= 2.0
-            if h < cfg.min_step:
-                out.ended = (
-                    f"the branch turns sharply at {A.p:.10g} however short the step (the map "
-                    "is not smooth there)"
+                nxt = None
+                if events and resumed < MAX_RESUMES:
+                    nxt = _through(smap, out, A, cfg)
+                if nxt is not None:
+                    resumed += 1
+                    A, h = nxt, cfg.step
+                    continue
+                out.ended = f"{failure} at {A.p:.10g}" + (
+                    f"; {out.specials[-1].note}" if out.specials and out.specials[-1].note else ""
                 )
                 _mark_end(smap, A, h, cfg, out)
                 break
             continue
+        out.evaluations += B.evaluations
         found = [(kind, None) for kind in _detect(_tests(A), _tests(B))]
         if events:
             grazes, explained = _grazings(sequence_of(smap, A), sequence_of(smap, B))
@@ -470,6 +640,9 @@ def trace(
         for kind, graze in found:
             sp, evals = _locate(smap, A, B, h, kind, cfg, graze)
             out.evaluations += evals
+            if kind == "grazing":  # stepped through: the branch went on, or turned at it
+                turned = np.sign(A.tau[-1]) != np.sign(B.tau[-1])
+                sp.transition = "nonsmooth_fold" if turned else "persistent"
             specials.append(sp)
         if any(not sp.resolved for sp in specials) and h / 2.0 >= cfg.approach:
             h /= 2.0  # approach it: a shorter step brackets it closer, with easier corrections

@@ -14,6 +14,7 @@ from workbench.continuation._branch import (
     MARGIN_TOLERANCE,
     MULTIPLIER_TOLERANCE,
     START_ITERATIONS,
+    TRANSITIONS,
     Settings,
     Traced,
     sequence_of,
@@ -264,6 +265,10 @@ def continue_orbit(
     return ds
 
 
+#: flags of ``bifurcation_transition``
+TRANSITION_FLAGS = {"not_a_grazing": 0} | {t: i + 1 for i, t in enumerate(TRANSITIONS)}
+
+
 def _attrs(long_name: str, units: str = "1", **extra) -> dict:
     return {"long_name": long_name, "units": units, **extra}
 
@@ -401,6 +406,7 @@ def _dataset(
         map_evaluations=int(sum(tr.evaluations for tr in branches)),
         branch_wall_time=" ".join(f"{tr.wall_time:.6g}" for tr in branches),
         branch_ended=" | ".join(tr.ended or "-" for tr in branches),
+        bifurcation_notes=" | ".join(sp.note or "-" for tr in branches for sp in tr.specials),
     )
     if max_points is not None:
         ds.attrs["max_points"] = max_points
@@ -539,6 +545,20 @@ def _special_variables(specials: list, parameter: str | None, p_attrs, model) ->
             "bifurcation",
             np.array([sp.phase for _, sp in specials], float),
             _attrs("time after the strobe time of a grazing's extremum", "s"),
+        ),
+        "bifurcation_transition": (
+            "bifurcation",
+            np.array(
+                [TRANSITION_FLAGS[sp.transition or "not_a_grazing"] for _, sp in specials],
+                np.int8,
+            ),
+            _attrs(
+                "how the orbit passes a grazing: persistent (it crosses with the new contact), "
+                "nonsmooth_fold (the branch turns at it), border_collision (no orbit of the "
+                "branch's period past it: the period there in the note), not_typed",
+                flag_values=np.array(list(TRANSITION_FLAGS.values()), np.int8),
+                flag_meanings=" ".join(TRANSITION_FLAGS),
+            ),
         ),
     }
     if parameter is not None:
