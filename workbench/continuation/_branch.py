@@ -546,6 +546,30 @@ def _grazing_ahead(smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settin
     )
 
 
+#: a branch stalls where this many accepted steps in a row were all shorter than STALL_STEP
+#: times the first step; it then ends with a diagnosis instead of creeping on
+STALL_POINTS = 30
+STALL_STEP = 1e-2
+
+
+def diagnosis(pt: OrbitPoint, h: float) -> str:
+    """Why steps collapse at ``pt``, in numbers: the step, the tangent's parameter component,
+    the conditioning of the Newton matrix and the monodromy's singular values beside its
+    multipliers (a monodromy far from normal in the scaled states, e.g. states scaled by a
+    clearance that is small against the motion, makes (M - I) ill-conditioned although every
+    multiplier lies well inside the unit circle)."""
+    M = pt.value.M
+    m = M.shape[0]
+    sv = np.linalg.svd(M, compute_uv=False)
+    cond = np.linalg.cond(M - np.eye(m))
+    return (
+        f"step {h:.3g} (scaled arclength), tangent's parameter component {float(pt.tau[-1]):.3g}, "
+        f"cond(M - I) {cond:.3g}, largest singular values of M {sv[0]:.3g} and "
+        f"{sv[1] if sv.size > 1 else float('nan'):.3g} against |mu| <= "
+        f"{float(np.abs(pt.multipliers).max()):.3g}"
+    )
+
+
 #: how often a branch is taken through a grazing it could not be stepped through
 MAX_RESUMES = 20
 
@@ -604,7 +628,7 @@ def trace(
     events = smap.prepared(first.p).problem.event_direction.size > 0
     h = cfg.step
     A = first
-    resumed = 0
+    resumed = short = 0
     while len(out.points) < cfg.max_points:
         try:
             B = _at(smap, A, h, cfg)
@@ -622,7 +646,7 @@ def trace(
                     resumed += 1
                     A, h = nxt, cfg.step
                     continue
-                out.ended = f"{failure} at {A.p:.10g}" + (
+                out.ended = f"{failure} at {A.p:.10g}: {diagnosis(A, h)}" + (
                     f"; {out.specials[-1].note}" if out.specials and out.specials[-1].note else ""
                 )
                 _mark_end(smap, A, h, cfg, out)
@@ -666,6 +690,14 @@ def trace(
         out.labels.append("regular")
         out.critical.append(complex(np.nan, np.nan))
         A = B
+        short = short + 1 if h < STALL_STEP * cfg.step else 0
+        if short >= STALL_POINTS:
+            out.ended = (
+                f"the branch stalled at {B.p:.10g}: {STALL_POINTS} steps in a row shorter than "
+                f"{STALL_STEP:g} of the first; {diagnosis(B, h)}; a tighter rtol (the map's noise) "
+                "or another parameter range may go further"
+            )
+            break
         if B.iterations <= 3:
             h = min(1.5 * h, cfg.max_step)
         elif B.iterations >= 6:
@@ -770,3 +802,26 @@ def start_point(
     """The converged orbit at ``p`` from the guess (y, aux), in at most ``max_iterations``
     Newton iterations (:class:`NewtonFailure` otherwise)."""
     return orbit_at(smap, y, aux, p, tolerance=cfg.tolerance, max_iterations=max_iterations)
+
+
+#: Newton's tolerance must lie this far above the map's noise (:meth:`StrobeMap.jitter`)
+NOISE_MARGIN = 10.0
+#: the tightest integration tolerance the map is taken to, to bring its noise under Newton's
+TIGHTEST_RTOL = 1e-12
+
+
+def settle_noise(smap: StrobeMap, first: OrbitPoint, cfg: Settings):
+    """The map's noise at the branch's first orbit against Newton's tolerance: the map is
+    integrated 10x tighter (down to :data:`TIGHTEST_RTOL`, the orbit corrected again) until its
+    noise lies :data:`NOISE_MARGIN` below the tolerance; if even that does not do it, the
+    tolerance is raised to the noise times the margin. Returns the map, the orbit, the
+    tolerance and the noise (scaled units) it measured last."""
+    tolerance = cfg.tolerance
+    while True:
+        noise = smap.jitter(first.value, first.y, first.aux, first.p, tolerance)
+        if NOISE_MARGIN * noise <= tolerance:
+            return smap, first, tolerance, noise
+        if smap.rtol / 10.0 < TIGHTEST_RTOL:
+            return smap, first, NOISE_MARGIN * noise, noise
+        smap = smap.with_rtol(smap.rtol / 10.0)
+        first = orbit_at(smap, first.y, first.aux, first.p, tolerance=tolerance)

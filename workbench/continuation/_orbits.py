@@ -18,6 +18,7 @@ from workbench.continuation._branch import (
     Settings,
     Traced,
     sequence_of,
+    settle_noise,
     start_point,
     switch_at_doubling,
     trace,
@@ -244,6 +245,7 @@ def continue_orbit(
     y, aux = _guess(smap, p0, state, discrete_state, None)
     t0 = time.perf_counter()
     first = start_point(smap, y, aux, p0, cfg)
+    smap, first, cfg.tolerance, noise = settle_noise(smap, first, cfg)
     direction = np.zeros(first.value.M.shape[0] + 1)
     direction[-1] = math.copysign(1.0, stop - p0)
     branches = [trace(smap, first, direction, cfg)]
@@ -260,8 +262,10 @@ def continue_orbit(
             last.ended += f"; switching at the period doubling failed ({exc})"
             break
         branches.append(trace(double, pt, away, cfg, label="start"))
-    ds = _dataset(branches, parameter, tolerance, max_points=max_points)
+    ds = _dataset(branches, parameter, cfg.tolerance, max_points=max_points)
     ds.attrs["wall_time"] = time.perf_counter() - t0
+    ds.attrs["tolerance_requested"] = tolerance
+    ds.attrs["map_noise"] = noise
     return ds
 
 

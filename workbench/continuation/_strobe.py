@@ -182,6 +182,33 @@ class StrobeMap:
             step=self.step,
         )
 
+    def with_rtol(self, rtol: float) -> StrobeMap:
+        """The same map integrated at another tolerance (``atol`` scaled alike)."""
+        return StrobeMap(
+            self.scene,
+            self.parameter,
+            periods=self.periods,
+            rtol=rtol,
+            monodromy=self.monodromy,
+            step=self.step,
+        )
+
+    def jitter(
+        self, value: MapValue, y: np.ndarray, aux: np.ndarray, p: float, size: float
+    ) -> float:
+        """How far the map departs from its linearisation over a step of ``size`` (scaled) from
+        (y, aux): ``max |P(y + size s v) - P(y) - M size v| / s`` for a fixed unit direction
+        ``v`` (scaled units). Over a step this short the curvature's share is ``size^2``; the rest
+        is the map's own noise (its step sequence changes with the start), the floor below
+        which Newton's residual cannot be driven."""
+        s = self.scale()
+        n = s.size
+        v = np.random.default_rng(0).standard_normal(n)
+        v /= np.linalg.norm(v)
+        moved = self(y + size * s * v, aux, p, tangent=False)
+        linear = value.M[:n, :n] @ (size * v)
+        return float(np.max(np.abs((moved.y1 - value.y1) / s - linear)))
+
     def scale(self) -> np.ndarray:
         """The characteristic size of each state (state units)."""
         return state_scale(self.prepared(self.value).problem)
