@@ -20,7 +20,15 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import display_scale, register_overview, wrap_title
-from workbench.plot._continuation import LABEL_MARKS, branch_figure, chaos_map_figure
+from workbench.plot._continuation import (
+    CURVE_COLOURS,
+    CURVE_MARKS,
+    LABEL_MARKS,
+    branch_figure,
+    chaos_map_figure,
+    curve_figure,
+    curve_overlay,
+)
 from workbench.plot._failures import failure_note, mark_failed, run_status_note
 from workbench.plot._phase import (
     CoarseSamplingWarning,
@@ -39,6 +47,8 @@ from workbench.plot._stability import floquet_figure, jacobian_spectrum_figure
 from workbench.plot._verify import verification_figure
 
 __all__ = [
+    "CURVE_COLOURS",
+    "CURVE_MARKS",
     "LABEL_MARKS",
     "PANELS_PER_FIGURE",
     "CoarseSamplingWarning",
@@ -54,6 +64,8 @@ __all__ = [
     "branch_figure",
     "campaign_figure",
     "chaos_map_figure",
+    "curve_figure",
+    "curve_overlay",
     "embedding_figure",
     "floquet_figure",
     "jacobian_spectrum_figure",
