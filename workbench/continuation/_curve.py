@@ -1262,6 +1262,7 @@ def continue_curve(
 
     Examples
     --------
+    >>> from workbench.continuation import continue_orbit
     >>> branch = continue_orbit({"model": {"name": "duffing"}, "parameters": {"gamma": 0.25},
     ...                          "run": {"transient_cycles": 100}}, "gamma", stop=0.27)
     >>> c = continue_curve(branch, "omega", start=1.15, stop=1.25)

@@ -6,7 +6,8 @@ return no figure: :func:`display_scale` (the factor and SI-prefixed unit to show
 :func:`coarse_sampling` (the largest jump between records, and when), :func:`wrap_title` (a
 title broken into lines), :func:`failure_note` and :func:`run_status_note` (text on failed
 points or a failed run), :func:`mark_failed` (marks failed parameter values on given axes and
-returns a note), :func:`run_figure_names` (the file names :func:`run_figures` writes) and
+returns a note), :func:`curve_overlay` (draws a curve of bifurcations in two parameters on
+given axes), :func:`run_figure_names` (the file names :func:`run_figures` writes) and
 :func:`register_overview` (a decorator that adds a model's overview to :func:`run_figures`).
 """
 

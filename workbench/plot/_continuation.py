@@ -267,6 +267,10 @@ def curve_overlay(
     xs = curve[x].values * scales.get(x, 1.0)
     ys = curve[y].values * scales.get(y, 1.0)
     codes = curve.kind.values
+    q = curve.attrs["curve_parameter"]
+    over = (
+        "" if q in (x, y) else f", {q} {curve[q].values.min():.4g} .. {curve[q].values.max():.4g}"
+    )
     drawn, named = [], set()
     start = 0
     for i in range(1, codes.size + 1):
@@ -280,7 +284,7 @@ def curve_overlay(
                 ":" if name == "neutral_saddle" else "-",
                 color=colour,
                 lw=1.6,
-                label=f"{short} curve" if marks and name not in named else None,
+                label=f"{short} curve{over}" if marks and name not in named else None,
             )
             named.add(name)
             drawn.append(line)
