@@ -302,6 +302,7 @@ def test_the_fold_curve_passes_its_cusp_and_agrees_with_harmonic_balance():
         ({"second_parameter": "nope"}, "second_parameter='nope' is not a parameter"),
         ({"second_parameter": "gamma"}, "is the first parameter"),
         ({"start": 1.3}, "must contain the scene's value 1.2"),
+        ({"value": 0.26}, "value= start a curve from a scene; a branch starts it at its own"),
     ],
 )
 def test_curve_errors_say_what_is_allowed(pd_branch, kwargs, message):

@@ -63,6 +63,7 @@ second contact touching elsewhere along a grazing orbit.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import math
 import time
@@ -921,8 +922,6 @@ def _touch(smap: StrobeMap, y, aux, p: float, event: int | None, samples: int = 
         raise ValueError(f"kind='grazing': model {smap.scene.model!r} has no event functions")
     if event is not None and not 0 <= event < ne:
         raise ValueError(f"event={event!r}: the model has {ne} event functions (0 .. {ne - 1})")
-    import dataclasses
-
     start = dataclasses.replace(pb, y0=np.asarray(y, float), aux0=np.asarray(aux, float))
     span = smap.periods * prep.period
     count = samples * smap.periods
@@ -1273,6 +1272,21 @@ def continue_curve(
     if kind is not None and kind not in KIND_NAMES:
         raise ValueError(f"kind={kind!r}; allowed: {', '.join(map(repr, KIND_NAMES))}")
     if isinstance(source, xr.Dataset):
+        given = [
+            k
+            for k, v in (
+                ("parameter", parameter),
+                ("value", value),
+                ("state", state),
+                ("discrete_state", discrete_state),
+            )
+            if v is not None
+        ]
+        if given:
+            raise ValueError(
+                f"{'=, '.join(given)}= start a curve from a scene; a branch starts it at its "
+                "own labelled point (choose it with kind= or bifurcation=)"
+            )
         st = _from_branch(source, kind, bifurcation)
         tolerance = st.tolerance if tolerance is None else tolerance
         rtol = st.rtol if rtol is None else rtol
