@@ -257,10 +257,13 @@ def curve_overlay(
     along the curve (default its first and second parameter; ``y="orbit_x"`` over a branch of
     orbits in the first parameter draws where the bifurcation's orbit lies as the second
     parameter changes). Each run of points of one kind is a line in its colour
-    (:data:`CURVE_COLOURS`; a Neimark-Sacker curve's neutral saddles dotted grey), its
+    (:data:`CURVE_COLOURS`, on a white halo that keeps it visible on any map; a
+    Neimark-Sacker curve's neutral saddles dotted grey), its
     codimension-two points marked as in :data:`CURVE_MARKS` with their short names; with
     ``marks`` the kinds and marks get legend entries. ``scales`` multiplies a variable's values
     (e.g. ``{"omega": 1 / pi}``). Returns the artists drawn."""
+    from matplotlib.patheffects import Normal, Stroke
+
     x = x or curve.attrs["continuation_parameter"]
     y = y or curve.attrs["curve_parameter"]
     scales = dict(scales or {})
@@ -284,6 +287,7 @@ def curve_overlay(
                 ":" if name == "neutral_saddle" else "-",
                 color=colour,
                 lw=1.6,
+                path_effects=[Stroke(linewidth=3.2, foreground="white", alpha=0.7), Normal()],
                 label=f"{short} curve{over}" if marks and name not in named else None,
             )
             named.add(name)
