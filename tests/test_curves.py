@@ -128,6 +128,8 @@ def test_the_curve_dataset_is_netcdf_ready_and_self_described(pd_curve, pd_branc
     assert s.size == 1 and float(c.omega[s[0]]) == 1.2
     pd = float(pd_branch.bifurcation_parameter[0])
     assert abs(float(c.gamma[s[0]]) - pd) < 1e-9
+    # omega grows along the stored curve, and so does the tangent's component in it
+    assert (np.diff(c.omega) > 0).all() and (c.test_second_parameter_turn > 0).all()
     # converged: Newton's residual below the branch's tolerance everywhere
     assert (c.residual < pd_branch.attrs["tolerance"]).all()
     assert c.attrs["curve_ended"].count("reached the end of its range") == 2

@@ -73,7 +73,8 @@ from itertools import combinations
 import numpy as np
 import xarray as xr
 
-from workbench.continuation._newton import NewtonFailure
+from workbench.continuation._newton import NewtonFailure, orbit_at
+from workbench.continuation._orbits import _attrs, _guess
 from workbench.continuation._strobe import MapValue, StrobeMap, _event_values
 from workbench.models import get_model
 from workbench.run import provenance
@@ -151,10 +152,6 @@ TEST_MEANINGS = {
 }
 #: a multiplier counts as complex when its imaginary part exceeds this fraction of its modulus
 COMPLEX = 1e-6
-
-
-def _attrs(long_name: str, units: str = "1", **extra) -> dict:
-    return {"long_name": long_name, "units": units, **extra}
 
 
 # -- the map over two parameters ----------------------------------------------------------------
@@ -742,7 +739,8 @@ class _Curve:
                     located = self.locate(A, B, h, name)
                     if located is None:
                         out.unresolved.append(
-                            f"{name} between points {len(out.points) - 1} and {len(out.points)}"
+                            f"{name} between ({A.ev.p:.10g}, {A.ev.q:.10g}) and "
+                            f"({B.ev.p:.10g}, {B.ev.q:.10g})"
                         )
                     else:
                         found.append((located[0], name, located[1]))
@@ -1147,13 +1145,21 @@ def _run(fam, system, y, aux, p0: float, q0: float, extra, ends, pscale: float, 
         )
         system.update(first.ev)
         halves.append(curve.trace(copy, tau, (q_lo, q_hi), p_range))
+    # stored from the first end to the second: the way toward the first end reversed, its
+    # tangents (and the turning tests, their components) turned to point along the curve
+    backward = halves[0] if ends[0] != q0 else None
+    if backward is not None:
+        for pt in backward.points:
+            pt.tau = -pt.tau
+            for name in _TURNS:
+                pt.tests[name] = -pt.tests[name]
     if len(halves) == 2:
         a, b = halves
         points = a.points[::-1] + b.points[1:]
         labels = a.labels[::-1] + b.labels[1:]
     else:
         points, labels = halves[0].points, halves[0].labels
-        if ends[0] != q0:  # only the way toward the first end: stored from that end
+        if backward is not None:
             points, labels = points[::-1], labels[::-1]
     return curve, points, labels, halves
 
@@ -1303,8 +1309,6 @@ def continue_curve(
             scene, parameter, periods=periods, rtol=rtol, monodromy=monodromy or "auto"
         )
         p = smap.value if value is None else float(value)
-        from workbench.continuation._orbits import _guess
-
         y, aux = _guess(smap, p, state, discrete_state, None)
         st = _Start(scene, parameter, kind, p, y, aux, periods, abs(p) or 1.0)
         st.source = f"a {kind} near {parameter} = {p:.10g} given by state and value"
@@ -1338,8 +1342,6 @@ def continue_curve(
     first_map = fam.map(q0)
     y, aux = np.asarray(st.y, float), np.asarray(st.aux, float)
     if not isinstance(source, xr.Dataset):
-        from workbench.continuation._newton import orbit_at
-
         try:
             orbit = orbit_at(first_map, y, aux, st.p, tolerance=tolerance)
             y, aux = orbit.y, orbit.aux
