@@ -17,7 +17,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, newton
 
 from workbench.archive import open_run, save_run
-from workbench.continuation import CURVE_KINDS, continue_curve, continue_orbit
+from workbench.continuation import CURVE_KINDS, StrobeMap, continue_curve, continue_orbit
 from workbench.continuation._curve import _run, _Settings, _system
 from workbench.continuation._strobe import MapValue
 from workbench.models import get_model
@@ -146,6 +146,21 @@ def test_a_curve_from_a_scene_equals_the_curve_from_the_branch(pd_curve):
     c = continue_curve(scene, "omega", stop=1.4, parameter="gamma", kind="period_doubling")
     assert float(c.omega[0]) == 1.2 and float(c.omega[-1]) == 1.4
     assert abs(float(c.gamma[-1]) - float(pd_curve.gamma[-1])) < 1e-9
+
+
+def test_the_flow_over_one_period_is_the_map_with_its_monodromy():
+    """StrobeMap.flow (the state at any time with its Jacobian by copies) over a whole period
+    is the strobe map, its Jacobian the tangent system's monodromy; at t0 it is the identity."""
+    smap = StrobeMap(dict(DUFFING, parameters={"gamma": 0.26}), "gamma")
+    y, aux = smap.initial(0.26)
+    prep = smap.prepared(0.26)
+    z, _, W, active = smap.flow(y, aux, 0.26, prep.problem.t0 + prep.period)
+    v = smap(y, aux, 0.26)
+    s = smap.scale()
+    assert active.size == 0 and np.allclose(z, v.y1, rtol=0, atol=1e-8)
+    assert np.allclose(W / s[:, None], v.M, rtol=0, atol=1e-6 * np.abs(v.M).max())
+    z0, _, W0, _ = smap.flow(y, aux, 0.26, prep.problem.t0)
+    assert np.array_equal(z0, y) and np.array_equal(W0, np.diag(s))
 
 
 # -- grazing in closed form ------------------------------------------------------------------
