@@ -352,6 +352,34 @@ class StrobeMap:
         s = np.concatenate([self.scale(), np.ones(live.size)])
         return da * pscale / s
 
+    def flow(
+        self, y: np.ndarray, aux: np.ndarray, p: float, t: float, *, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+        """The state and discrete state at time ``t`` (s, at or after the problem's ``t0``)
+        from (y, aux) at ``t0``, at parameter value ``p``: ``(y_t, aux_t, W, active)``.
+
+        With ``jacobian``, ``W`` (shape ``(n + na, n + active.size)``) is the derivative of
+        ``(y_t, aux_t)`` (their units) in the scaled unknowns: ``y / s`` (column ``j``), then
+        the active discrete states (non-zero at ``t0``; column ``n + i`` for ``active[i]``),
+        by central differences of copies in one step sequence (as the monodromy by copies,
+        :meth:`__call__`); else None. E.g. the point where an orbit touches an event surface,
+        for a grazing condition."""
+        pb = self.prepared(p).problem
+        y, aux = np.asarray(y, float), np.asarray(aux, float)
+        n, na = y.size, aux.size
+        active = np.flatnonzero(aux != 0.0)
+        if not t > pb.t0:
+            W = np.zeros((n + na, n + active.size))
+            W[:n, :n] = np.diag(state_scale(pb))
+            W[n + active, n + np.arange(active.size)] = 1.0
+            return y.copy(), aux.copy(), W if jacobian else None, active
+        start = dataclasses.replace(pb, y0=y, aux0=aux)
+        if not jacobian:
+            res = self._solve(start, float(t))
+            return res.Y[-1].copy(), res.AUX[-1].copy(), None, active
+        y1, aux1, W, _, _ = self._copies(start, active, float(t))
+        return y1, aux1, W, active
+
     def orbit_samples(self, y: np.ndarray, aux: np.ndarray, p: float) -> np.ndarray:
         """The states of a period-k orbit at its k strobe times (rows: ``y``, ``P(y)``, ...)."""
         prep = self.prepared(p)
