@@ -842,6 +842,11 @@ def _from_branch(branch: xr.Dataset, kind: str | None, bifurcation: int | None) 
     P = branch.attrs["continuation_parameter"]
     names = _flag_names(branch.bifurcation_label)
     found = [names[int(c)] for c in branch.bifurcation_label.values]
+    if "bifurcation_resolved" in branch:  # an unresolved bifurcation is no start
+        found = [
+            k if ok else "unresolved"
+            for k, ok in zip(found, branch.bifurcation_resolved.values, strict=True)
+        ]
     where = ", ".join(
         f"{k} at {P} = {float(p):.8g}"
         for k, p in zip(found, branch.bifurcation_parameter.values, strict=True)
@@ -868,15 +873,9 @@ def _from_branch(branch: xr.Dataset, kind: str | None, bifurcation: int | None) 
             )
         i = hits[0]
     p = float(branch.bifurcation_parameter.values[i])
-    b = int(branch.bifurcation_branch.values[i])
-    labels = _flag_names(branch.label)
-    code = {v: k for k, v in labels.items()}[found[i]]
-    row = np.flatnonzero(
-        (branch.label.values == code) & (branch[P].values == p) & (branch.branch.values == b)
-    )
-    if row.size == 0:  # pragma: no cover - a branch dataset holds its located points
+    r = int(branch.bifurcation_point.values[i])
+    if r < 0:  # pragma: no cover - a branch dataset holds its located points
         raise ValueError(f"the branch holds no point at its {found[i]} ({P} = {p!r})")
-    r = int(row[0])
     scene = scene_from_toml(branch.attrs["scene"])
     pb = StrobeMap(scene, None).prepared(math.nan).problem
     y = pb.y0.copy()

@@ -374,7 +374,13 @@ def _dataset(
     residual = np.array([r[1].residual for r in rows])
     data["residual"] = ("point", residual, _attrs("scaled residual max |P^k(x) - x| / s"))
     specials = [(b, sp) for b, tr in enumerate(branches) for sp in tr.specials]
+    row_of = {(b, id(pt)): i for i, (b, pt, _, _) in enumerate(rows)}
     data.update(_special_variables(specials, parameter, p_attrs if parameter else None, model))
+    data["bifurcation_point"] = (
+        "bifurcation",
+        np.array([row_of.get((b, id(sp.point)), -1) for b, sp in specials], np.int32),
+        _attrs("index along point of the bifurcation's located orbit"),
+    )
     coords = {
         "point": ("point", np.arange(n), _attrs("index along the branches")),
         "multiplier": ("multiplier", np.arange(m), _attrs("multiplier (largest modulus first)")),
