@@ -95,7 +95,7 @@ def branch_figure(
     orbit diagram: each orbit's strobe samples of ``state`` against the parameter, solid where
     the orbit is stable and dashed where not, its labelled points marked as in
     :data:`LABEL_MARKS` (LP fold, BP branch point, PD period doubling, NS Neimark-Sacker, G
-    grazing, NF nonsmooth fold, ? a bifurcation bracketed but not confirmed); under it, when
+    grazing, NF nonsmooth fold, ? unresolved: bracketed but not confirmed); under it, when
     given, the strobe samples of a sweep (:func:`workbench.analysis.bifurcation_diagram` of a
     campaign or a continued sweep, one colour per direction).
 
