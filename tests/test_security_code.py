@@ -10,6 +10,7 @@ Every planted module writes a marker file when imported: the marker must not app
 """
 
 import itertools
+import os
 import subprocess
 import sys
 import uuid
@@ -91,7 +92,7 @@ def test_trust_modules_imports_the_named_module_and_only_that(importable):
     with pytest.raises(SceneError, match="names the module"):
         workbench.scene_from_toml(text, trust_modules=("some_other_module",))
     assert not marker.exists()
-    scene = workbench.scene_from_toml(text, trust_modules=(name,))
+    scene = workbench.scene_from_toml(text, trust_modules=name)  # one name: a str will do
     assert marker.exists() and scene.model_module == name
     # imported on the user's word: the same text now loads without naming it again
     assert workbench.scene_from_toml(text) == scene
@@ -234,26 +235,36 @@ def test_a_netcdf4_py_beside_a_shared_scene_does_not_replace_the_library(tmp_pat
     assert f'module = "{name}"' in workbench.open_run(tmp_path / "r.nc").attrs["scene"]
 
 
-def test_campaign_workers_load_the_module_by_file_path_not_from_sys_path(tmp_path):
-    """``workbench campaign``: the client and its worker processes import the module beside
-    the scene (the workers by the file path the client found it at); none of them imports the
-    netCDF4.py lying there."""
-    spec = DUFFING | {"sweep": {"gamma": [0.3, 0.35, 0.4, 0.45]}}
-    name, pids, marker = shared_scene(tmp_path / "shared", spec)
+CONTINUED = {"omega": [1.1, 1.11, 1.12], "continuation": {"direction": "down", "segments": 2}}
+
+
+@pytest.mark.parametrize("context", ["", "spawn"], ids=["fork_server", "spawn"])
+@pytest.mark.parametrize(
+    "sweep", [{"gamma": [0.3, 0.35, 0.4, 0.45]}, CONTINUED], ids=["blocks", "continued"]
+)
+def test_campaign_workers_load_the_module_by_file_path_not_from_sys_path(tmp_path, sweep, context):
+    """``workbench campaign`` (blocks of points, and a continued sweep's segments): the client
+    and its worker processes import the module beside the scene (the workers by the file path
+    the client found it at: it is not on their path); none imports the netCDF4.py there. The
+    local pool's fork server imports it once for its workers; spawned workers (dask's
+    ``multiprocessing.context``: no preloading server) import it from their tasks."""
+    name, pids, marker = shared_scene(tmp_path / "shared", DUFFING | {"sweep": sweep})
     out = subprocess.run(
         [*CLI, "campaign", str(tmp_path / "shared" / "scene.toml"), "-o", "c.nc", "--workers", "2"]
-        + ["--chunk", "1", "-q"],
+        + ["-q"],
         cwd=tmp_path,
         capture_output=True,
         text=True,
         timeout=900,
+        env=os.environ | ({"DASK_MULTIPROCESSING__CONTEXT": context} if context else {}),
     )
     assert out.returncode == 0, out.stderr
     assert not marker.exists()
     importers = set(pids.read_text().split())
-    assert len(importers) >= 2  # the client, and the worker side (fork server or workers)
+    # the client, and the fork server (its workers inherit the module) or the spawned workers
+    assert len(importers) >= 2
     ds = workbench.open_run(tmp_path / "c.nc")
-    assert (ds.status.values == 0).all() and ds.sizes["gamma"] == 4
+    assert (ds.status.values == 0).all() and ds.status.size == len(sweep.get("gamma", [0] * 3))
 
 
 def test_a_task_scene_imports_its_module_by_file_path(tmp_path):
@@ -306,3 +317,14 @@ def test_a_missing_module_is_one_line(tmp_path, monkeypatch):
         "model.module: cannot import 'no_such_module_xyz': put no_such_module_xyz.py beside "
         "the scene file or in the working directory, or on PYTHONPATH"
     )
+
+
+def test_a_scene_error_crosses_processes_intact():
+    """A worker's SceneError (e.g. the module it is told to import is gone) reaches the client
+    as the same one-line error; before, unpickling it raised a TypeError that broke the pool
+    ("a worker process of the local pool died")."""
+    import pickle
+
+    for err in (SceneError("model.module", "cannot import 'x'"), SceneError("", "no key")):
+        back = pickle.loads(pickle.dumps(err))
+        assert type(back) is SceneError and back.key == err.key and str(back) == str(err)

@@ -242,7 +242,7 @@ def scene_from_toml(text: str, *, trust_modules: Iterable[str] = ()) -> Scene:
     ----------
     text : str
         TOML text of a scene.
-    trust_modules : iterable of str
+    trust_modules : str or iterable of str
         Modules the text may name and so import (command line: ``--trust-module NAME``).
 
     Raises
@@ -251,7 +251,8 @@ def scene_from_toml(text: str, *, trust_modules: Iterable[str] = ()) -> Scene:
         If the text is not TOML or the scene is invalid (naming the key), or names a module
         that is not trusted (naming the module and how to trust it).
     """
-    return _validate(_parse(text, "the scene text"), (Path.cwd(),), tuple(trust_modules))
+    trusted = (trust_modules,) if isinstance(trust_modules, str) else tuple(trust_modules)
+    return _validate(_parse(text, "the scene text"), (Path.cwd(),), trusted)
 
 
 def _parse(text: str, where: str) -> dict[str, Any]:
