@@ -65,8 +65,8 @@ def check_trusted(module: str, trust_modules: Iterable[str]) -> None:
         _KEY,
         f"the scene text names the module {module!r}; a scene read from stored text (an "
         "archive's or a manifest's) imports no module, since importing runs its code. If you "
-        f"trust {module!r}: scene_from_toml(text, trust_modules=({module!r},)), on the command "
-        f"line --trust-module {module}, or load the scene file that names it",
+        f"trust {module!r}: scene_from_toml(text, trust_modules=({module!r},)) (workbench "
+        f"analyse: --trust-module {module}), or load the scene file that names it",
     )
 
 
