@@ -22,6 +22,9 @@ class SceneError(ValueError):
         self.key = key
         super().__init__(f"{key}: {message}" if key else message)
 
+    def __reduce__(self):  # the same error across processes (raised in a campaign's worker)
+        return (type(self), (self.key, str(self)[len(self.key) + 2 :] if self.key else str(self)))
+
 
 class ModelWarning(UserWarning):
     """A run completed, but its model says a law left the range where it is physical (e.g. a

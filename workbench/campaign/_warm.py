@@ -6,8 +6,9 @@ from __future__ import annotations
 import os
 import tempfile
 
+from workbench.campaign._block import task_scene
 from workbench.run import derive, integrate, prepare, provenance, to_dataset
-from workbench.scene import Scene, scene_from_toml
+from workbench.scene import Scene
 
 __all__ = ["kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
 
@@ -34,11 +35,13 @@ def kernel_cached(scene: Scene) -> bool | None:
     return bool(index)
 
 
-def load_kernel(scene_toml: str) -> None:
+def load_kernel(scene_toml: str, model_module: str = "", model_directory: str = "") -> None:
     """The provenance's package versions, then every compiled function a point of the scene
     runs (from the cache, or compiled into it): the kernel of the scene's model and the model's
-    derived outputs, over an empty interval (one record at the start: nothing is integrated)."""
-    prepared = prepare(scene_from_toml(scene_toml))
+    derived outputs, over an empty interval (one record at the start: nothing is integrated).
+    ``model_module``, ``model_directory``: the campaign's :func:`model_source`, imported first
+    (see :func:`task_scene`)."""
+    prepared = prepare(task_scene(scene_toml, model_module, model_directory))
     provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
     if prepared.scene.solver["method"].startswith("scipy:"):
         return
