@@ -11,8 +11,8 @@ code  class                       outcomes
 2     invalid input               a scene error, a refused campaign store (another scene, or
                                   in use by another process), a missing or unreadable file, an
                                   output that exists (without ``--overwrite``) or cannot be
-                                  written, a bad argument; a campaign point with
-                                  ``invalid_parameters``
+                                  written, a bad argument, a refused kernel cache; a campaign
+                                  point with ``invalid_parameters``
 3     solver limit                ``max_steps`` (raise ``solver.max_steps``)
 4     integration failure         ``step_underflow``, ``non_finite``
 5     model failure               ``model_failure`` (a state outside the model's domain)
@@ -27,6 +27,7 @@ runs or settings, and says how many failed.
 
 from __future__ import annotations
 
+from workbench._cache import CacheError
 from workbench.archive import ArchiveError
 from workbench.campaign import CampaignError
 from workbench.scene import SceneError
@@ -59,7 +60,7 @@ def exit_code(outcome: Status | BaseException) -> int:
         return _BY_STATUS[outcome.status]
     if isinstance(outcome, KeyboardInterrupt):  # Ctrl-C, or a Terminated signal
         return 128 + getattr(outcome, "signum", 2)
-    if isinstance(outcome, SceneError | CampaignError | ArchiveError | UsageError):
+    if isinstance(outcome, SceneError | CampaignError | ArchiveError | CacheError | UsageError):
         return EXIT_INVALID
     if isinstance(outcome, FileNotFoundError):
         return EXIT_INVALID
