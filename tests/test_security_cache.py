@@ -197,31 +197,36 @@ def test_a_digests_folder_that_others_can_write_is_refused(tmp_path, monkeypatch
     assert "is a link" in _refusal(monkeypatch, root)
 
 
-def test_a_refused_cache_is_one_line_of_the_command_with_the_fix(tmp_path):
-    """``workbench run`` with a cache of mode 777: exit code 2, one error line that names the
-    folder, its owner and mode and the fix; no traceback; nothing compiled into it."""
+@pytest.mark.parametrize("command", ["run", "campaign"])
+def test_a_refused_cache_is_one_line_of_the_command_with_the_fix(tmp_path, command):
+    """``workbench run`` (or ``campaign``) with a cache of mode 777: exit code 2, one line on
+    stderr, before anything runs, that names the folder, its owner and mode and the fix; no
+    traceback; nothing written into the cache, no output or campaign store."""
     cache = tmp_path / "cache"
     cache.mkdir()
     cache.chmod(0o777)
+    scene = tmp_path / "scene.toml"
+    sweep = (
+        "\n[sweep]\ngamma = { start = 0.3, stop = 0.5, num = 2 }\n" if command == "campaign" else ""
+    )
+    scene.write_text(f'[model]\nname = "duffing"\n[run]\ncycles = 2\n{sweep}')
     out = subprocess.run(
-        [sys.executable, "-m", "workbench.cli", "run", str(ROOT / "studies" / "duffing.toml")]
-        + ["-o", "d.nc", "-q"],
+        [sys.executable, "-m", "workbench.cli", command, str(scene), "-o", "d.nc"],
         cwd=tmp_path,
         env=_env(cache),
         capture_output=True,
         text=True,
     )
     assert out.returncode == 2, out.stderr
-    (line,) = [line for line in out.stderr.splitlines() if "error" in line]
     me = _cache._owner(os.geteuid())
-    assert line == (
-        f"workbench run: error: the kernel cache {cache} (owner {me}, mode 0777) is writable "
-        "by every user, so compiled code found there could be anyone's; chmod o-w "
+    assert out.stderr.splitlines() == [
+        f"workbench {command}: error: the kernel cache {cache} (owner {me}, mode 0777) is "
+        "writable by every user, so compiled code found there could be anyone's; chmod o-w "
         f"{cache} (go-w if it is yours alone), or set WORKBENCH_CACHE_DIR to a folder of "
         "your own"
-    )
-    assert "Traceback" not in out.stderr
+    ]
     assert list(cache.iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "scene.toml"]
 
 
 def _without_home(monkeypatch, tmp_path: Path) -> Path:
