@@ -24,9 +24,9 @@ Loading compiled code runs it (numba's index and data files are pickles), so the
 trusted only as far as who can write it:
 
 - The root (:func:`cache_root`) must belong to the user and not be writable by group or others,
-  else :class:`CacheError` names it, its owner and mode, and the fix. A cache
-  that a team shares is an explicit opt-in, ``WORKBENCH_SHARED_CACHE=1``: its owner and group,
-  who can write it, are trusted (it must still not be writable by others).
+  else :class:`CacheError` names it, its owner and mode, and the fix. A cache that a team
+  shares is an explicit opt-in, ``WORKBENCH_SHARED_CACHE=1``: its owner and group, who can
+  write it, are trusted (it must still not be writable by others).
 - When the home directory is not writable, the root is a folder of the system's temporary
   directory made by :func:`tempfile.mkdtemp` (an unpredictable name, mode 0700) and found again
   by the next process among the folders of that prefix that are the user's alone (owner, mode
