@@ -1,12 +1,15 @@
 """The errors scenes and models raise: :class:`SceneError`, and the solver's
 :class:`~workbench.solver.SolverError` (re-exported: models raise it for a state outside their
-domain); and :class:`ModelWarning`, for a run that ended well but left its model's physics."""
+domain); :class:`~workbench._cache.CacheError` (re-exported: a kernel cache that could hold
+someone else's code); and :class:`ModelWarning`, for a run that ended well but left its model's
+physics."""
 
 from __future__ import annotations
 
+from workbench._cache import CacheError
 from workbench.solver import SolverError
 
-__all__ = ["ModelWarning", "SceneError", "SolverError"]
+__all__ = ["CacheError", "ModelWarning", "SceneError", "SolverError"]
 
 
 class SceneError(ValueError):

@@ -16,8 +16,8 @@ __all__ = ["kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
 def kernel_cached(scene: Scene) -> bool | None:
     """Whether numba's on-disk cache holds the compiled kernel of a scene's model (None when it
     cannot tell: a scipy method, a model without states, a scene that does not prepare, or a
-    numba that keeps its cache elsewhere). Reads the index of the kernel's main entry point,
-    as numba itself does before it compiles."""
+    numba that keeps its cache elsewhere; a cache that is refused raises its CacheError). Reads
+    the index of the kernel's main entry point, as numba itself does before it compiles."""
     if scene.solver["method"].startswith("scipy:"):
         return None
     try:
@@ -26,10 +26,14 @@ def kernel_cached(scene: Scene) -> bool | None:
         return None
     if problem.y0.size == 0:
         return None
+    from workbench._cache import CacheError
+
     try:
         from workbench.solver._compile import kernel_for
 
         index = kernel_for(problem.hooks).advance._cache._cache_file._load_index()
+    except CacheError:  # a refused cache: said before anything runs
+        raise
     except Exception:  # pragma: no cover - numba internals changed
         return None
     return bool(index)
