@@ -21,5 +21,5 @@ Formats: 1, workbench 0.1.0 (no ``format_version`` attribute; statuses ``done``,
 
 __all__ = ["FORMAT_VERSION", "__version__"]
 
-__version__ = "0.5.1"
+__version__ = "0.6.0"
 FORMAT_VERSION = 2
