@@ -79,6 +79,9 @@ def save_run(
 def open_run(path: str | os.PathLike, *, chunks: int | str | dict | None = None) -> xr.Dataset:
     """Read a stored run (or campaign).
 
+    An archive of an older format (its ``format_version``, :mod:`workbench._version`) is
+    upgraded in memory where the change is unambiguous (``upgraded_from_format`` says so).
+
     Parameters
     ----------
     path : str or path
@@ -89,8 +92,10 @@ def open_run(path: str | os.PathLike, *, chunks: int | str | dict | None = None)
         takes them, e.g. ``{"time": 100_000}``, ``"auto"``, or ``{}`` for one chunk per
         variable) read when computed; the file stays open until ``ds.close()``.
 
-    An archive of an older format (its ``format_version``, :mod:`workbench._version`) is
-    upgraded in memory where the change is unambiguous (``upgraded_from_format`` says so).
+    Returns
+    -------
+    xarray.Dataset
+        The archive's dataset.
 
     Raises
     ------
