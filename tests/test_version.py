@@ -77,6 +77,21 @@ def test_a_format1_run_is_upgraded():
     xr.testing.assert_identical(ds.clearance_x, raw.clearance_x.load())
 
 
+def test_a_format2_run_is_read_as_it_was_written(tmp_path):
+    """Format 2 (workbench 0.2.0 to 0.5.1) stored the simulated time in "s" with xarray's
+    encoding; format 3 stores it as a CF time coordinate (workbench.archive._format). A format-2
+    file reads back as the same dataset, upgraded."""
+    ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 2}})
+    old = ds.copy()
+    old.attrs["format_version"] = np.int32(2)
+    old.to_netcdf(tmp_path / "format2.nc")  # xarray's writer: what save_run wrote in format 2
+    with xr.open_dataset(tmp_path / "format2.nc") as raw:
+        assert raw.time.attrs["units"] == "s" and raw.time.dtype == np.float64
+    back = workbench.open_run(tmp_path / "format2.nc")
+    assert back.attrs.pop("upgraded_from_format") == 2
+    assert back.identical(ds)
+
+
 def test_a_format1_campaign_is_upgraded_to_todays_flags(tmp_path):
     """data/bifurcation_speed.nc as workbench 0.1.0 wrote it (4 points): flags 'ok
     solver_failed terminated_early invalid_parameters'. The upgraded flags are those a
