@@ -70,10 +70,13 @@ class Store:
         self.manifest_path = self.blocks_dir / "manifest.json"
 
     def block_path(self, index: int) -> Path:
+        """The file of block ``index`` in the store's blocks directory."""
         return self.blocks_dir / f"block-{index:05d}.nc"
 
     # manifest
     def read_manifest(self) -> dict | None:
+        """The store's manifest, or None for a new store (CampaignError for block files
+        without a manifest, or a manifest that cannot be read or has another format)."""
         if not self.manifest_path.is_file():
             if self.blocks_dir.is_dir() and any(
                 _BLOCK_RE.match(p.name) for p in self.blocks_dir.iterdir()
@@ -131,6 +134,7 @@ class Store:
         return blocks
 
     def save_manifest(self, data: dict) -> dict:
+        """Write ``data`` as the store's manifest, atomically, and return it."""
         self.blocks_dir.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
         return data
