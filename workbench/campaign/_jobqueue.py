@@ -123,7 +123,7 @@ def cluster_security(security=None):
             except ImportError as exc:
                 raise ImportError(
                     "a cluster's TLS credentials are made with cryptography: pip install "
-                    "'workbench[cluster]' (or cryptography), or name certificates in the dask "
+                    "'clearance-workbench[cluster]' (or cryptography), or name certificates in the dask "
                     "config (distributed.comm.tls.*)"
                 ) from exc
         security, where = Security(), "the dask config"
