@@ -481,15 +481,15 @@ def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
 
 
 def test_detection_rules_of_the_branch():
-    """Which sign changes between two branch points name which bifurcation."""
+    """Which sign changes between two branch points name which bifurcation (grazings come from
+    the contact sequences: tests/test_grazing.py)."""
     from workbench.continuation._branch import _detect
 
-    base = {"size": 2, "fold": 1.0, "pd": 1.0, "ns": 0, "events": 0, "turn": 0.5}
+    base = {"size": 2, "fold": 1.0, "pd": 1.0, "ns": 0, "turn": 0.5}
     assert _detect(base, dict(base, fold=-1.0, turn=-0.5)) == ["fold"]
     assert _detect(base, dict(base, fold=-1.0)) == ["branch_point"]
     assert _detect(base, dict(base, pd=-1.0)) == ["period_doubling"]
     assert _detect(base, dict(base, ns=2)) == ["neimark_sacker"]
-    assert _detect(base, dict(base, events=2)) == ["grazing"]
     assert _detect(base, dict(base, turn=-0.5)) == ["nonsmooth_fold"]  # no multiplier at +1
     assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
 

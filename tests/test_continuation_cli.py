@@ -68,6 +68,89 @@ def test_orbit_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, message
     assert not (tmp_path / "b.nc").exists()
 
 
+def test_orbit_curve_holds_both_parameters_along_the_curve(tmp_path, capsys):
+    """``--curve omega`` continues the branch's period doubling (gamma = 0.2655818 at omega =
+    1.2) in omega from 1.15 to 1.25: the archive holds gamma and omega along the curve, the
+    figure draws it alone, over an orbit diagram (--state) or over a chaos map (--map)."""
+    import numpy as np
+    import xarray as xr
+
+    from workbench.archive import save_run
+
+    path = _scene_file(tmp_path, DUFFING)
+    out, fig = tmp_path / "curve.nc", tmp_path / "curve.png"
+    args = ["orbit", path, "-o", str(out), "--param", "gamma", "--stop", "0.27"]
+    args += ["--curve", "omega", "--curve-start", "1.15", "--curve-stop", "1.25"]
+    assert main([*args, "--figure", str(fig)]) == 0
+    printed = capsys.readouterr().out
+    assert "period_doubling curve from the period_doubling at gamma = 0.26558" in printed
+    curve = open_run(out)
+    assert curve.gamma.dims == ("curve_point",) and curve.omega.dims == ("curve_point",)
+    assert curve.gamma.attrs["units"] == "m s-2" and curve.omega.attrs["units"] == "rad s-1"
+    assert (float(curve.omega[0]), float(curve.omega[-1])) == (1.15, 1.25)
+    assert (
+        curve.attrs["curve_kind"] == "period_doubling" and "omega" in curve.attrs["curve_parameter"]
+    )
+    assert 0.2656 < float(curve.gamma.max()) and float(curve.gamma.min()) < 0.2655
+    assert fig.stat().st_size > 10_000
+    # over the orbit diagram of the branch, and over a chaos map of (gamma, omega)
+    assert main([*args, "--overwrite", "--figure", str(fig), "--state", "x"]) == 0
+    maps = xr.Dataset(
+        {"strobe_period": (("gamma", "omega"), np.ones((3, 3), np.int8), {"units": "1"})},
+        coords={
+            "gamma": ("gamma", [0.25, 0.26, 0.27], {"units": "m s-2", "long_name": "gamma"}),
+            "omega": ("omega", [1.15, 1.2, 1.25], {"units": "rad s-1", "long_name": "omega"}),
+        },
+        attrs={"campaign_dims": "gamma omega"},
+    )
+    mapfile = save_run(maps, tmp_path / "map.nc")
+    map_fig = tmp_path / "map.png"
+    assert main([*args, "--overwrite", "--figure", str(map_fig), "--map", str(mapfile)]) == 0
+    assert map_fig.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--stop", "0.26", "--curve", "omega", "--curve-stop", "1.3"], "--curve-start: the scene"),
+        (
+            ["--stop", "0.26", "--curve", "omega", "--curve-start", "1.1", "--curve-stop", "1.3"],
+            "--curve: no labelled fold, period_doubling, neimark_sacker or grazing point found "
+            "along gamma between 0.25 and 0.26 (found: none)",
+        ),
+        (
+            ["--stop", "0.27", "--curve", "omega", "--curve-start", "1.1", "--curve-stop", "1.3"]
+            + ["--curve-kind", "fold"],
+            "--curve-kind: no labelled fold point found along gamma between 0.25 and 0.27 "
+            "(found: period_doubling at 0.26558179)",
+        ),
+        (["--stop", "0.27", "--curve-kind", "fold"], "--curve-kind needs --curve"),
+        (["--stop", "0.27", "--curve-start", "1.0"], "--curve-start needs --curve"),
+        (["--stop", "0.27", "--curve", "nope", "--curve-stop", "1.3"], "--curve 'nope': not a"),
+        (["--stop", "0.27", "--curve", "gamma", "--curve-stop", "1.3"], "the same as --param"),
+        (
+            ["--stop", "0.27", "--curve", "omega", "--curve-start", "1.3", "--curve-stop", "1.4"],
+            "must contain the scene's value 1.2",
+        ),
+        (
+            ["--stop", "0.27", "--curve", "omega", "--curve-stop", "1.3", "--curve-kind", "hopf"],
+            "--curve-kind 'hopf': allowed: fold, period_doubling",
+        ),
+        (
+            ["--stop", "0.27", "--curve", "omega", "--curve-stop", "1.3", "--map", "m.nc"],
+            "--map needs --figure",
+        ),
+    ],
+)
+def test_orbit_curve_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, message):
+    monkeypatch.chdir(tmp_path)
+    path = _scene_file(tmp_path, DUFFING)
+    assert main(["orbit", path, "-o", "c.nc", "--param", "gamma", *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "c.nc").exists()
+
+
 def test_chaos_map_from_a_scene_file(tmp_path, capsys):
     data = {
         "model": {"name": "duffing"},

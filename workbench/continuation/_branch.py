@@ -1,9 +1,9 @@
 """Branches of periodic orbits: pseudo-arclength continuation in one parameter, bifurcations
-detected and located on the way, and the switch to the doubled branch at a period doubling.
+detected, located, checked against what defines them and labelled on the way, and the switch
+to the doubled branch at a period doubling.
 
 Between two consecutive points of a branch a bifurcation shows as a sign change of a test
-function of the Floquet multipliers ``mu`` (Seydel 2010, Sec. 7.4-7.6; Kuznetsov 2004,
-Sec. 10.2):
+function (Seydel 2010, Sec. 7.4-7.6; Kuznetsov 2004, Sec. 10.2):
 
 * ``det(M - I)`` (a real multiplier through +1): a **fold** (cyclic fold, saddle-node of
   orbits) where the parameter turns back (the tangent's parameter component changes sign), a
@@ -11,15 +11,28 @@ Sec. 10.2):
 * ``det(M + I)`` (a real multiplier through -1): a **period doubling** (flip);
 * the number of complex multipliers outside the unit circle: a **Neimark-Sacker** (torus)
   bifurcation;
-* the number of events per period (for the clearance mechanisms: contact onsets and ends):
-  a **grazing** (contact) bifurcation, where the orbit touches an event surface (Nordmark 1991;
-  di Bernardo et al. 2008, Ch. 2);
+* a local extremum of an event function along the orbit through zero (for the clearance
+  mechanisms: a free flight that reaches the bearing wall, a contact that lifts off): a
+  **grazing** (Nordmark 1991; di Bernardo et al. 2008, Ch. 2 and 7), each extremum followed by
+  its phase (:mod:`workbench.continuation._contacts`), so that changes at two joints or two
+  phases are found one by one;
 * the tangent's parameter component changes sign while no multiplier passes +1: a
   **nonsmooth fold**, where the branch turns at a point the map is not smooth at (e.g. a
   contact about to lift off; a border-collision pair, di Bernardo et al. 2008, Ch. 3).
 
 Each is located by the Illinois (regula falsi) method along the arclength between the two
-points (bisection for the integer event count), each trial point corrected onto the branch.
+points, each trial point corrected onto the branch, and the bracket kept between converged
+points. A located point is **labelled** only where the quantity that defines its kind confirms
+it: the critical multiplier within :data:`MULTIPLIER_TOLERANCE` of +1 (fold, branch point), of
+-1 (period doubling) or of the unit circle (a complex pair: Neimark-Sacker), the margin of the
+grazing extremum within :data:`MARGIN_TOLERANCE` of its event function's range. Otherwise it is
+stored as **unresolved** between the two converged ends of its bracket, with its suspected kind
+and the defining quantity's value; before that, the step that brackets it is rejected and
+halved until the search confirms it or the step is ``Settings.approach`` short. Located points
+are stored in order of arclength; a step whose contact sequence changes in a way no extremum's
+sign change explains is rejected and halved. A branch ends on the bound of its parameter
+range (the last point is corrected at the bound), never beyond it.
+
 At a period doubling the doubled branch (``P^{2k}``) leaves in the direction of the
 multiplier's eigenvector ``v``: its first point is corrected on the hyperplane through
 ``u* + eps v`` normal to ``v`` (branch switching; Seydel 2010, Sec. 5.6).
@@ -27,11 +40,13 @@ multiplier's eigenvector ``v``: its first point is corrected on the hyperplane t
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from workbench.continuation._contacts import ContactSequence, match_extrema
 from workbench.continuation._newton import (
     NewtonFailure,
     OrbitPoint,
@@ -40,8 +55,18 @@ from workbench.continuation._newton import (
     tangent,
 )
 from workbench.continuation._strobe import StrobeMap
+from workbench.scene import SceneError
+from workbench.solver import SolverError
 
-__all__ = ["LABELS", "Settings", "trace", "switch_at_doubling"]
+__all__ = [
+    "LABELS",
+    "MARGIN_TOLERANCE",
+    "MULTIPLIER_TOLERANCE",
+    "Settings",
+    "Special",
+    "trace",
+    "switch_at_doubling",
+]
 
 #: point labels (CF flag_values / flag_meanings of the stored ``label``)
 LABELS = {
@@ -54,9 +79,17 @@ LABELS = {
     "neimark_sacker": 6,
     "grazing": 7,
     "nonsmooth_fold": 8,
+    "unresolved": 9,
 }
 #: a multiplier counts as complex when its imaginary part exceeds this fraction of its modulus
 COMPLEX = 1e-6
+#: a located fold, branch point, period doubling or Neimark-Sacker point is labelled only where
+#: its critical multiplier lies this close to +1, -1 or the unit circle (located to 1e-7 of the
+#: parameter's range, a transversal crossing leaves ~1e-7, a fold's square root ~3e-4)
+MULTIPLIER_TOLERANCE = 1e-3
+#: a located grazing is labelled only where the extremum's value is this small relative to
+#: the range of its event function along the orbit
+MARGIN_TOLERANCE = 1e-6
 
 
 @dataclass
@@ -73,12 +106,41 @@ class Settings:
     max_points: int = 300
     locate_tolerance: float = 1e-7  # of pscale, for the located bifurcations
     max_iterations: int = 8
+    #: a bifurcation that its search cannot confirm from a longer step is approached with
+    #: halved steps until the step is this short (scaled arclength)
+    approach: float = 1e-4
+
+
+@dataclass
+class Special:
+    """A bifurcation found between two points of a branch.
+
+    ``point`` is the converged orbit at the located value (the bracket's end nearer to it);
+    ``lower`` and ``upper`` the parameter at the two converged ends of the final bracket;
+    ``resolved`` whether the defining quantity confirms the kind there; ``test`` that quantity
+    (the critical multiplier's distance from +1, -1 or the unit circle; for a grazing the
+    extremum's value, event units); ``critical`` the critical multiplier; for a grazing
+    ``event`` and ``phase`` (s after the strobe time) of the extremum."""
+
+    kind: str
+    point: OrbitPoint
+    sigma: float
+    lower: float
+    upper: float
+    resolved: bool
+    test: float
+    critical: complex
+    event: int = -1
+    phase: float = math.nan
+    note: str = ""
+    #: for a grazing, how the orbit passes it (see :func:`_beyond_grazing`)
+    transition: str = ""
 
 
 @dataclass
 class Traced:
-    """A traced branch: its points (special points included, in order), their labels, the
-    map, and the reason it ended."""
+    """A traced branch: its points (special points included, in order of arclength), their
+    labels, the map, the bifurcations found and the reason it ended."""
 
     smap: StrobeMap
     points: list[OrbitPoint] = field(default_factory=list)
@@ -87,6 +149,7 @@ class Traced:
     ended: str = ""
     evaluations: int = 0
     wall_time: float = 0.0
+    specials: list[Special] = field(default_factory=list)
 
 
 def _tests(pt: OrbitPoint) -> dict:
@@ -99,7 +162,6 @@ def _tests(pt: OrbitPoint) -> dict:
         "fold": float(np.linalg.det(M - np.eye(m))),
         "pd": float(np.linalg.det(M + np.eye(m))),
         "ns": int(np.sum(cplx & (np.abs(mu) > 1.0))),
-        "events": pt.value.events,
         "turn": float(pt.tau[-1]),
     }
 
@@ -111,6 +173,7 @@ def _ns_value(pt: OrbitPoint) -> float:
 
 
 def _detect(a: dict, b: dict) -> list[str]:
+    """The kinds of bifurcation the multipliers and the tangent show between two points."""
     if a["size"] != b["size"]:
         return []
     found = []
@@ -123,9 +186,57 @@ def _detect(a: dict, b: dict) -> list[str]:
         found.append("period_doubling")
     if a["ns"] != b["ns"]:
         found.append("neimark_sacker")
-    if a["events"] != b["events"]:
-        found.append("grazing")
     return found
+
+
+def sequence_of(smap: StrobeMap, pt: OrbitPoint) -> ContactSequence:
+    """The contact sequence of a converged orbit (computed once per point)."""
+    if pt.sequence is None:
+        pt.sequence = smap.contact_sequence(pt.y, pt.aux, pt.p)
+    return pt.sequence
+
+
+def _surfaces(seq: ContactSequence) -> list[int]:
+    """One event function per event surface: functions whose extrema coincide (the onset and
+    end functions of one joint share its penetration) are the same surface."""
+    keep: list[int] = []
+    for k, e in enumerate(seq.extrema):
+        if not any(
+            e.shape == seq.extrema[j].shape and np.array_equal(e, seq.extrema[j]) for j in keep
+        ):
+            keep.append(k)
+    return keep
+
+
+def _grazings(seq_a: ContactSequence, seq_b: ContactSequence) -> tuple[list[tuple], bool]:
+    """The grazings between two orbits: ``(k, phase, kind)`` of each local extremum whose value
+    changes sign (matched by phase), and whether the change of the crossings per event function
+    is explained by them (False: the sequence changed in a way no extremum accounts for)."""
+    found = []
+    for k in _surfaces(seq_a):
+        ea, eb = seq_a.extrema[k], seq_b.extrema[k]
+        for i, j in match_extrema(ea, eb, seq_a.span):
+            if np.sign(ea[i, 1]) != np.sign(eb[j, 1]):
+                found.append((k, float(ea[i, 0]), float(ea[i, 2])))
+    changed = seq_a.counts != seq_b.counts
+    return found, not changed or bool(found)
+
+
+def _extremum_value(smap: StrobeMap, k: int, phase: float, kind: float):
+    """The test function of a grazing: the value of event function ``k``'s local extremum of
+    ``kind`` nearest to ``phase`` along an orbit."""
+
+    def value(pt: OrbitPoint) -> float:
+        seq = sequence_of(smap, pt)
+        e = seq.extrema[k]
+        e = e[e[:, 2] == kind]
+        if e.shape[0] == 0:
+            return float("nan")
+        d = np.abs(e[:, 0] - phase)
+        d = np.minimum(d, seq.span - d)
+        return float(e[int(np.argmin(d)), 1])
+
+    return value
 
 
 def _predict(smap: StrobeMap, A: OrbitPoint, u: np.ndarray, pscale: float) -> OrbitPoint:
@@ -153,78 +264,25 @@ def _at(smap, A: OrbitPoint, sigma: float, cfg: Settings) -> OrbitPoint:
         max_iterations=cfg.max_iterations,
     )
     if B.Pp is None:  # converged at the prediction: the column there
-        B.Pp = smap.parameter_derivative(B.y, B.aux, B.p, B.value.live, cfg.pscale)
+        try:
+            B.Pp = smap.parameter_derivative(B.y, B.aux, B.p, B.value.live, cfg.pscale)
+        except (SceneError, SolverError) as exc:
+            raise NewtonFailure(f"no parameter derivative at p = {B.p:.10g}: {exc}") from exc
         B.evaluations += 2
     B.tau = tangent(B, A.tau)
     return B
 
 
-def _grazing_test(smap, A: OrbitPoint, B: OrbitPoint):
-    """The smooth test of a grazing between A and B: the extreme value of an event function
-    along the orbit that changes sign between them (its largest value: a contact appears or
-    vanishes; its smallest: a lasting contact starts to lift off), or None."""
-    a_max, a_min = smap.event_extrema(A.y, A.aux, A.p)
-    b_max, b_min = smap.event_extrema(B.y, B.aux, B.p)
-    for k in range(a_max.size):
-        if np.sign(a_max[k]) != np.sign(b_max[k]):
-            return lambda pt, k=k: float(smap.event_extrema(pt.y, pt.aux, pt.p)[0][k])
-        if np.sign(a_min[k]) != np.sign(b_min[k]):
-            return lambda pt, k=k: float(smap.event_extrema(pt.y, pt.aux, pt.p)[1][k])
-    return None
-
-
-def _locate(smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: Settings):
-    """The bifurcation ``kind`` between A and B (B at arclength h from A): the Illinois method
-    on its test function (for a grazing, the extreme value of the event function that changes
-    sign; bisection on the event count if none does); returns the point and its evaluations."""
-    evals = 0
-    integer = False
+def _value_function(smap, kind: str, graze: tuple | None):
     if kind in ("fold", "branch_point"):
-        value = lambda pt: _tests(pt)["fold"]  # noqa: E731
-    elif kind == "period_doubling":
-        value = lambda pt: _tests(pt)["pd"]  # noqa: E731
-    elif kind == "neimark_sacker":
-        value = _ns_value
-    elif kind == "nonsmooth_fold":
-        value = lambda pt: float(pt.tau[-1])  # noqa: E731
-    else:
-        value = _grazing_test(smap, A, B)
-        if value is None:
-            integer = True
-            value = lambda pt: float(pt.value.events)  # noqa: E731
-
-    lo, hi, f_lo, f_hi = 0.0, h, value(A), value(B)
-    best, side = B, 0
-    for _ in range(60):
-        if abs(hi - lo) * max(abs(A.tau[-1]), 1e-3) < cfg.locate_tolerance:
-            break
-        if integer or not (np.isfinite(f_lo) and np.isfinite(f_hi)) or f_lo == f_hi:
-            mid = 0.5 * (lo + hi)
-        else:
-            mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
-            if not lo < mid < hi:
-                mid = 0.5 * (lo + hi)
-        try:
-            pt = _at(smap, A, mid, cfg)
-        except NewtonFailure:
-            break
-        evals += pt.evaluations
-        f = value(pt)
-        best = pt
-        same_as_lo = (f == f_lo) if integer else (np.sign(f) == np.sign(f_lo))
-        if same_as_lo:
-            lo, f_lo = mid, f
-            if side == -1 and not integer:
-                f_hi /= 2.0
-            side = -1
-        else:
-            hi, f_hi = mid, f
-            if side == 1 and not integer:
-                f_lo /= 2.0
-            side = 1
-        if not integer and f == 0.0:
-            break
-    return best, evals
+        return lambda pt: _tests(pt)["fold"]
+    if kind == "period_doubling":
+        return lambda pt: _tests(pt)["pd"]
+    if kind == "neimark_sacker":
+        return _ns_value
+    if kind == "nonsmooth_fold":
+        return lambda pt: float(pt.tau[-1])
+    return _extremum_value(smap, *graze)
 
 
 def _critical(pt: OrbitPoint, kind: str) -> complex:
@@ -233,21 +291,326 @@ def _critical(pt: OrbitPoint, kind: str) -> complex:
         return complex(mu[np.argmin(np.abs(mu - 1.0))])
     if kind == "period_doubling":
         return complex(mu[np.argmin(np.abs(mu + 1.0))])
-    if kind == "nonsmooth_fold":
-        return complex(mu[0])
     if kind == "neimark_sacker":
         cplx = np.abs(mu.imag) > COMPLEX * np.abs(mu)
         if cplx.any():
             c = mu[cplx]
             return complex(c[np.argmin(np.abs(np.abs(c) - 1.0))])
-    return complex(np.nan, np.nan)
+        return complex(np.nan, np.nan)
+    return complex(mu[0])
+
+
+def _confirm(smap, kind: str, pt: OrbitPoint, f: float, graze) -> tuple[bool, float, str]:
+    """Whether the quantity that defines ``kind`` confirms it at the located point; that
+    quantity; and, if not, why."""
+    if kind in ("fold", "branch_point", "period_doubling", "neimark_sacker"):
+        c = _critical(pt, kind)
+        if kind == "neimark_sacker":
+            d = abs(abs(c) - 1.0) if np.isfinite(c) else math.inf
+            target = "a complex pair on the unit circle"
+        else:
+            one = 1.0 if kind != "period_doubling" else -1.0
+            d = abs(c - one)
+            target = f"{one:+g}"
+        if d <= MULTIPLIER_TOLERANCE:
+            return True, d, ""
+        return False, d, f"critical multiplier {c:.4g}, {d:.3g} from {target}"
+    if kind == "grazing":
+        scale = float(sequence_of(smap, pt).scale[graze[0]])
+        if abs(f) <= MARGIN_TOLERANCE * scale:
+            return True, f, ""
+        return (
+            False,
+            f,
+            f"the extremum's value {f:.3g} exceeds {MARGIN_TOLERANCE:g} of its range {scale:.3g}",
+        )
+    return True, f, ""  # nonsmooth_fold: the tangent's turn, bracketed to the tolerance
+
+
+def _locate(
+    smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: Settings, graze=None
+) -> tuple[Special, int]:
+    """The bifurcation ``kind`` between A and B (B at arclength h from A): the Illinois method
+    on its test function, the bracket kept between converged points; returns the
+    :class:`Special` (confirmed or unresolved) and the map evaluations spent."""
+    value = _value_function(smap, kind, graze)
+    evals = 0
+    lo, hi, f_lo, f_hi = 0.0, h, value(A), value(B)
+    pt_lo, pt_hi = A, B
+    side = 0
+    note = ""
+    for _ in range(60):
+        if abs(hi - lo) * max(abs(A.tau[-1]), 1e-3) < cfg.locate_tolerance:
+            break
+        if not (np.isfinite(f_lo) and np.isfinite(f_hi)) or f_lo == f_hi:
+            mid = 0.5 * (lo + hi)
+        else:
+            mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+            if not lo < mid < hi:
+                mid = 0.5 * (lo + hi)
+        try:
+            pt = _at(smap, A, mid, cfg)
+        except NewtonFailure as exc:
+            if mid != 0.5 * (lo + hi):  # the secant's trial failed: try the bisection's
+                side = 0
+                try:
+                    mid = 0.5 * (lo + hi)
+                    pt = _at(smap, A, mid, cfg)
+                except NewtonFailure as exc2:
+                    note = f"the corrector failed inside the bracket ({exc2})"
+                    break
+            else:
+                note = f"the corrector failed inside the bracket ({exc})"
+                break
+        evals += pt.evaluations
+        f = value(pt)
+        if not np.isfinite(f):
+            note = "the test function is not defined inside the bracket"
+            break
+        if np.sign(f) == np.sign(f_lo):
+            lo, f_lo, pt_lo = mid, f, pt
+            if side == -1:
+                f_hi /= 2.0
+            side = -1
+        else:
+            hi, f_hi, pt_hi = mid, f, pt
+            if side == 1:
+                f_lo /= 2.0
+            side = 1
+        if f == 0.0:
+            break
+    # the located point: the bracket's end with the smaller test value (both converged)
+    f_a, f_b = abs(value(pt_lo)), abs(value(pt_hi))
+    best, sigma = (pt_lo, lo) if f_a <= f_b else (pt_hi, hi)
+    f_best = value(best)
+    ok, test, why = _confirm(smap, kind, best, f_best, graze)
+    special = Special(
+        kind=kind,
+        point=best,
+        sigma=sigma,
+        lower=min(pt_lo.p, pt_hi.p),
+        upper=max(pt_lo.p, pt_hi.p),
+        resolved=ok,
+        test=test,
+        critical=_critical(best, kind),
+        event=graze[0] if graze else -1,
+        phase=graze[1] if graze else math.nan,
+        note="; ".join(x for x in (note, why) if x),
+    )
+    return special, evals
+
+
+def _on_bound(smap, A: OrbitPoint, B: OrbitPoint, bound: float, cfg: Settings) -> OrbitPoint | None:
+    """The orbit at the parameter's bound between A and B (the state interpolated along the
+    step, then Newton at the fixed parameter), or None where it does not converge."""
+    w = (bound - A.p) / (B.p - A.p) if B.p != A.p else 1.0
+    y = A.y + w * (B.y - A.y)
+    aux = B.aux.copy()
+    try:
+        pt = orbit_at(
+            smap, y, aux, bound, tolerance=cfg.tolerance, max_iterations=cfg.max_iterations
+        )
+        pt.Pp = smap.parameter_derivative(pt.y, pt.aux, pt.p, pt.value.live, cfg.pscale)
+        pt.evaluations += 2
+    except NewtonFailure:
+        return None
+    pt.tau = tangent(pt, A.tau) if pt.value.M.shape == A.value.M.shape else A.tau
+    return pt
+
+
+#: how far past a grazing (a fraction of the parameter's range) the orbits on its other side
+#: are sought when the branch cannot be stepped through it
+BEYOND = 1e-5
+#: transitions at a grazing (``transition`` of a grazing bifurcation): the orbit crosses it with
+#: the new contact (persistent); the branch turns back at it (a nonsmooth fold, di Bernardo et
+#: al. 2008, Sec. 3.5); no orbit of the branch's period beyond it, the motion there of another
+#: period (a border collision, with the period in the text) or of none up to 16
+TRANSITIONS = ("persistent", "nonsmooth_fold", "border_collision", "not_typed")
+
+
+def _attractor_period(smap: StrobeMap, y, aux, p: float, cycles: int = 200) -> int:
+    """The period (in forcing periods, 0: none up to 16) of the motion from (y, aux) at ``p``
+    after ``cycles`` forcing periods, from its next 64 strobe samples."""
+    from workbench.continuation._indicators import strobe_period
+
+    one = smap.with_periods(1)
+    y, aux = np.array(y, float), np.array(aux, float)
+    for _ in range(cycles):
+        v = one(y, aux, p, tangent=False)
+        y, aux = v.y1, v.aux1
+    samples = []
+    for _ in range(64):
+        v = one(y, aux, p, tangent=False)
+        y, aux = v.y1, v.aux1
+        samples.append(y / one.scale())
+    return strobe_period(np.array(samples))
+
+
+def _beyond_grazing(
+    smap: StrobeMap, A: OrbitPoint, G: OrbitPoint, cfg: Settings
+) -> tuple[str, OrbitPoint | None, str]:
+    """What lies past the grazing ``G``, reached from ``A``, where the branch cannot be stepped
+    through it: the orbit a little further on with the new contact (``persistent``: returned,
+    for the branch to go on from), or the same a little back (``nonsmooth_fold``: the branch
+    turns at the grazing), or neither (``border_collision``: the motion beyond has another
+    period, said in the text, or none); Newton from the grazing orbit, continued along the
+    branch's tangent into the contact."""
+    lo, hi = cfg.bounds
+    ahead = math.copysign(1.0, G.p - A.p)
+    counts = sequence_of(smap, A).counts
+    s = smap.scale()
+    n = G.y.size
+    for side in (ahead, -ahead):
+        p = G.p + side * BEYOND * cfg.pscale
+        if not lo <= p <= hi:
+            continue
+        # the state a little past the grazing along the branch's tangent: into the contact
+        y = G.y + s * (BEYOND * G.tau[:n] / max(abs(G.tau[-1]), 1e-3))
+        try:
+            pt = orbit_at(
+                smap, y, G.aux, p, tolerance=cfg.tolerance, max_iterations=START_ITERATIONS
+            )
+        except NewtonFailure:
+            continue
+        if sequence_of(smap, pt).counts != counts:  # the new contact: the other side's orbit
+            kind = "persistent" if side == ahead else "nonsmooth_fold"
+            return kind, pt, f"an orbit with the new contact at {p:.10g}"
+    p = G.p + ahead * BEYOND * cfg.pscale
+    if lo <= p <= hi:
+        try:
+            k = _attractor_period(smap, G.y, G.aux, p)
+        except Exception as exc:  # noqa: BLE001 - the reason is reported
+            return "not_typed", None, f"the motion past it failed ({exc})"
+        what = f"period {k}" if k else "no period up to 16"
+        return "border_collision", None, f"no period-{smap.periods} orbit past it; {what} there"
+    return "not_typed", None, "its other side lies outside the parameter's range"
+
+
+def _with_tangent(smap: StrobeMap, pt: OrbitPoint, orientation: np.ndarray, cfg: Settings):
+    """``pt`` with its parameter column and unit tangent (oriented along ``orientation``)."""
+    if pt.Pp is None:
+        pt.Pp = smap.parameter_derivative(pt.y, pt.aux, pt.p, pt.value.live, cfg.pscale)
+        pt.evaluations += 2
+    pt.tau = tangent(pt, orientation)
+    return pt
+
+
+def _grazing_ahead(smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settings):
+    """The grazing the branch runs into after A, where its steps collapsed: the smallest margin
+    of A's orbit followed at fixed parameter values (Newton at each) by the Illinois method on
+    the secant through prev and A; the :class:`Special` (confirmed by its margin) or None."""
+    seq = sequence_of(smap, A)
+    k, phase, value = seq.smallest_margin()
+    if k < 0 or abs(value) > 1e-2 * float(seq.scale[k]):
+        return None
+    kind = float(seq.extrema[k][np.argmin(np.abs(seq.extrema[k][:, 1] - value)), 2])
+    margin = _extremum_value(smap, k, phase, kind)
+    pts = [prev, A]
+    f = [margin(prev), margin(A)]
+    if not (np.isfinite(f[0]) and np.isfinite(f[1])) or f[0] == f[1]:
+        return None
+    lo, hi = cfg.bounds
+    best = A
+    for _ in range(40):
+        p = pts[1].p - f[1] * (pts[1].p - pts[0].p) / (f[1] - f[0])
+        p = min(max(p, lo), hi)
+        w = (p - pts[0].p) / (pts[1].p - pts[0].p)
+        y = pts[0].y + w * (pts[1].y - pts[0].y)
+        try:
+            pt = orbit_at(smap, y, pts[1].aux, p, tolerance=cfg.tolerance, max_iterations=12)
+        except NewtonFailure:  # no orbit of this family there: halve towards the last one
+            p = 0.5 * (p + pts[1].p)
+            try:
+                pt = orbit_at(smap, pts[1].y, pts[1].aux, p, tolerance=cfg.tolerance)
+            except NewtonFailure:
+                return None
+        fp = margin(pt)
+        if not np.isfinite(fp):
+            return None
+        best = pt
+        if abs(fp) <= MARGIN_TOLERANCE * float(sequence_of(smap, pt).scale[k]):
+            break
+        if np.sign(fp) != np.sign(f[1]):
+            pts, f = [pts[1], pt], [f[1], fp]
+        else:
+            pts, f = [pts[0], pt], [f[0] / 2.0, fp]  # Illinois: the stale end counts half
+    else:
+        return None
+    fb = margin(best)
+    ok = abs(fb) <= MARGIN_TOLERANCE * float(sequence_of(smap, best).scale[k])
+    if not ok:
+        return None
+    _with_tangent(smap, best, A.tau, cfg)
+    return Special(
+        "grazing", best, 0.0, best.p, best.p, True, fb, complex(np.nan, np.nan), k, phase
+    )
+
+
+#: a branch stalls where this many accepted steps in a row were all shorter than STALL_STEP
+#: times the first step; it then ends with a diagnosis instead of creeping on
+STALL_POINTS = 30
+STALL_STEP = 1e-2
+
+
+def diagnosis(pt: OrbitPoint, h: float) -> str:
+    """Why steps collapse at ``pt``, in numbers: the step, the tangent's parameter component,
+    the conditioning of the Newton matrix and the monodromy's singular values beside its
+    multipliers (a monodromy far from normal in the scaled states, e.g. states scaled by a
+    clearance that is small against the motion, makes (M - I) ill-conditioned although every
+    multiplier lies well inside the unit circle)."""
+    M = pt.value.M
+    m = M.shape[0]
+    sv = np.linalg.svd(M, compute_uv=False)
+    cond = np.linalg.cond(M - np.eye(m))
+    return (
+        f"step {h:.3g} (scaled arclength), tangent's parameter component {float(pt.tau[-1]):.3g}, "
+        f"cond(M - I) {cond:.3g}, largest singular values of M {sv[0]:.3g} and "
+        f"{sv[1] if sv.size > 1 else float('nan'):.3g} against |mu| <= "
+        f"{float(np.abs(pt.multipliers).max()):.3g}"
+    )
+
+
+#: how often a branch is taken through a grazing it could not be stepped through
+MAX_RESUMES = 20
+
+
+def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: Settings) -> OrbitPoint | None:
+    """Where the steps collapsed at A: the grazing ahead, located and typed
+    (:func:`_grazing_ahead`, :func:`_beyond_grazing`) and stored; the orbit on its other side
+    to go on from (its tangent set), or None (the branch ends there)."""
+    prev = next((q for q in reversed(out.points[:-1]) if q is not A and abs(q.p - A.p) > 0), None)
+    if prev is None:
+        return None
+    G = _grazing_ahead(smap, prev, A, cfg)
+    if G is None:
+        return None
+    transition, pt, text = _beyond_grazing(smap, A, G.point, cfg)
+    G.transition, G.note = transition, text
+    if not any(sp.point is G.point for sp in out.specials):
+        out.points.append(G.point)
+        out.labels.append("grazing")
+        out.critical.append(G.critical)
+        out.specials.append(G)
+    if pt is None:
+        return None
+    ahead = math.copysign(1.0, pt.p - G.point.p)
+    direction = np.zeros(pt.value.M.shape[0] + 1)
+    direction[-1] = ahead
+    try:
+        _with_tangent(smap, pt, direction, cfg)
+    except (NewtonFailure, SceneError, SolverError):
+        return None
+    out.points.append(pt)
+    out.labels.append("regular")
+    out.critical.append(complex(np.nan, np.nan))
+    return pt
 
 
 def trace(
     smap: StrobeMap, first: OrbitPoint, direction: np.ndarray, cfg: Settings, label="start"
 ) -> Traced:
     """Continue a branch from the converged point ``first`` along ``direction`` (scaled
-    unknowns) until the parameter leaves ``cfg.bounds``, the step falls below
+    unknowns) until the parameter reaches a bound of ``cfg.bounds``, the step falls below
     ``cfg.min_step`` or ``cfg.max_points`` points are found."""
     wall0 = time.perf_counter()
     out = Traced(smap)
@@ -262,51 +625,85 @@ def trace(
     out.critical.append(complex(np.nan, np.nan))
     out.evaluations += first.evaluations
     lo, hi = cfg.bounds
+    events = smap.prepared(first.p).problem.event_direction.size > 0
     h = cfg.step
     A = first
+    resumed = short = 0
     while len(out.points) < cfg.max_points:
         try:
             B = _at(smap, A, h, cfg)
+            sharp = float(A.tau @ B.tau) < 0.5  # too sharp a turn: halve
+            failure = "the branch turns sharply however short the step" if sharp else ""
         except NewtonFailure as exc:
+            B, sharp, failure = None, True, f"the corrector failed at the smallest step ({exc})"
+        if sharp:
             h /= 2.0
             if h < cfg.min_step:
-                out.ended = f"the corrector failed at the smallest step ({exc})"
-                _mark_end(smap, A, h, cfg, out)
-                break
-            continue
-        out.evaluations += B.evaluations
-        if float(A.tau @ B.tau) < 0.5:  # too sharp a turn: halve
-            h /= 2.0
-            if h < cfg.min_step:
-                out.ended = (
-                    f"the branch turns sharply at {A.p:.10g} however short the step (the map "
-                    "is not smooth there)"
+                nxt = None
+                if events and resumed < MAX_RESUMES:
+                    nxt = _through(smap, out, A, cfg)
+                if nxt is not None:
+                    resumed += 1
+                    A, h = nxt, cfg.step
+                    continue
+                out.ended = f"{failure} at {A.p:.10g}: {diagnosis(A, h)}" + (
+                    f"; {out.specials[-1].note}" if out.specials and out.specials[-1].note else ""
                 )
                 _mark_end(smap, A, h, cfg, out)
                 break
             continue
-        for kind in _detect(_tests(A), _tests(B)):
-            pt, evals = _locate(smap, A, B, h, kind, cfg)
+        out.evaluations += B.evaluations
+        found = [(kind, None) for kind in _detect(_tests(A), _tests(B))]
+        if events:
+            grazes, explained = _grazings(sequence_of(smap, A), sequence_of(smap, B))
+            if not explained and h / 2.0 >= cfg.min_step:
+                h /= 2.0  # the contact sequence changed in a way no extremum explains
+                continue
+            found += [("grazing", g) for g in grazes]
+        specials = []
+        for kind, graze in found:
+            sp, evals = _locate(smap, A, B, h, kind, cfg, graze)
             out.evaluations += evals
-            if lo <= pt.p <= hi:
-                out.points.append(pt)
-                out.labels.append(kind)
-                out.critical.append(_critical(pt, kind))
+            if kind == "grazing":  # stepped through: the branch went on, or turned at it
+                turned = np.sign(A.tau[-1]) != np.sign(B.tau[-1])
+                sp.transition = "nonsmooth_fold" if turned else "persistent"
+            specials.append(sp)
+        if any(not sp.resolved for sp in specials) and h / 2.0 >= cfg.approach:
+            h /= 2.0  # approach it: a shorter step brackets it closer, with easier corrections
+            continue
+        for sp in sorted(specials, key=lambda x: x.sigma):
+            if lo <= sp.point.p <= hi:
+                out.points.append(sp.point)
+                out.labels.append(sp.kind if sp.resolved else "unresolved")
+                out.critical.append(sp.critical)
+                out.specials.append(sp)
         if not lo <= B.p <= hi:
-            out.ended = "the parameter left its range"
+            bound = hi if B.p > hi else lo
+            end = _on_bound(smap, A, B, bound, cfg)
+            if end is not None:
+                out.points.append(end)
+                out.labels.append("end")
+                out.critical.append(complex(np.nan, np.nan))
+            out.ended = f"the parameter reached its bound {bound:.10g}"
             break
         out.points.append(B)
         out.labels.append("regular")
         out.critical.append(complex(np.nan, np.nan))
         A = B
+        short = short + 1 if h < STALL_STEP * cfg.step else 0
+        if short >= STALL_POINTS:
+            out.ended = (
+                f"the branch stalled at {B.p:.10g}: {STALL_POINTS} steps in a row shorter than "
+                f"{STALL_STEP:g} of the first; {diagnosis(B, h)}; a tighter rtol (the map's noise) "
+                "or another parameter range may go further"
+            )
+            break
         if B.iterations <= 3:
             h = min(1.5 * h, cfg.max_step)
         elif B.iterations >= 6:
             h /= 1.5
     else:
         out.ended = f"{cfg.max_points} points reached"
-    # a located point is appended before the regular point that brackets it with the one
-    # before: the list is in order of arclength
     if len(out.points) > 1 and out.labels[-1] == "regular":
         out.labels[-1] = "end"
     out.wall_time = time.perf_counter() - wall0
@@ -314,13 +711,10 @@ def trace(
 
 
 def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: Settings, out: Traced) -> None:
-    """Where a branch ends because it cannot be continued: if a contact appears, ends or is
-    held differently just beyond the last point (the events per period or the live discrete
-    states differ at the predicted next point), the last point is where the orbit's contact
-    structure changes: labelled grazing. With a discrete state that is held through a lasting
-    contact (the mechanisms' onset velocity of the contact damping), the map jumps there: a
-    contact that starts again takes a new onset velocity, so the branch cannot be continued
-    through it."""
+    """Why a branch ends where it cannot be continued, said in ``out.ended``: the contact
+    structure just beyond the last point (the events per period and the live discrete states at
+    the prediction, not a converged orbit) and the last orbit's smallest margin. The last point
+    is labelled a grazing only where its own margin confirms it (within MARGIN_TOLERANCE)."""
     s = smap.scale()
     u = A.u(s, cfg.pscale) + 4 * cfg.min_step * A.tau
     beyond = _predict(smap, A, u, cfg.pscale)
@@ -328,22 +722,27 @@ def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: Settings, out: Trac
         v = smap(beyond.y, beyond.aux, beyond.p, tangent=False)
     except Exception:  # noqa: BLE001 - the reason is reported as it is
         return
-    changed = v.events != A.value.events or not np.array_equal(v.live, A.value.live)
-    try:
-        gmax, gmin = smap.event_extrema(A.y, A.aux, A.p)
-        if gmax.size:
+    if smap.prepared(A.p).problem.event_direction.size:
+        seq = sequence_of(smap, A)
+        k, phase, value = seq.smallest_margin()
+        if k >= 0:
             out.ended += (
-                f"; event functions along the last orbit: largest {gmax.max():.3g}, smallest "
-                f"{gmin.min():.3g}"
+                f"; the last orbit's smallest margin: event function {k} at phase {phase:.6g} s, "
+                f"{value:.3g}"
             )
-    except Exception:  # noqa: BLE001, S110 - a diagnosis only
-        pass
-    if changed and out.points and out.points[-1] is A:
-        out.labels[-1] = "grazing"
+            if abs(value) <= MARGIN_TOLERANCE * float(seq.scale[k]) and out.points[-1] is A:
+                out.labels[-1] = "grazing"
+                out.specials.append(
+                    Special(
+                        "grazing", A, 0.0, A.p, A.p, True, value, complex(np.nan, np.nan), k, phase
+                    )
+                )
+    changed = v.events != A.value.events or not np.array_equal(v.live, A.value.live)
+    if changed:
         out.ended += (
-            f"; the contact structure changes there (events per {smap.periods} period(s) "
-            f"{A.value.events} -> {v.events}, live discrete states {A.value.live.tolist()} -> "
-            f"{v.live.tolist()})"
+            f"; the prediction beyond it (not converged) has another contact structure (events "
+            f"per {smap.periods} period(s) {A.value.events} -> {v.events}, live discrete states "
+            f"{A.value.live.tolist()} -> {v.live.tolist()})"
         )
 
 
@@ -403,3 +802,26 @@ def start_point(
     """The converged orbit at ``p`` from the guess (y, aux), in at most ``max_iterations``
     Newton iterations (:class:`NewtonFailure` otherwise)."""
     return orbit_at(smap, y, aux, p, tolerance=cfg.tolerance, max_iterations=max_iterations)
+
+
+#: Newton's tolerance must lie this far above the map's noise (:meth:`StrobeMap.jitter`)
+NOISE_MARGIN = 10.0
+#: the tightest integration tolerance the map is taken to, to bring its noise under Newton's
+TIGHTEST_RTOL = 1e-12
+
+
+def settle_noise(smap: StrobeMap, first: OrbitPoint, cfg: Settings):
+    """The map's noise at the branch's first orbit against Newton's tolerance: the map is
+    integrated 10x tighter (down to :data:`TIGHTEST_RTOL`, the orbit corrected again) until its
+    noise lies :data:`NOISE_MARGIN` below the tolerance; if even that does not do it, the
+    tolerance is raised to the noise times the margin. Returns the map, the orbit, the
+    tolerance and the noise (scaled units) it measured last."""
+    tolerance = cfg.tolerance
+    while True:
+        noise = smap.jitter(first.value, first.y, first.aux, first.p, tolerance)
+        if NOISE_MARGIN * noise <= tolerance:
+            return smap, first, tolerance, noise
+        if smap.rtol / 10.0 < TIGHTEST_RTOL:
+            return smap, first, NOISE_MARGIN * noise, noise
+        smap = smap.with_rtol(smap.rtol / 10.0)
+        first = orbit_at(smap, first.y, first.aux, first.p, tolerance=tolerance)

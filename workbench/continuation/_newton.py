@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from workbench.continuation._contacts import ContactSequence
 from workbench.continuation._strobe import MapValue, StrobeMap
+from workbench.scene import SceneError
 from workbench.solver import SolverError
 
 __all__ = ["NewtonFailure", "OrbitPoint", "correct", "orbit_at", "tangent"]
@@ -40,6 +42,8 @@ class OrbitPoint:
     Pp: np.ndarray | None = None
     evaluations: int = 0
     tau: np.ndarray | None = field(default=None, repr=False)
+    #: the orbit's contact sequence, once computed (:meth:`StrobeMap.contact_sequence`)
+    sequence: ContactSequence | None = field(default=None, repr=False)
 
     @property
     def multipliers(self) -> np.ndarray:
@@ -63,6 +67,8 @@ def _evaluate(smap: StrobeMap, y, aux, p) -> MapValue:
         return smap(y, aux, p)
     except SolverError as exc:
         raise NewtonFailure(f"the map failed at p = {p:.10g}: {exc}") from exc
+    except SceneError as exc:  # an iterate outside the parameter's valid range
+        raise NewtonFailure(f"no orbit at p = {p:.10g}: {exc}") from exc
 
 
 def orbit_at(
@@ -144,7 +150,7 @@ def correct(
             break
         try:
             Pp = smap.parameter_derivative(y, aux, p, v.live, pscale)
-        except SolverError as exc:
+        except (SolverError, SceneError) as exc:
             raise NewtonFailure(f"the map failed near p = {p:.10g}: {exc}") from exc
         evaluations += 2
         m = v.M.shape[0]

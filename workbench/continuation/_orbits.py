@@ -11,9 +11,14 @@ import xarray as xr
 
 from workbench.continuation._branch import (
     LABELS,
+    MARGIN_TOLERANCE,
+    MULTIPLIER_TOLERANCE,
     START_ITERATIONS,
+    TRANSITIONS,
     Settings,
     Traced,
+    sequence_of,
+    settle_noise,
     start_point,
     switch_at_doubling,
     trace,
@@ -33,10 +38,14 @@ LABEL_ATTRS = {
     "flag_meanings": " ".join(LABELS),
     "comment": "fold: a real multiplier through +1 where the parameter turns back; "
     "branch_point: through +1 without a turn; period_doubling: a real multiplier through -1; "
-    "neimark_sacker: a complex pair leaves the unit circle; grazing: the number of events per "
-    "period changes (a contact appears or vanishes), or the branch ends where it would; "
+    "neimark_sacker: a complex pair leaves the unit circle; grazing: a local extremum of an "
+    "event function along the orbit through zero (a contact appears or vanishes); "
     "nonsmooth_fold: the parameter turns back with no multiplier at +1 (the map is not smooth "
-    "there)",
+    "there); each labelled only where its defining quantity confirms it (the critical "
+    f"multiplier within {MULTIPLIER_TOLERANCE:g} of +1, -1 or the unit circle; the grazing "
+    f"extremum within {MARGIN_TOLERANCE:g} of its event function's range); unresolved: a "
+    "bifurcation bracketed but not confirmed (its suspected kind and bracket in the "
+    "bifurcation_* variables)",
 }
 
 
@@ -236,6 +245,7 @@ def continue_orbit(
     y, aux = _guess(smap, p0, state, discrete_state, None)
     t0 = time.perf_counter()
     first = start_point(smap, y, aux, p0, cfg)
+    smap, first, cfg.tolerance, noise = settle_noise(smap, first, cfg)
     direction = np.zeros(first.value.M.shape[0] + 1)
     direction[-1] = math.copysign(1.0, stop - p0)
     branches = [trace(smap, first, direction, cfg)]
@@ -252,9 +262,15 @@ def continue_orbit(
             last.ended += f"; switching at the period doubling failed ({exc})"
             break
         branches.append(trace(double, pt, away, cfg, label="start"))
-    ds = _dataset(branches, parameter, tolerance, max_points=max_points)
+    ds = _dataset(branches, parameter, cfg.tolerance, max_points=max_points)
     ds.attrs["wall_time"] = time.perf_counter() - t0
+    ds.attrs["tolerance_requested"] = tolerance
+    ds.attrs["map_noise"] = noise
     return ds
+
+
+#: flags of ``bifurcation_transition``
+TRANSITION_FLAGS = {"not_a_grazing": 0} | {t: i + 1 for i, t in enumerate(TRANSITIONS)}
 
 
 def _attrs(long_name: str, units: str = "1", **extra) -> dict:
@@ -317,30 +333,8 @@ def _dataset(
             ),
         )
     if ne:
-        extrema = [branches[b].smap.event_extrema(pt.y, pt.aux, pt.p) for b, pt, _, _ in rows]
-        for k, (name, meaning) in enumerate(
-            (
-                (
-                    "event_max",
-                    "largest value of each event function along the orbit (crosses "
-                    "0 where a contact appears: grazing)",
-                ),
-                (
-                    "event_min",
-                    "smallest value of each event function along the orbit (crosses "
-                    "0 where a lasting contact lifts off)",
-                ),
-            )
-        ):
-            data[name] = (
-                ("point", "event"),
-                np.array([e[k] for e in extrema]).reshape(n, ne),
-                _attrs(
-                    meaning + "; the mechanisms: a joint's penetration, events 2i and 2i + 1 "
-                    "of its i-th clearance joint",
-                    model.event_units,
-                ),
-            )
+        seqs = [sequence_of(branches[b].smap, pt) for b, pt, _, _ in rows]
+        data.update(_sequence_variables(seqs, ne, model.event_units))
     if parameter is not None:
         par = get_model(smap.scene.model).parameter(parameter)
         p_attrs = _attrs(par.long_name, par.units)
@@ -379,35 +373,34 @@ def _dataset(
     data["newton_iterations"] = ("point", iterations, _attrs("Newton iterations of the point"))
     residual = np.array([r[1].residual for r in rows])
     data["residual"] = ("point", residual, _attrs("scaled residual max |P^k(x) - x| / s"))
-    special = [r for r in rows if r[2] not in ("regular", "start", "end")]
-    kinds = np.array([LABELS[r[2]] for r in special], np.int8)
-    data["bifurcation_label"] = (
+    specials = [(b, sp) for b, tr in enumerate(branches) for sp in tr.specials]
+    row_of = {(b, id(pt)): i for i, (b, pt, _, _) in enumerate(rows)}
+    data.update(_special_variables(specials, parameter, p_attrs if parameter else None, model))
+    data["bifurcation_point"] = (
         "bifurcation",
-        kinds,
-        dict(LABEL_ATTRS, long_name="kind of the bifurcation"),
+        np.array([row_of.get((b, id(sp.point)), -1) for b, sp in specials], np.int32),
+        _attrs("index along point of the bifurcation's located orbit"),
     )
-    data["bifurcation_branch"] = (
-        "bifurcation",
-        np.array([r[0] for r in special], np.int32),
-        _attrs("branch index of the bifurcation"),
-    )
-    crit = np.array([r[3] for r in special], complex)
-    long_name = "part of the multiplier that crossed the unit circle"
-    data["critical_real"] = ("bifurcation", crit.real, _attrs(f"real {long_name}"))
-    data["critical_imag"] = ("bifurcation", crit.imag, _attrs(f"imaginary {long_name}"))
-    if parameter is not None:
-        where = np.array([r[1].p for r in special])
-        data["bifurcation_parameter"] = ("bifurcation", where, dict(p_attrs))
     coords = {
         "point": ("point", np.arange(n), _attrs("index along the branches")),
         "multiplier": ("multiplier", np.arange(m), _attrs("multiplier (largest modulus first)")),
         "sample": ("sample", np.arange(kmax), _attrs("strobe sample of the orbit (k T on)")),
-        "bifurcation": ("bifurcation", np.arange(len(special)), _attrs("located bifurcation")),
+        "bifurcation": ("bifurcation", np.arange(len(specials)), _attrs("located bifurcation")),
     }
     if na:
         coords["discrete_state"] = ("discrete_state", np.arange(na), _attrs("discrete state"))
     if ne:
         coords["event"] = ("event", np.arange(ne), _attrs("event function"))
+        coords["extremum"] = (
+            "extremum",
+            np.arange(data["extremum_value"][1].shape[2]),
+            _attrs("local extremum of an event function along the orbit, in order of phase"),
+        )
+        coords["crossing"] = (
+            "crossing",
+            np.arange(data["crossing_phase"][1].shape[2]),
+            _attrs("crossing of an event function in its direction, in order of phase"),
+        )
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(provenance(smap.scene, by="workbench.continuation.continue_orbit"))
     title = f"periodic orbits of model {smap.scene.model}"
@@ -423,6 +416,7 @@ def _dataset(
         map_evaluations=int(sum(tr.evaluations for tr in branches)),
         branch_wall_time=" ".join(f"{tr.wall_time:.6g}" for tr in branches),
         branch_ended=" | ".join(tr.ended or "-" for tr in branches),
+        bifurcation_notes=" | ".join(sp.note or "-" for tr in branches for sp in tr.specials),
     )
     if max_points is not None:
         ds.attrs["max_points"] = max_points
@@ -431,11 +425,173 @@ def _dataset(
     return ds
 
 
+def _padded(arrays: list[list[np.ndarray]], column: int) -> np.ndarray:
+    """(point, event, item) array of one column of per-point, per-event rows, NaN-padded."""
+    width = max([1] + [a.shape[0] for per in arrays for a in per])
+    out = np.full((len(arrays), len(arrays[0]) if arrays else 0, width), np.nan)
+    for i, per in enumerate(arrays):
+        for k, a in enumerate(per):
+            out[i, k, : a.shape[0]] = a[:, column] if a.ndim == 2 else a
+    return out
+
+
+def _extreme_of(a: np.ndarray, pick) -> np.ndarray:
+    """``pick`` (np.max or np.min) over the last axis, ignoring NaN (NaN where all are)."""
+    fill = -np.inf if pick is np.max else np.inf
+    out = pick(np.where(np.isnan(a), fill, a), axis=-1)
+    return np.where(np.isinf(out), np.nan, out)
+
+
+def _sequence_variables(seqs: list, ne: int, units: str) -> dict:
+    """The contact sequence of every orbit (:mod:`workbench.continuation._contacts`)."""
+    extrema = [list(q.extrema) for q in seqs]
+    crossings = [list(q.crossings) for q in seqs]
+    value = _padded(extrema, 1)
+    kind = _padded(extrema, 2)
+    pe, pex, pc = ("point", "event"), ("point", "event", "extremum"), ("point", "event", "crossing")
+    return {
+        "crossings_per_orbit": (
+            pe,
+            np.array([q.counts for q in seqs], np.int32).reshape(len(seqs), ne),
+            _attrs(
+                "crossings of each event function in its direction along the orbit (the "
+                "mechanisms: contact onsets for events 2i, ends for events 2i + 1)"
+            ),
+        ),
+        "crossing_phase": (
+            pc,
+            _padded(crossings, 0),
+            _attrs("time of each crossing after the strobe time", "s"),
+        ),
+        "extremum_phase": (
+            pex,
+            _padded(extrema, 0),
+            _attrs("time of each local extremum of the event function after the strobe time", "s"),
+        ),
+        "extremum_value": (
+            pex,
+            value,
+            _attrs(
+                "value of the event function at each of its local extrema: the margin to the "
+                "next grazing (a maximum below 0: a free flight that misses the surface by so "
+                "much; a minimum above 0: a lasting contact that stays on by so much)",
+                units,
+            ),
+        ),
+        "extremum_kind": (
+            pex,
+            kind,
+            _attrs(
+                "kind of the local extremum",
+                flag_values=np.array([-1.0, 1.0]),
+                flag_meanings="minimum maximum",
+            ),
+        ),
+        "event_max": (
+            pe,
+            _extreme_of(np.where(kind == 1.0, value, np.nan), np.max),
+            _attrs(
+                "largest value of each event function along the orbit (crosses 0 where a contact "
+                "appears: grazing); the mechanisms: a joint's penetration, events 2i and 2i + 1 "
+                "of its i-th clearance joint",
+                units,
+            ),
+        ),
+        "event_min": (
+            pe,
+            _extreme_of(np.where(kind == -1.0, value, np.nan), np.min),
+            _attrs(
+                "smallest value of each event function along the orbit (crosses 0 where a "
+                "lasting contact lifts off)",
+                units,
+            ),
+        ),
+    }
+
+
+def _special_variables(specials: list, parameter: str | None, p_attrs, model) -> dict:
+    """The bifurcations of the branches, each with its bracket and the quantity that confirms
+    it (dim ``bifurcation``)."""
+    kinds = np.array([LABELS[sp.kind] for _, sp in specials], np.int8)
+    crit = np.array([sp.critical for _, sp in specials], complex)
+    long_name = "part of the multiplier that crossed the unit circle"
+    out = {
+        "bifurcation_label": (
+            "bifurcation",
+            kinds,
+            dict(LABEL_ATTRS, long_name="kind of the bifurcation (suspected, where unresolved)"),
+        ),
+        "bifurcation_resolved": (
+            "bifurcation",
+            np.array([sp.resolved for _, sp in specials], np.int8),
+            _attrs(
+                "located and confirmed by its defining quantity (1), or only bracketed (0)",
+                flag_values=np.array([0, 1], np.int8),
+                flag_meanings="unresolved resolved",
+            ),
+        ),
+        "bifurcation_branch": (
+            "bifurcation",
+            np.array([b for b, _ in specials], np.int32),
+            _attrs("branch index of the bifurcation"),
+        ),
+        "critical_real": ("bifurcation", crit.real, _attrs(f"real {long_name}")),
+        "critical_imag": ("bifurcation", crit.imag, _attrs(f"imaginary {long_name}")),
+        "bifurcation_test": (
+            "bifurcation",
+            np.array([sp.test for _, sp in specials], float),
+            _attrs(
+                "the defining quantity at the located point: the critical multiplier's "
+                "distance from +1, -1 or the unit circle (1); for a grazing the extremum's "
+                f"value ({model.event_units})"
+            ),
+        ),
+        "bifurcation_event": (
+            "bifurcation",
+            np.array([sp.event for _, sp in specials], np.int32),
+            _attrs("event function of a grazing (-1: not a grazing)"),
+        ),
+        "bifurcation_phase": (
+            "bifurcation",
+            np.array([sp.phase for _, sp in specials], float),
+            _attrs("time after the strobe time of a grazing's extremum", "s"),
+        ),
+        "bifurcation_transition": (
+            "bifurcation",
+            np.array(
+                [TRANSITION_FLAGS[sp.transition or "not_a_grazing"] for _, sp in specials],
+                np.int8,
+            ),
+            _attrs(
+                "how the orbit passes a grazing: persistent (it crosses with the new contact), "
+                "nonsmooth_fold (the branch turns at it), border_collision (no orbit of the "
+                "branch's period past it: the period there in the note), not_typed",
+                flag_values=np.array(list(TRANSITION_FLAGS.values()), np.int8),
+                flag_meanings=" ".join(TRANSITION_FLAGS),
+            ),
+        ),
+    }
+    if parameter is not None:
+        out["bifurcation_parameter"] = (
+            "bifurcation",
+            np.array([sp.point.p for _, sp in specials]),
+            dict(p_attrs),
+        )
+        for name, pick in (("lower", lambda sp: sp.lower), ("upper", lambda sp: sp.upper)):
+            out[f"bifurcation_{name}"] = (
+                "bifurcation",
+                np.array([pick(sp) for _, sp in specials]),
+                dict(p_attrs, long_name=f"{p_attrs['long_name']} at the {name} end of the bracket"),
+            )
+    return out
+
+
 def branch_bifurcations(branch: xr.Dataset, parameter: str) -> list[dict]:
     """The bifurcations located on a branch of :func:`continue_orbit`, in order: per
     bifurcation its ``type`` (the label's meaning, e.g. ``period_doubling``), ``value`` (the
-    parameter there, in its units), ``critical`` (the critical Floquet multiplier, complex) and
-    ``index`` (the branch point nearest to it)."""
+    parameter there, in its units), ``critical`` (the critical Floquet multiplier, complex),
+    ``index`` (the branch point nearest to it) and ``resolved`` (False: only bracketed, the
+    defining quantity did not confirm the kind)."""
     names = branch.label.attrs["flag_meanings"].split()
     values = branch[parameter].values
     return [
@@ -444,12 +600,14 @@ def branch_bifurcations(branch: xr.Dataset, parameter: str) -> list[dict]:
             "value": float(p),
             "critical": complex(re, im),
             "index": int(np.argmin(np.abs(values - p))),
+            "resolved": bool(ok),
         }
-        for k, p, re, im in zip(
+        for k, p, re, im, ok in zip(
             branch.bifurcation_label.values,
             branch.bifurcation_parameter.values,
             branch.critical_real.values,
             branch.critical_imag.values,
+            branch.bifurcation_resolved.values,
             strict=True,
         )
     ]

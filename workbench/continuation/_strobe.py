@@ -45,8 +45,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from workbench.continuation._contacts import ContactSequence, contact_sequence
 from workbench.run import Prepared, prepare
-from workbench.scene import Scene, SceneSource, load_scene
+from workbench.scene import Scene, SceneError, SceneSource, load_scene
 from workbench.solver import (
     COMPILED_METHODS,
     RunResult,
@@ -59,7 +60,10 @@ from workbench.solver import (
     tangent_problem,
 )
 
-__all__ = ["MapValue", "StrobeMap"]
+__all__ = ["SAMPLES", "MapValue", "StrobeMap"]
+
+#: samples of the event functions per forcing period along an orbit (its contact sequence)
+SAMPLES = 2048
 
 
 @dataclass
@@ -178,6 +182,33 @@ class StrobeMap:
             step=self.step,
         )
 
+    def with_rtol(self, rtol: float) -> StrobeMap:
+        """The same map integrated at another tolerance (``atol`` scaled alike)."""
+        return StrobeMap(
+            self.scene,
+            self.parameter,
+            periods=self.periods,
+            rtol=rtol,
+            monodromy=self.monodromy,
+            step=self.step,
+        )
+
+    def jitter(
+        self, value: MapValue, y: np.ndarray, aux: np.ndarray, p: float, size: float
+    ) -> float:
+        """How far the map departs from its linearisation over a step of ``size`` (scaled) from
+        (y, aux): ``max |P(y + size s v) - P(y) - M size v| / s`` for a fixed unit direction
+        ``v`` (scaled units). Over a step this short the curvature's share is ``size^2``; the rest
+        is the map's own noise (its step sequence changes with the start), the floor below
+        which Newton's residual cannot be driven."""
+        s = self.scale()
+        n = s.size
+        v = np.random.default_rng(0).standard_normal(n)
+        v /= np.linalg.norm(v)
+        moved = self(y + size * s * v, aux, p, tangent=False)
+        linear = value.M[:n, :n] @ (size * v)
+        return float(np.max(np.abs((moved.y1 - value.y1) / s - linear)))
+
     def scale(self) -> np.ndarray:
         """The characteristic size of each state (state units)."""
         return state_scale(self.prepared(self.value).problem)
@@ -294,13 +325,60 @@ class StrobeMap:
         """d P^k / d(p / pscale) in the scaled unknowns, by central differences (step
         ``sqrt(rtol) pscale``: two runs with their own steps differ by ~rtol, so the column is
         good to ~sqrt(rtol), enough for Newton; a shorter stencil than rtol^(1/3) stays on one
-        side of a nonsmooth point sooner)."""
+        side of a nonsmooth point sooner); one-sided (second order) at the edge of the
+        parameter's valid range."""
         h = math.sqrt(self.rtol) * pscale
-        a = self(y, aux, p + h, tangent=False)
-        b = self(y, aux, p - h, tangent=False)
+
+        def at(q: float) -> np.ndarray | None:
+            try:
+                v = self(y, aux, q, tangent=False)
+            except SceneError:  # beyond the parameter's valid range
+                return None
+            return np.concatenate([v.y1, v.aux1[live]])
+
+        plus, minus = at(p + h), at(p - h)
+        if plus is not None and minus is not None:
+            da = (plus - minus) / (2 * h)
+        else:  # at the edge of the valid range: the one-sided second-order difference
+            side = 1.0 if plus is not None else -1.0
+            first = plus if plus is not None else minus
+            second = at(p + 2 * side * h)
+            here = at(p)
+            if first is None or second is None or here is None:
+                raise SceneError(
+                    self.parameter or "", f"no valid value within {2 * h:.3g} of {p:.10g}"
+                )
+            da = side * (-3.0 * here + 4.0 * first - second) / (2 * h)
         s = np.concatenate([self.scale(), np.ones(live.size)])
-        da = (np.concatenate([a.y1, a.aux1[live]]) - np.concatenate([b.y1, b.aux1[live]])) / (2 * h)
         return da * pscale / s
+
+    def flow(
+        self, y: np.ndarray, aux: np.ndarray, p: float, t: float, *, jacobian: bool = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+        """The state and discrete state at time ``t`` (s, at or after the problem's ``t0``)
+        from (y, aux) at ``t0``, at parameter value ``p``: ``(y_t, aux_t, W, active)``.
+
+        With ``jacobian``, ``W`` (shape ``(n + na, n + active.size)``) is the derivative of
+        ``(y_t, aux_t)`` (their units) in the scaled unknowns: ``y / s`` (column ``j``), then
+        the active discrete states (non-zero at ``t0``; column ``n + i`` for ``active[i]``),
+        by central differences of copies in one step sequence (as the monodromy by copies,
+        :meth:`__call__`); else None. E.g. the point where an orbit touches an event surface,
+        for a grazing condition."""
+        pb = self.prepared(p).problem
+        y, aux = np.asarray(y, float), np.asarray(aux, float)
+        n, na = y.size, aux.size
+        active = np.flatnonzero(aux != 0.0)
+        if not t > pb.t0:
+            W = np.zeros((n + na, n + active.size))
+            W[:n, :n] = np.diag(state_scale(pb))
+            W[n + active, n + np.arange(active.size)] = 1.0
+            return y.copy(), aux.copy(), W if jacobian else None, active
+        start = dataclasses.replace(pb, y0=y, aux0=aux)
+        if not jacobian:
+            res = self._solve(start, float(t))
+            return res.Y[-1].copy(), res.AUX[-1].copy(), None, active
+        y1, aux1, W, _, _ = self._copies(start, active, float(t))
+        return y1, aux1, W, active
 
     def orbit_samples(self, y: np.ndarray, aux: np.ndarray, p: float) -> np.ndarray:
         """The states of a period-k orbit at its k strobe times (rows: ``y``, ``P(y)``, ...)."""
@@ -312,24 +390,48 @@ class StrobeMap:
         res = self._solve(start, pb.t0 + (self.periods - 1) * prep.period, self.periods - 1)
         return np.concatenate([np.asarray(y, float)[None, :], res.Y], axis=0)
 
+    def sampled_events(
+        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int = SAMPLES
+    ) -> np.ndarray:
+        """The event functions along the orbit through (y, aux) over its ``k`` periods, at
+        ``samples`` equally spaced times per period from the strobe time on (the strobe time
+        itself included, the end excluded: rows of ``g``, event units)."""
+        prep = self.prepared(p)
+        pb = prep.problem
+        ne = pb.event_direction.size
+        n_rec = samples * self.periods
+        if ne == 0:
+            return np.zeros((n_rec, 0))
+        start = dataclasses.replace(pb, y0=np.asarray(y, float), aux0=np.asarray(aux, float))
+        res = self._solve(start, pb.t0 + self.periods * prep.period, n_rec)
+        # records at j span / n_rec, j = 1 .. n_rec: the last is the strobe state again (by
+        # periodicity), so it stands for j = 0
+        values = _event_values(pb, res.t, res.Y, res.AUX)
+        return np.roll(values, 1, axis=0)
+
     def event_extrema(
-        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int = 2048
+        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int = SAMPLES
     ) -> tuple[np.ndarray, np.ndarray]:
         """The largest and smallest value of each event function along the orbit through (y,
         aux) over its ``k`` periods (``samples`` records per period, the extreme record refined
         by the parabola through it and its neighbours): an onset event's largest value crosses
         zero where a contact appears (grazing), the smallest where a lasting one starts to
         lift off. Units of the event functions (the mechanisms: penetration, m)."""
-        prep = self.prepared(p)
-        pb = prep.problem
-        ne = pb.event_direction.size
-        if ne == 0:
+        values = self.sampled_events(y, aux, p, samples)
+        if values.shape[1] == 0:
             return np.zeros(0), np.zeros(0)
-        start = dataclasses.replace(pb, y0=np.asarray(y, float), aux0=np.asarray(aux, float))
-        n_rec = samples * self.periods
-        res = self._solve(start, pb.t0 + self.periods * prep.period, n_rec)
-        values = _event_values(pb, res.t, res.Y, res.AUX)
         return _extreme(values, np.argmax, 1.0), _extreme(values, np.argmin, -1.0)
+
+    def contact_sequence(
+        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int = SAMPLES
+    ) -> ContactSequence:
+        """The contact sequence of the orbit through (y, aux) at ``p``
+        (:mod:`workbench.continuation._contacts`): per event function its crossings and the
+        local maxima of its signed value, the margins to the next grazing."""
+        values = self.sampled_events(y, aux, p, samples)
+        pb = self.prepared(p).problem
+        span = self.periods * self.prepared(p).period
+        return contact_sequence(values, pb.event_direction, span)
 
 
 def _event_values(pb, t: np.ndarray, Y: np.ndarray, AUX: np.ndarray) -> np.ndarray:

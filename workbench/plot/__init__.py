@@ -6,7 +6,8 @@ return no figure: :func:`display_scale` (the factor and SI-prefixed unit to show
 :func:`coarse_sampling` (the largest jump between records, and when), :func:`wrap_title` (a
 title broken into lines), :func:`failure_note` and :func:`run_status_note` (text on failed
 points or a failed run), :func:`mark_failed` (marks failed parameter values on given axes and
-returns a note), :func:`run_figure_names` (the file names :func:`run_figures` writes) and
+returns a note), :func:`curve_overlay` (draws a curve of bifurcations in two parameters on
+given axes), :func:`run_figure_names` (the file names :func:`run_figures` writes) and
 :func:`register_overview` (a decorator that adds a model's overview to :func:`run_figures`).
 """
 
@@ -20,7 +21,15 @@ from workbench.plot._analysis import (
     zero_one_figure,
 )
 from workbench.plot._base import display_scale, register_overview, wrap_title
-from workbench.plot._continuation import LABEL_MARKS, branch_figure, chaos_map_figure
+from workbench.plot._continuation import (
+    CURVE_COLOURS,
+    CURVE_MARKS,
+    LABEL_MARKS,
+    branch_figure,
+    chaos_map_figure,
+    curve_figure,
+    curve_overlay,
+)
 from workbench.plot._failures import failure_note, mark_failed, run_status_note
 from workbench.plot._phase import (
     CoarseSamplingWarning,
@@ -39,6 +48,8 @@ from workbench.plot._stability import floquet_figure, jacobian_spectrum_figure
 from workbench.plot._verify import verification_figure
 
 __all__ = [
+    "CURVE_COLOURS",
+    "CURVE_MARKS",
     "LABEL_MARKS",
     "PANELS_PER_FIGURE",
     "CoarseSamplingWarning",
@@ -54,6 +65,8 @@ __all__ = [
     "branch_figure",
     "campaign_figure",
     "chaos_map_figure",
+    "curve_figure",
+    "curve_overlay",
     "embedding_figure",
     "floquet_figure",
     "jacobian_spectrum_figure",

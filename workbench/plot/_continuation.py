@@ -1,16 +1,25 @@
-"""Figures of continuation results: a branch of periodic orbits over an orbit diagram, and maps
-of chaos indicators over two parameters."""
+"""Figures of continuation results: a branch of periodic orbits over an orbit diagram, maps of
+chaos indicators over two parameters, and curves of bifurcations in two parameters drawn over
+either."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import xarray as xr
 
 from workbench.plot._base import axis_label, display_scale, plt
 
-__all__ = ["branch_figure", "chaos_map_figure", "LABEL_MARKS"]
+__all__ = [
+    "CURVE_COLOURS",
+    "CURVE_MARKS",
+    "LABEL_MARKS",
+    "branch_figure",
+    "chaos_map_figure",
+    "curve_figure",
+    "curve_overlay",
+]
 
 #: marker, short text and colour of each labelled point of a branch
 LABEL_MARKS = {
@@ -20,6 +29,30 @@ LABEL_MARKS = {
     "neimark_sacker": ("^", "NS", "tab:orange"),
     "grazing": ("v", "G", "tab:brown"),
     "nonsmooth_fold": ("X", "NF", "tab:pink"),
+    "unresolved": ("x", "?", "tab:gray"),
+}
+#: colour and short name of each kind of curve point
+CURVE_COLOURS = {
+    "fold": ("tab:red", "LP"),
+    "period_doubling": ("tab:green", "PD"),
+    "neimark_sacker": ("tab:orange", "NS"),
+    "grazing": ("tab:brown", "G"),
+    "neutral_saddle": ("0.55", "neutral saddle"),
+}
+#: marker and short text of each codimension-two point of a curve (the curves' turning points
+#: in either parameter are not marked)
+CURVE_MARKS = {
+    "cusp": ("P", "CP"),
+    "resonance_1_1": ("s", "R1"),
+    "resonance_1_2": ("D", "R2"),
+    "resonance_1_3": ("^", "R3"),
+    "resonance_1_4": ("v", "R4"),
+    "fold_flip": ("X", "LPPD"),
+    "fold_neimark_sacker": ("h", "LPNS"),
+    "flip_neimark_sacker": ("H", "PDNS"),
+    "grazing_fold": ("<", "G-LP"),
+    "grazing_period_doubling": (">", "G-PD"),
+    "degenerate_grazing": ("*", "DG"),
 }
 #: the mark of an exponent that is only an upper bound on a chaos map
 BOUND_MARK = r"$\leq$"
@@ -62,9 +95,9 @@ def branch_figure(
     orbit diagram: each orbit's strobe samples of ``state`` against the parameter, solid where
     the orbit is stable and dashed where not, its labelled points marked as in
     :data:`LABEL_MARKS` (LP fold, BP branch point, PD period doubling, NS Neimark-Sacker, G
-    grazing, NF nonsmooth fold); under it, when given, the strobe samples of a sweep
-    (:func:`workbench.analysis.bifurcation_diagram` of a campaign or a continued sweep, one
-    colour per direction).
+    grazing, NF nonsmooth fold, ? a bifurcation bracketed but not confirmed); under it, when
+    given, the strobe samples of a sweep (:func:`workbench.analysis.bifurcation_diagram` of a
+    campaign or a continued sweep, one colour per direction).
 
     ``scale`` multiplies the parameter on the x axis (e.g. ``1 / pi``, with ``xlabel``).
     """
@@ -136,6 +169,7 @@ def chaos_map_figure(
     indicators: tuple[str, ...] = ("strobe_period", "zero_one_K", "lle"),
     scales: Mapping[str, float] | None = None,
     labels: Mapping[str, str] | None = None,
+    curves: Sequence[xr.Dataset] = (),
 ):
     """Maps of chaos indicators over the two parameter dims of a campaign (from
     :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
@@ -144,13 +178,22 @@ def chaos_map_figure(
     :func:`display_scale`). On the exponent's map, hatched cells hold an exponent that did not
     converge (``lle_converged`` 0; ``lle_unmet`` says why), a "less or equal" sign marks an
     upper bound (``lle_status`` 2) and "x" a failed exponent; a legend below the panel says so
-    where any cell is marked."""
+    where any cell is marked. ``curves`` (of :func:`workbench.continuation.continue_curve` in
+    the map's two parameters, either way round) are drawn over every panel
+    (:func:`curve_overlay`), within the map's extent, with a legend on the first panel."""
     scales = dict(scales or {})
     labels = dict(labels or {})
     dims = maps.attrs["campaign_dims"].split()
     if len(dims) != 2:
         raise ValueError(f"a chaos map needs two parameter dims; this campaign has {dims!r}")
     xd, yd = dims
+    for c in curves:
+        pair = {c.attrs.get("continuation_parameter"), c.attrs.get("curve_parameter")}
+        if pair != {xd, yd}:
+            raise ValueError(
+                f"curves: a curve in {sorted(p for p in pair if p)!r} cannot be drawn on a map "
+                f"over {[xd, yd]!r}; continue the bifurcation in the map's two parameters"
+            )
     shown = [v for v in indicators if v in maps]
     fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.8), squeeze=False)
     for d in (xd, yd):
@@ -189,6 +232,118 @@ def chaos_map_figure(
         ax.set_ylabel(labels.get(yd, axis_label(maps[yd])))
         units = maps[name].attrs.get("units", "1")
         ax.set_title(f"{name} [{units}]", fontsize=9)
+        if curves:
+            limits = ax.get_xlim(), ax.get_ylim()
+            for c in curves:
+                curve_overlay(ax, c, x=xd, y=yd, scales=scales, marks=ax is axes[0][0])
+            ax.set_xlim(*limits[0])
+            ax.set_ylim(*limits[1])
+            if ax is axes[0][0]:
+                ax.legend(fontsize=7, loc="best", framealpha=0.8)
+    fig.tight_layout()
+    return fig
+
+
+def curve_overlay(
+    ax,
+    curve: xr.Dataset,
+    *,
+    x: str | None = None,
+    y: str | None = None,
+    scales: Mapping[str, float] | None = None,
+    marks: bool = True,
+) -> list:
+    """Draw a curve of bifurcations (from :func:`workbench.continuation.continue_curve`) on
+    given axes, e.g. a chaos map's panel or an orbit diagram's: ``x`` and ``y`` name variables
+    along the curve (default its first and second parameter; ``y="orbit_x"`` over a branch of
+    orbits in the first parameter draws where the bifurcation's orbit lies as the second
+    parameter changes). Each run of points of one kind is a line in its colour
+    (:data:`CURVE_COLOURS`, on a white halo that keeps it visible on any map; a
+    Neimark-Sacker curve's neutral saddles dotted grey), its
+    codimension-two points marked as in :data:`CURVE_MARKS` with their short names; with
+    ``marks`` the kinds and marks get legend entries. ``scales`` multiplies a variable's values
+    (e.g. ``{"omega": 1 / pi}``). Returns the artists drawn."""
+    from matplotlib.patheffects import Normal, Stroke
+
+    x = x or curve.attrs["continuation_parameter"]
+    y = y or curve.attrs["curve_parameter"]
+    scales = dict(scales or {})
+    xs = curve[x].values * scales.get(x, 1.0)
+    ys = curve[y].values * scales.get(y, 1.0)
+    codes = curve.kind.values
+    q = curve.attrs["curve_parameter"]
+    over = (
+        "" if q in (x, y) else f", {q} {curve[q].values.min():.4g} .. {curve[q].values.max():.4g}"
+    )
+    drawn, named = [], set()
+    start = 0
+    for i in range(1, codes.size + 1):
+        if i == codes.size or codes[i] != codes[start]:
+            name = _flag(curve.kind, int(codes[start]))
+            colour, short = CURVE_COLOURS[name]
+            seg = slice(start, min(i + 1, codes.size))
+            (line,) = ax.plot(
+                xs[seg],
+                ys[seg],
+                ":" if name == "neutral_saddle" else "-",
+                color=colour,
+                lw=1.6,
+                path_effects=[Stroke(linewidth=3.2, foreground="white", alpha=0.7), Normal()],
+                label=f"{short} curve{over}" if marks and name not in named else None,
+            )
+            named.add(name)
+            drawn.append(line)
+            start = i
+    shown = set()
+    for i in range(curve.label.size):
+        name = _flag(curve.label, int(curve.label.values[i]))
+        if name not in CURVE_MARKS:
+            continue
+        marker, text = CURVE_MARKS[name]
+        drawn += ax.plot(
+            xs[i], ys[i], marker, ms=7, mfc="none", mec="k", mew=1.3,
+            label=f"{text}: {name.replace('_', ' ')}" if marks and name not in shown else None,
+        )  # fmt: skip
+        shown.add(name)
+        drawn.append(
+            ax.annotate(text, (xs[i], ys[i]), textcoords="offset points", xytext=(4, 4),
+                        fontsize=7)
+        )  # fmt: skip
+    return drawn
+
+
+def _flag(da: xr.DataArray, code: int) -> str:
+    """The flag meaning of ``code`` in a CF-flagged variable."""
+    values = np.atleast_1d(da.attrs["flag_values"]).tolist()
+    return da.attrs["flag_meanings"].split()[values.index(code)]
+
+
+def curve_figure(
+    curves: Sequence[xr.Dataset],
+    *,
+    scales: Mapping[str, float] | None = None,
+    labels: Mapping[str, str] | None = None,
+):
+    """Curves of bifurcations (from :func:`workbench.continuation.continue_curve`, all in the
+    same two parameters) in the plane of their parameters, the first parameter of the first
+    curve on the x axis (:func:`curve_overlay`); ``scales`` as there, ``labels`` names an
+    axis (default the parameter's long name and units)."""
+    if not curves:
+        raise ValueError("curves: give at least one curve")
+    first = curves[0]
+    x, y = first.attrs["continuation_parameter"], first.attrs["curve_parameter"]
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    for c in curves:
+        pair = (c.attrs["continuation_parameter"], c.attrs["curve_parameter"])
+        if set(pair) != {x, y}:
+            raise ValueError(f"curves: a curve in {list(pair)!r} among curves in {[x, y]!r}")
+        curve_overlay(ax, c, x=x, y=y, scales=scales)
+    labels = dict(labels or {})
+    ax.set_xlabel(labels.get(x, axis_label(first[x])))
+    ax.set_ylabel(labels.get(y, axis_label(first[y])))
+    ax.legend(fontsize=7, loc="best")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"bifurcation curves in ({x}, {y})", fontsize=9)
     fig.tight_layout()
     return fig
 

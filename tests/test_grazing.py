@@ -1,0 +1,183 @@
+"""Bifurcations at contact events (issue 38): the contact sequence of an orbit, grazings located
+on the local extremum that reaches zero, and labels that their defining quantity confirms.
+
+The stop oscillator's non-impacting orbit is the linear one, so it grazes where the linear
+amplitude F / sqrt((k - m w^2)^2 + (c w)^2) equals the gap: a closed form for every parameter
+set, here for sets the package's other tests do not use, found with scipy's brentq."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import workbench
+from workbench.continuation import branch_bifurcations, continue_orbit
+from workbench.continuation._branch import MARGIN_TOLERANCE, MULTIPLIER_TOLERANCE
+from workbench.continuation._contacts import contact_sequence, match_extrema
+from workbench.models.stop_oscillator import grazing_amplitude
+
+#: the issue's stop oscillator (none of the suite's other sets): grazing near 1.0645 rad/s
+ISSUE = {
+    "mass": 2.0,
+    "damping": 0.3,
+    "stiffness": 3.0,
+    "stop_stiffness": 1000.0,
+    "gap": 0.5,
+    "force": 0.4,
+}
+#: two more, drawn once at random (np.random.default_rng(1), cases 1 and 3 of a study script,
+#: rounded): grazing near 0.7057 and 0.5815 rad/s
+DRAWN = [
+    {
+        "mass": 2.5693,
+        "damping": 0.54,
+        "stiffness": 1.9322,
+        "stop_stiffness": 193.22,
+        "gap": 0.2938,
+        "force": 0.222,
+    },
+    {
+        "mass": 1.5078,
+        "damping": 0.1917,
+        "stiffness": 1.2121,
+        "stop_stiffness": 36.36,
+        "gap": 1.1256,
+        "force": 0.8003,
+    },
+]
+
+
+def lower_grazing(params: dict) -> float:
+    """The lowest forcing frequency (rad s-1) where the linear orbit reaches the stop."""
+    full = {"mass": 1.0, "stiffness": 1.0, **params}
+    w0 = math.sqrt(full["stiffness"] / full["mass"])
+    f = lambda w: grazing_amplitude({**full, "omega": w}) - full["gap"]  # noqa: E731
+    grid = np.linspace(0.2 * w0, w0, 400)
+    values = [f(w) for w in grid]
+    i = next(i for i in range(grid.size - 1) if values[i] < 0 <= values[i + 1])
+    return brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15)
+
+
+def _branch(params: dict, start: float, stop: float, **kw):
+    scene = {
+        "model": {"name": "stop_oscillator"},
+        "parameters": dict(params, omega=start),
+        "run": {"transient_cycles": 300},
+    }
+    return continue_orbit(scene, "omega", stop=stop, **kw)
+
+
+def _assert_labels_confirmed(r, parameter: str = "omega") -> None:
+    """Every stored label agrees with the quantity that defines it, and the located points lie
+    in order of arclength (between the points before and after them)."""
+    names = r.label.attrs["flag_meanings"].split()
+    mu = r.multiplier_real.values + 1j * r.multiplier_imag.values
+    for i in np.flatnonzero(r.label.values >= 3):
+        kind = names[int(r.label.values[i])]
+        m = mu[i][np.isfinite(mu[i])]
+        if kind in ("fold", "branch_point"):
+            assert np.min(np.abs(m - 1.0)) <= MULTIPLIER_TOLERANCE, (kind, m)
+        elif kind == "period_doubling":
+            assert np.min(np.abs(m + 1.0)) <= MULTIPLIER_TOLERANCE, (kind, m)
+        elif kind == "neimark_sacker":
+            c = m[np.abs(m.imag) > 0]
+            assert np.min(np.abs(np.abs(c) - 1.0)) <= MULTIPLIER_TOLERANCE, (kind, m)
+        elif kind == "grazing":
+            values = r.extremum_value.values[i]
+            scale = np.nanmax(values, axis=1) - np.nanmin(values, axis=1)
+            rel = np.nanmin(np.abs(values), axis=1) / scale
+            assert np.nanmin(rel) <= MARGIN_TOLERANCE, (kind, values)
+        if 0 < i < r.sizes["point"] - 1 and r.branch[i - 1] == r.branch[i] == r.branch[i + 1]:
+            p = r[parameter].values
+            assert min(p[i - 1], p[i + 1]) - 1e-12 <= p[i] <= max(p[i - 1], p[i + 1]) + 1e-12
+
+
+def test_the_sequence_sees_a_contact_between_two_samples():
+    """A maximum of 1e-6 above zero whose samples all lie below zero: a crossing, found by the
+    parabola through the samples; the margins are the extrema's values, matched by phase."""
+    n = 400
+    t = np.arange(n) / n
+    g = np.cos(2 * np.pi * (t - 0.5 / n)) - 1.0 + 1e-6  # its top between samples 0 and 1
+    assert g.max() < 0
+    seq = contact_sequence(np.stack([g, g], axis=1), np.array([1, -1]), 1.0)
+    assert seq.counts == (1, 1)
+    top = seq.extrema[0][seq.extrema[0][:, 2] == 1][0]
+    vertex = (2 * np.pi / n) ** 4  # the parabola's error on a cosine's top (its range is 2)
+    assert top[1] == pytest.approx(1e-6, abs=vertex) and top[0] == pytest.approx(0.5 / n, abs=1e-6)
+    below = contact_sequence(np.stack([g - 2e-6], axis=1), np.array([1]), 1.0)
+    assert below.counts == (0,) and below.smallest_margin()[2] == pytest.approx(-1e-6, abs=vertex)
+    # matched by phase and kind across two orbits whose extrema moved a little
+    a = np.array([[0.1, -0.2, 1.0], [0.6, -1.0, -1.0]])
+    b = np.array([[0.58, -1.0, -1.0], [0.12, 0.1, 1.0]])
+    assert match_extrema(a, b, 1.0) == [(0, 1), (1, 0)]
+
+
+@pytest.mark.parametrize(
+    "params, start, stop",
+    [(ISSUE, 0.6, 1.15), (ISSUE, 0.6, 1.1), (DRAWN[0], 0.64, 0.74), (DRAWN[1], 0.52, 0.61)],
+    ids=["issue-1.15", "issue-1.1", "drawn-0", "drawn-1"],
+)
+def test_grazing_of_stop_oscillators_against_the_closed_form(params, start, stop):
+    """Omega continued upwards through the lower grazing: one grazing, within 1e-6 of the
+    closed form (relative), whatever the stop of the range (the step sequence); every label
+    confirmed by its defining quantity. Before, the issue's set was labelled at 1.0798 against
+    1.06454 (+1.4 %), with a "period doubling" whose multiplier was -0.082."""
+    exact = lower_grazing(params)
+    r = _branch(params, start, stop)
+    found = branch_bifurcations(r, "omega")
+    grazings = [b for b in found if b["type"] == "grazing" and b["resolved"]]
+    assert len(grazings) == 1, found
+    assert abs(grazings[0]["value"] - exact) < 1e-6 * exact, (grazings, exact)
+    _assert_labels_confirmed(r)
+    # below the grazing the orbit misses the stop, past it each period has one contact
+    before = r.omega.values < exact * (1 - 1e-6)
+    assert (r.crossings_per_orbit.values[before] == 0).all()
+    assert (r.crossings_per_orbit.values[r.omega.values > exact * (1 + 1e-6)] == 1).all()
+
+
+def test_an_unconfirmed_bifurcation_is_stored_unresolved(monkeypatch):
+    """Where the defining quantity does not confirm the kind (here: a tolerance no multiplier
+    meets), the point is labelled unresolved and the bifurcation kept with its suspected kind,
+    its bracket and the quantity's value; nothing is labelled a period doubling."""
+    import workbench.continuation._branch as branch
+
+    monkeypatch.setattr(branch, "MULTIPLIER_TOLERANCE", 1e-300)
+    r = continue_orbit(
+        {
+            "model": {"name": "duffing"},
+            "parameters": {"gamma": 0.25},
+            "run": {"transient_cycles": 100},
+        },
+        "gamma",
+        stop=0.27,
+    )
+    names = r.label.attrs["flag_meanings"].split()
+    labels = [names[int(v)] for v in r.label.values]
+    assert "period_doubling" not in labels and "unresolved" in labels
+    (b,) = branch_bifurcations(r, "gamma")
+    assert b["type"] == "period_doubling" and not b["resolved"]
+    assert int(r.bifurcation_resolved[0]) == 0
+    lo, hi = float(r.bifurcation_lower[0]), float(r.bifurcation_upper[0])
+    assert lo <= float(r.bifurcation_parameter[0]) <= hi and hi - lo < 1e-6
+    assert 0 < float(r.bifurcation_test[0]) < 1e-3  # |mu + 1| at the located point
+
+
+def test_the_parameter_never_leaves_its_valid_range():
+    """Damping continued from 0.1 N s/m down to a bound below its valid range (>= 0): the branch
+    ends inside the range with the reason, never with an error (the issue: omega stepped to a
+    negative value and ended in a SceneError traceback)."""
+    params = dict(ISSUE, gap=10.0, omega=0.5)
+    scene = {"model": {"name": "stop_oscillator"}, "parameters": params}
+    r = continue_orbit(scene, "damping", stop=-0.05, start=0.1, state={"x": 0.0, "v": 0.0})
+    assert (r.damping.values >= 0.0).all()
+    assert "damping" in r.attrs["branch_ended"] or "corrector" in r.attrs["branch_ended"]
+    assert float(r.damping.min()) < 1e-3  # it went as far as the range allows
+
+
+def test_a_branch_ends_on_its_bound():
+    """The last point of a branch is the orbit at the bound of its range, not beyond it."""
+    r = _branch(dict(ISSUE, gap=10.0), 0.6, 0.7)
+    assert float(r.omega[-1]) == pytest.approx(0.7, abs=1e-12)
+    assert r.omega.values.max() <= 0.7 and "bound 0.7" in r.attrs["branch_ended"]
+    assert workbench.continuation.branch_bifurcations(r, "omega") == []
