@@ -18,9 +18,12 @@ demo: $(STAMP)
 	$(VENV)/bin/workbench run studies/ninebar.toml -o $(OUT)/ninebar.nc --figures $(OUT)/figures --overwrite
 	@echo "demo: netCDF run in $(OUT)/ninebar.nc, figures in $(OUT)/figures/"
 
+# ruff, and numpydoc's validation of the public API's docstrings (docs/docstrings.py; the checks
+# in pyproject.toml's [tool.numpydoc_validation]).
 lint: $(STAMP)
-	$(VENV)/bin/ruff check workbench tests benchmarks studies docs/hooks.py
-	$(VENV)/bin/ruff format --check workbench tests benchmarks studies docs/hooks.py
+	$(VENV)/bin/ruff check workbench tests benchmarks studies docs/hooks.py docs/docstrings.py
+	$(VENV)/bin/ruff format --check workbench tests benchmarks studies docs/hooks.py docs/docstrings.py
+	$(PY) docs/docstrings.py
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format workbench tests benchmarks studies docs/hooks.py

@@ -11,6 +11,13 @@ Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), th
 ``make notebooks``. ``tests/test_data.py`` fails when the archives no longer match what the
 code writes.
 
+- ``--upgrade``: where only how the archives are written changed (the archive format, the
+  CF attributes), not what they hold, rewrite each shipped archive in place with the current
+  writer, its values untouched (checked), instead of recomputing it (the maps cost an hour
+  each): read by ``open_run`` (an older format upgraded), given the global attributes every
+  archive now carries that it lacks (``Conventions``, ``references``), a line in
+  ``history`` that says so, and written as it was (netCDF-3 for the maps and periodic_end.nc).
+
 - ``<map>_map.nc``: a chaos map of ``studies/chaos_maps/<map>.toml`` (``make chaos-maps``
   computes both, each of order an hour of CPU; data/ ships both) without its strobe
   samples: the
@@ -71,6 +78,41 @@ def main() -> None:
     print("bifurcation_speed.nc")
 
 
+def upgrade(path: Path) -> Path:
+    """Rewrite the archive at ``path`` in place with the current writer, its values untouched
+    (module docstring: ``--upgrade``)."""
+    import datetime
+
+    import netCDF4
+    import numpy as np
+
+    from workbench.run._dataset import references
+
+    with netCDF4.Dataset(path) as nc:
+        classic = nc.data_model.startswith("NETCDF3")
+    ds = workbench.open_run(path)
+    found = int(ds.attrs.pop("upgraded_from_format", ds.attrs["format_version"]))
+    attrs = ds.attrs
+    attrs.setdefault("Conventions", "CF-1.11")
+    attrs.setdefault("references", references(attrs["model"]))
+    now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    line = (
+        f"{now} rewritten by workbench {workbench.__version__} (data/regenerate.py --upgrade): "
+        f"archive format {found} -> {workbench.FORMAT_VERSION}, values untouched"
+    )
+    attrs["history"] = f"{attrs['history']}\n{line}" if attrs.get("history") else line
+    with_values = ds.copy(deep=True)
+    workbench.save_run(ds, path, classic=classic)
+    back = workbench.open_run(path)
+    for name, var in with_values.variables.items():
+        same = back[name].values == var.values
+        if var.dtype.kind == "f":
+            same |= np.isnan(back[name].values) & np.isnan(var.values)
+        assert np.all(same) and back[name].dims == var.dims, f"{path.name}: {name} changed"
+    assert back.identical(with_values), f"{path.name}: the attributes read back differ"
+    return path
+
+
 def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
     """The chaos map at ``source`` without its strobe samples (every variable over ``time``),
     with the cost of its run from ``log`` (GNU ``time -v`` output and ``uptime`` lines) as
@@ -95,6 +137,13 @@ def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
     )
     workbench.save_run(out, target, classic=True)  # a few kB: no HDF5 per-variable overhead
     return target
+
+
+#: the global attributes of the continued sweep that periodic_end.nc keeps (and its own)
+KEPT = (
+    *("Conventions", "title", "history", "source", "references", "scene", "format_version"),
+    *("package_versions", "model", "code_digest"),
+)
 
 
 def periodic_end(target: Path, workers: int = 2) -> Path:
@@ -133,12 +182,7 @@ def periodic_end(target: Path, workers: int = 2) -> Path:
             "status": ds.status.transpose(*dims),
         },
         coords={d: ds[d] for d in dims},
-        attrs={
-            k: ds.attrs[k]
-            for k in ds.attrs
-            if k in ("title", "scene", "format_version", "package_versions", "model", "code_digest")
-            or k.startswith("continuation_")
-        },
+        attrs={k: v for k, v in ds.attrs.items() if k in KEPT or k.startswith("continuation_")},
     )
     out.attrs.update(
         measured_worker_time=float(ds.attrs["campaign_cpu_time"]),
@@ -152,6 +196,9 @@ def periodic_end(target: Path, workers: int = 2) -> Path:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--periodic-end"]:
         print(periodic_end(DATA / "periodic_end.nc"))
+    elif sys.argv[1:2] == ["--upgrade"]:
+        for archive in sorted(DATA.glob("*.nc")):
+            print(upgrade(archive))
     elif sys.argv[1:2] == ["--chaos-map"]:
         source = Path(sys.argv[2])
         print(chaos_map_summary(source, Path(sys.argv[3]), DATA / f"{source.stem}_map.nc"))

@@ -15,6 +15,7 @@ import pytest
 import xarray as xr
 
 import workbench
+from workbench.archive._format import decode_time
 from workbench.campaign._block import STATUS_ATTRS
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -24,9 +25,10 @@ STATIC_ATTRS = ("Conventions", "format_version", "model", "forcing_period_units"
 
 
 def _raw(name: str) -> xr.Dataset:
-    """The archive as stored (not upgraded by open_run)."""
-    with xr.open_dataset(DATA / name) as ds:
-        return ds.load()
+    """The archive as stored (not upgraded by open_run), its simulated time read as open_run
+    reads it (seconds since t = 0: workbench.archive._format)."""
+    with xr.open_dataset(DATA / name, decode_times=False) as ds:
+        return decode_time(ds.load())
 
 
 def _same_structure(shipped: xr.Dataset, fresh: xr.Dataset, name: str) -> None:

@@ -24,16 +24,24 @@ def test_there_are_notebooks():
 
 
 def _text(nb) -> list[list[str]]:
-    """The text outputs of each code cell (streams and text/plain results; not images)."""
+    """The text outputs of each code cell (streams and text/plain results; not images). The
+    kernel sends printed text in chunks as its buffer flushes, which depends on timing: one
+    cell's consecutive stdout chunks are joined into one text."""
     out = []
     for cell in nb.cells:
         if cell.cell_type != "code":
             continue
-        texts = []
+        texts, streaming = [], False
         for o in cell.get("outputs", []):
             if o.get("output_type") == "stream" and o.get("name") == "stdout":
-                texts.append(o["text"])
-            elif "data" in o and "text/plain" in o["data"] and "image/png" not in o["data"]:
+                if streaming:
+                    texts[-1] += o["text"]
+                else:
+                    texts.append(o["text"])
+                streaming = True
+                continue
+            streaming = False
+            if "data" in o and "text/plain" in o["data"] and "image/png" not in o["data"]:
                 texts.append(o["data"]["text/plain"])
         out.append([t.rstrip() for t in texts])
     return out

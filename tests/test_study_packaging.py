@@ -63,7 +63,7 @@ def test_an_installed_wheel_lists_and_loads_the_studies(tmp_path):
         timeout=600,
     )
     assert build.returncode == 0, build.stderr[-2000:]
-    (wheel,) = tmp_path.glob("workbench-*.whl")
+    (wheel,) = tmp_path.glob("clearance_workbench-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
     expected = {f"workbench/study/scenes/{f}" for f in _scene_files(ROOT / "studies")}
     assert expected <= set(names), sorted(expected - set(names))[:5]

@@ -139,8 +139,8 @@ def test_events_discrete_state_and_outputs_of_a_user_model(user_modules):
 
 
 def test_a_user_model_runs_in_a_campaign_of_worker_processes(user_modules, tmp_path):
-    """The workers import the user's module (by name, from its directory if their path lacks
-    it): a sweep over c on two local processes."""
+    """The workers import the user's module (by name, else by file path from the directory the
+    campaign's process imported it from): a sweep over c on two local processes."""
     import rossler_model  # noqa: F401
 
     runs = workbench.run_campaign(
@@ -161,8 +161,9 @@ def test_a_user_model_runs_in_a_campaign_of_worker_processes(user_modules, tmp_p
 
 def test_a_scene_file_names_the_module_and_the_command_line_runs_it(user_modules, tmp_path):
     """``[model] module``: the CLI (a fresh process, started elsewhere) imports the module from
-    the scene file's directory and runs the user's model; a module that is not there is one
-    line naming the key."""
+    the scene file's directory and runs the user's model; the archive's scene imports it only
+    when trusted (the page's refusal, word for word); a module that is not there is one line
+    naming the key."""
     out = subprocess.run(
         [
             sys.executable,
@@ -189,6 +190,38 @@ def test_a_scene_file_names_the_module_and_the_command_line_runs_it(user_modules
         "rossler_phase.png",
         "rossler_timeseries.png",
     ]
+    # the archive's scene is data: a fresh process imports its module only when trusted, and
+    # then by file path from the working directory (-P: the directory is not on sys.path)
+    code = (
+        "import sys, workbench\n"
+        f"text = workbench.open_run({str(tmp_path / 'r.nc')!r}).attrs['scene']\n"
+        "try:\n    workbench.scene_from_toml(text)\n"
+        "except workbench.SceneError as exc:\n    print(exc)\n"
+        "scene = workbench.scene_from_toml(text, trust_modules=('rossler_model',))\n"
+        "print(scene.model, sys.modules['rossler_model'].__file__, '' in sys.path)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-P", "-c", code],
+        cwd=user_modules,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    refusal, trusted = out.stdout.splitlines()
+    assert trusted == f"rossler {user_modules / 'rossler_model.py'} False"
+    # the command line says the same, in the words of the page, before any work
+    out = subprocess.run(
+        [sys.executable, "-m", "workbench.cli", "analyse", "r.nc", "--var", "x", "--equations"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr == f"workbench analyse: error: {refusal}\n"
+    quoted = re.search(r"refused in one line, `(model\.module:\s.*?)`", DOC.read_text(), re.S)
+    assert " ".join(quoted.group(1).split()) == refusal
     bad = tmp_path / "bad.toml"
     bad.write_text('[model]\nname = "rossler"\nmodule = "no_such_module"\n')
     out = subprocess.run(

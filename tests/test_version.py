@@ -1,9 +1,11 @@
 """One version, said everywhere, and a format version on every archive (issue 26 item 1):
 pyproject.toml, ``workbench.__version__``, ``workbench --version``, the archives' ``source`` and
 ``format_version``; an archive of the older format (workbench 0.1.0) is upgraded or refused
-with a message that says what to do; a newer one is refused."""
+with a message that says what to do; a newer one is refused. One distribution name (issue 40
+item 1): pyproject's, the installed metadata's and every install command's."""
 
 import re
+import shlex
 import tomllib
 from pathlib import Path
 
@@ -17,6 +19,19 @@ from workbench.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = Path(__file__).parent / "fixtures"
+#: the distribution's name (the project called ``workbench`` on PyPI is another one); the
+#: package one imports and the command stay ``workbench``
+DISTRIBUTION = "clearance-workbench"
+#: where install commands are shown to users: the README, the docs' pages, the notebooks and
+#: the package's own messages
+INSTALL_SOURCES = [
+    ROOT / "README.md",
+    *sorted(p for p in (ROOT / "docs").rglob("*.md") if not p.is_symlink()),
+    *sorted((ROOT / "notebooks").glob("*.ipynb")),
+    *sorted((ROOT / "workbench").rglob("*.py")),
+]
+#: a requirement (a name with extras) or a path (``.``, ``.[extras]``) that pip installs
+_TARGET = re.compile(r"(?P<name>\.|[A-Za-z0-9][A-Za-z0-9._-]*)(?:\[(?P<extras>[\w,-]+)\])?")
 
 
 def test_one_version():
@@ -60,6 +75,21 @@ def test_a_format1_run_is_upgraded():
     assert ds.attrs["format_version"] == workbench.FORMAT_VERSION
     assert ds.attrs["upgraded_from_format"] == 1
     xr.testing.assert_identical(ds.clearance_x, raw.clearance_x.load())
+
+
+def test_a_format2_run_is_read_as_it_was_written(tmp_path):
+    """Format 2 (workbench 0.2.0 to 0.5.1) stored the simulated time in "s" with xarray's
+    encoding; format 3 stores it as a CF time coordinate (workbench.archive._format). A format-2
+    file reads back as the same dataset, upgraded."""
+    ds = workbench.simulate({"model": {"name": "duffing"}, "run": {"cycles": 2}})
+    old = ds.copy()
+    old.attrs["format_version"] = np.int32(2)
+    old.to_netcdf(tmp_path / "format2.nc")  # xarray's writer: what save_run wrote in format 2
+    with xr.open_dataset(tmp_path / "format2.nc") as raw:
+        assert raw.time.attrs["units"] == "s" and raw.time.dtype == np.float64
+    back = workbench.open_run(tmp_path / "format2.nc")
+    assert back.attrs.pop("upgraded_from_format") == 2
+    assert back.identical(ds)
 
 
 def test_a_format1_campaign_is_upgraded_to_todays_flags(tmp_path):
@@ -109,3 +139,65 @@ def test_the_changelog_has_each_version_once_newest_first():
     as_numbers = [tuple(map(int, v)) for v in versions]
     assert as_numbers == sorted(set(as_numbers), reverse=True), versions
     assert ".".join(versions[0]) == workbench.__version__
+
+
+def _install_targets(text: str) -> list[tuple[str, set[str]]]:
+    """What each ``pip install ...`` of ``text`` installs: (name or ".", extras), its options
+    skipped, up to the first word that is neither (the end of the command in prose)."""
+    found = []
+    for command in re.findall(r"pip install ([^`\n\"]+)", text):
+        for word in shlex.split(command.replace("\\", " "), comments=True):
+            if word.startswith("-"):
+                continue
+            target = _TARGET.fullmatch(word)
+            if target is None:
+                break
+            extras = target.group("extras")
+            found.append((target.group("name"), set(extras.split(",")) if extras else set()))
+    return found
+
+
+def test_install_commands_name_the_distribution():
+    """No command installs the PyPI project called ``workbench`` (which is not this one): each
+    names ``clearance-workbench`` or a checkout (``.``), with extras that pyproject defines."""
+    extras = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"])  # fmt: skip
+    seen = []
+    for source in INSTALL_SOURCES:
+        for name, wanted in _install_targets(source.read_text()):
+            where = f"{source.relative_to(ROOT)}: pip install {name}"
+            assert name.lower().replace("_", "-") != "workbench", where
+            if name in (".", DISTRIBUTION):
+                assert wanted <= extras, (where, wanted - extras)
+                seen.append(name)
+    assert DISTRIBUTION in seen and "." in seen  # the test reads the commands it checks
+
+
+def test_the_check_of_install_commands_can_fail():
+    assert _install_targets("run `pip install -e '.[verify]'` (exudyn)") == [(".", {"verify"})]
+    text = "needs dask-jobqueue: pip install 'workbench[cluster]' (or dask-jobqueue)"
+    assert _install_targets(text) == [("workbench", {"cluster"})]
+
+
+def test_the_distribution_name_and_its_installed_metadata():
+    """pyproject names the distribution; the installed package reports that name, this
+    version and the ``workbench`` command (skipped where workbench runs from a source tree
+    that no distribution installed)."""
+    from importlib.metadata import distribution, packages_distributions
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert project["name"] == DISTRIBUTION
+    assert project["scripts"] == {"workbench": "workbench.cli:main"}
+    # (a distribution seen twice, from site-packages and from an egg-info in the checkout)
+    providers = sorted(set(packages_distributions().get("workbench", [])))
+    if not providers:
+        pytest.skip("no installed distribution provides the package workbench")
+    assert providers == [DISTRIBUTION], (
+        f"the package workbench is installed by {providers}: pip uninstall the others, then "
+        "pip install -e . (make test does it when pyproject.toml changes)"
+    )
+    dist = distribution(DISTRIBUTION)
+    assert dist.metadata["Name"] == DISTRIBUTION
+    assert dist.version == workbench.__version__, "a stale install: pip install -e ."
+    scripts = {ep.name: ep.value for ep in dist.entry_points if ep.group == "console_scripts"}
+    assert scripts == {"workbench": "workbench.cli:main"}

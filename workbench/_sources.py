@@ -45,9 +45,10 @@ _Import = tuple[str, tuple[str, ...] | None, int]
 
 
 def _kernel_directory() -> Path | None:
-    """The directory of the generated kernels' package, once ``solver._compile`` made it."""
+    """The directory of the generated kernels, once ``solver._compile`` made their package (its
+    ``directory``: the package's ``__path__`` is empty, nothing is imported from there)."""
     package = sys.modules.get(_KERNELS)
-    return Path(package.__path__[0]) if package is not None else None
+    return Path(package.directory) if package is not None else None
 
 
 def _installed(path: Path) -> bool:
@@ -58,14 +59,18 @@ def _installed(path: Path) -> bool:
 
 
 def module_path(name: str) -> Path | None:
-    """The source file of module ``name`` of workbench or of the generated kernels (a package's
-    ``__init__.py``), or of any other imported module with a ``.py`` file; else None."""
+    """The source file of module ``name`` of workbench (a package's ``__init__.py``) or of the
+    generated kernels (a regular ``.py`` file: never a package), or of any other imported module
+    with a ``.py`` file; else None."""
     parts = name.split(".")
-    if parts[0] in (_PACKAGE, _KERNELS):
-        root = _PACKAGE_DIR if parts[0] == _PACKAGE else _kernel_directory()
-        if root is None:
+    if parts[0] == _KERNELS:
+        root = _kernel_directory()
+        if root is None or len(parts) != 2:
             return None
-        base = root.joinpath(*parts[1:])
+        path = root / f"{parts[1]}.py"
+        return path if path.is_file() and not path.is_symlink() else None
+    if parts[0] == _PACKAGE:
+        base = _PACKAGE_DIR.joinpath(*parts[1:])
         if len(parts) > 1 and base.with_suffix(".py").is_file():
             return base.with_suffix(".py")
         init = base / "__init__.py"
@@ -214,5 +219,7 @@ def source_digest(source: str, name: str) -> str:
     for m in sorted(_imports(name, imports, False)):
         if not _followed(m) and _installed(module_path(m)):
             continue
-        h.update(f"\n{m} {code_digest(m)}".encode())
+        # a generated module: the digest in its name (its text is generated, not read back)
+        digest = m.rsplit("_", 1)[-1] if m.startswith(f"{_KERNELS}.") else code_digest(m)
+        h.update(f"\n{m} {digest}".encode())
     return h.hexdigest()[:16]

@@ -172,6 +172,7 @@ def lle_from_equations(
     Parameters
     ----------
     scene : Scene, path or mapping
+        The scene whose model and run are measured (as :func:`workbench.load_scene` takes it).
     cycles, duration : optional
         Measured length, shared among the starts: forcing periods (forced models) or seconds;
         default the scene's.

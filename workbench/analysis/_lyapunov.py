@@ -193,6 +193,7 @@ def lyapunov_spectrum(
     Parameters
     ----------
     scene : Scene, path or mapping
+        The scene whose model and run are measured (as :func:`workbench.load_scene` takes it).
     exponents : int, optional
         How many exponents (1 .. n), largest first.
     cycles, duration : optional

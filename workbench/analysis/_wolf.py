@@ -134,14 +134,15 @@ def wolf_lle(
         dim ``strobe`` and coordinate ``strobe_time`` is a stroboscopic section).
     dt : float, optional
         Sampling step (s) of a plain array; without it, exponents are per sample.
-    dim, delay, evolve, theiler : int, optional
-        Embedding dimension, delay (samples), evolution time (samples), Theiler window
-        (samples: neighbours are at least this far apart in time).
+    dim, delay, evolve : int, optional
+        Embedding dimension, delay (samples), evolution time (samples).
     scale_min, scale_max : float, optional
         Separations (units of x) between which a neighbour is kept.
     max_angle : float
         Largest angle (rad, 0 < max_angle <= pi/2) between a replacement and the evolved
         separation.
+    theiler : int, optional
+        Theiler window (samples: neighbours are at least this far apart in time).
     period : float, optional
         Forcing period (s) for ``lle_per_period`` (default: the series' ``forcing_period``).
     flow : bool, optional

@@ -9,6 +9,15 @@ a work-precision study's ``status`` flags were ``ok`` 0, ``solver_failed`` 1,
 ``terminated`` 1, and ``invalid_parameters`` 6). ``solver_failed`` has no single counterpart
 (it is now one of ``max_steps``, ``step_underflow``, ``non_finite``, ``model_failure``): an
 archive with such a point is refused.
+
+Format 2 differs from format 3 in how the file stores the simulated time (nothing changes in
+memory). CF 1.11 (Sec. 4.4) gives a time coordinate the units ``<unit> since <reference
+instant>``; a simulation has no date. In memory a dataset's times are seconds since t = 0 of
+the run's equations (``units`` "s", ``standard_name`` "time"); on disk (format 3) the same
+numbers carry the units ``s since 1970-01-01 00:00:00`` and the calendar ``standard``: the
+reference instant stands for t = 0 and no date is meant (:func:`encode_time` on writing,
+:func:`decode_time` on reading). A format-2 file wrote them as "s": a reader of format 2 that
+decodes CF times (xarray does by default) would read format 3's times as dates.
 """
 
 from __future__ import annotations
@@ -20,7 +29,15 @@ from workbench._version import FORMAT_VERSION, __version__
 from workbench.archive._integrity import ArchiveError
 from workbench.solver import Status
 
-__all__ = ["stamp_format", "status_flags", "upgrade_archive"]
+__all__ = ["decode_time", "encode_time", "stamp_format", "status_flags", "upgrade_archive"]
+
+#: the reference instant that stands for t = 0 of a run in the units of its time axis on disk
+#: (CF 1.11 requires one; a simulation has no date: none is meant)
+TIME_REFERENCE = "1970-01-01 00:00:00"
+TIME_CALENDAR = "standard"
+#: a simulated time in memory: seconds since t = 0 of the run (workbench.run.TIME_ATTRS)
+_SECONDS = "s"
+_ON_DISK = f"{_SECONDS} since {TIME_REFERENCE}"
 
 #: format 1's status labels and what they are in format 2 (None: no single counterpart)
 FORMAT1_STATUS = {
@@ -42,6 +59,44 @@ def stamp_format(ds: xr.Dataset) -> xr.Dataset:
     ds = ds.copy(deep=False)
     ds.attrs["format_version"] = np.int32(FORMAT_VERSION)
     return ds
+
+
+def encode_time(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` as the file stores it (format 3, module docstring): each variable with
+    ``standard_name`` "time" in seconds since t = 0 gets the units ``s since 1970-01-01
+    00:00:00`` and the calendar ``standard``, its values unchanged (a shallow copy if any did;
+    ``ds`` is left alone)."""
+    names = [n for n, v in ds.variables.items() if _is_simulated_time(v.attrs, _SECONDS)]
+    if not names:
+        return ds
+    ds = ds.copy(deep=False)
+    for name in names:
+        var = ds.variables[name]
+        var.attrs = {**var.attrs, "units": _ON_DISK, "calendar": TIME_CALENDAR}
+    return ds
+
+
+def decode_time(ds: xr.Dataset) -> xr.Dataset:
+    """The inverse of :func:`encode_time`, for a dataset read without decoding CF times: each
+    variable the file stores as a simulated time is seconds since t = 0 again (``units`` "s",
+    no calendar). Other variables are left as they are."""
+    names = [
+        n
+        for n, v in ds.variables.items()
+        if _is_simulated_time(v.attrs, _ON_DISK) and v.attrs.get("calendar") == TIME_CALENDAR
+    ]
+    if not names:
+        return ds
+    ds = ds.copy(deep=False)
+    for name in names:
+        var = ds.variables[name]
+        attrs = {k: v for k, v in var.attrs.items() if k != "calendar"}
+        var.attrs = {**attrs, "units": _SECONDS}
+    return ds
+
+
+def _is_simulated_time(attrs: dict, units: str) -> bool:
+    return attrs.get("standard_name") == "time" and attrs.get("units") == units
 
 
 def _written_by_workbench(ds: xr.Dataset) -> bool:
@@ -82,7 +137,13 @@ def upgrade_archive(ds: xr.Dataset, path: str) -> xr.Dataset:
         )
     if found == FORMAT_VERSION:
         return ds
-    return _upgrade_from_1(ds, path)
+    if found == 1:
+        ds = _upgrade_from_1(ds, path)
+    # format 2 -> 3: the simulated time is stored otherwise, read the same (module docstring)
+    ds = ds.copy(deep=False)
+    ds.attrs["format_version"] = np.int32(FORMAT_VERSION)
+    ds.attrs["upgraded_from_format"] = np.int32(found)
+    return ds
 
 
 def _upgrade_from_1(ds: xr.Dataset, path: str) -> xr.Dataset:
@@ -123,8 +184,6 @@ def _upgrade_from_1(ds: xr.Dataset, path: str) -> xr.Dataset:
             "workbench.Status (terminated_early -> terminated)"
         )
         ds[name] = (var.dims, new_values.astype(var.dtype), attrs)
-    ds.attrs["format_version"] = np.int32(FORMAT_VERSION)
-    ds.attrs["upgraded_from_format"] = np.int32(1)
     return ds
 
 

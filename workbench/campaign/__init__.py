@@ -92,7 +92,9 @@ stores only what the scene records: ``record.samples_per_period = 1`` keeps stro
 
 The pieces another package runs its own tasks with (:mod:`workbench.continuation`'s continued
 sweeps): :class:`Store`, :func:`execute` (with its own ``runner``), :func:`block_dataset`
-(:func:`run_outcome`, :func:`invalid_outcome`) and :func:`assemble_blocks`.
+(:func:`run_outcome`, :func:`invalid_outcome`), :func:`assemble_blocks`, and
+:func:`model_source` / :func:`task_scene` (a task names the module of the user's model, which its
+worker imports before it reads the task's scene).
 
 Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--scheduler ADDRESS]
 [--chunk K] [--restart]`` and ``workbench bifurcation sweep.nc --var x [-o fig.png]``.
@@ -104,7 +106,9 @@ from workbench.campaign._block import (
     block_summary,
     failed,
     invalid_outcome,
+    model_source,
     run_outcome,
+    task_scene,
 )
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
@@ -138,9 +142,11 @@ __all__ = [
     "invalid_outcome",
     "jobqueue_cluster",
     "local_cluster",
+    "model_source",
     "parameter_attrs",
     "run_campaign",
     "run_outcome",
+    "task_scene",
     "store_paths",
     "summary",
     "warm_kernel",

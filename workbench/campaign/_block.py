@@ -7,7 +7,6 @@ file atomically and returns a small summary to the client.
 
 from __future__ import annotations
 
-import importlib
 import os
 import signal
 import sys
@@ -27,6 +26,7 @@ from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
+from workbench.scene._modules import import_model_module
 from workbench.solver import Status
 
 __all__ = [
@@ -39,8 +39,10 @@ __all__ = [
     "block_summary",
     "failed",
     "invalid_outcome",
+    "model_source",
     "run_block",
     "run_outcome",
+    "task_scene",
     "worker_start",
 ]
 
@@ -87,6 +89,7 @@ _TASKS_IN_PROCESS = 0
 # per block); a larger one the client reads from the file.
 RETURN_LIMIT = 32 * 2**20
 PRELOAD_ENV = "WORKBENCH_CAMPAIGN_PRELOAD"  # scene TOML whose kernel the fork server loads
+MODEL_ENV = "WORKBENCH_CAMPAIGN_MODEL"  # its model_source(), JSON: imported there first
 
 
 @dataclass(frozen=True)
@@ -105,8 +108,8 @@ class BlockTask:
     campaign_id: str
     block: int
     max_memory: float | str | None = None  # the memory limit of one point's records
-    model_module: str = ""
-    model_directory: str = ""  # where the module's file lies, for a worker without it on sys.path
+    model_module: str = ""  # model_source(): the module the user named, imported in the worker
+    model_directory: str = ""  # where it lies, for a worker without it on its import path
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None
 
 
@@ -183,17 +186,30 @@ def _point(scene: Scene, params: dict[str, float], max_memory=None, per_point=No
     return run_outcome(ds, time.perf_counter() - t0) | {"measured": measured}
 
 
-def _import_model(module: str, directory: str) -> None:
-    """Import (and so register) a user's model module in this worker: by name, and if the
-    worker's ``sys.path`` lacks it (a fork server started before the caller extended its
-    path), from the directory the caller imported it from."""
-    try:
-        importlib.import_module(module)
-    except ModuleNotFoundError as exc:
-        if not directory or exc.name != module.split(".")[0]:
-            raise
-        sys.path.insert(0, directory)
-        importlib.import_module(module)
+def model_source(scene: Scene) -> tuple[str, str]:
+    """The module a worker imports to know the model of ``scene`` and the directory its
+    top-level file or package lies in: the scene's ``[model] module`` (the user named it), else
+    the module that defines a model registered outside workbench; ('', '') for a model of
+    workbench."""
+    module = scene.model_module or type(get_model(scene.model)).__module__
+    if module.split(".")[0] == "workbench":
+        return "", ""
+    file = getattr(sys.modules.get(module), "__file__", None)
+    if not file:
+        return module, ""
+    depth = module.count(".") + (Path(file).name == "__init__.py")
+    return module, str(Path(file).resolve().parents[depth])
+
+
+def task_scene(scene_toml: str, model_module: str = "", model_directory: str = "") -> Scene:
+    """The scene of a task, in a worker: the TOML and the model's module come from the client,
+    which took them from the user's scene (never from a manifest or an archive). The module
+    (:func:`model_source`) is imported first, by name, else by file path from
+    ``model_directory`` (a worker whose path lacks it; the directory is not put on
+    ``sys.path``), and so trusted for the scene's ``[model] module``."""
+    if model_module:
+        import_model_module(model_module, [Path(model_directory)] if model_directory else [])
+    return scene_from_toml(scene_toml)
 
 
 def run_block(task: BlockTask) -> dict:
@@ -209,9 +225,7 @@ def run_block(task: BlockTask) -> dict:
     _TASKS_IN_PROCESS += 1
     started = time.time()
     wall0 = time.perf_counter()
-    if task.model_module:
-        _import_model(task.model_module, task.model_directory)
-    scene = scene_from_toml(task.scene_toml)
+    scene = task_scene(task.scene_toml, task.model_module, task.model_directory)
     runs = [
         _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory, task.per_point)
         for v in task.values

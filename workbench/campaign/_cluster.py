@@ -24,6 +24,7 @@ from collections.abc import Iterator
 
 from distributed.diagnostics.plugin import WorkerPlugin
 
+from workbench.campaign._block import task_scene
 from workbench.campaign._warm import kernel_cached, load_kernel, warm_io
 from workbench.scene import scene_from_toml
 
@@ -32,18 +33,21 @@ __all__ = ["WorkerReady", "ready_workers"]
 _log = logging.getLogger(__name__)
 
 
-def _ready(scene_toml: str) -> None:
-    """Warm the writers and load the kernel of ``scene_toml``; failures are logged only (the
+def _ready(scene_toml: str, model_module: str = "", model_directory: str = "") -> None:
+    """Warm the writers and load the kernel of ``scene_toml`` (the module of a user's model,
+    ``model_module`` from ``model_directory``, imported first: see
+    :func:`workbench.campaign.task_scene`); failures are logged only (the
     first block then loads the kernel itself, and reports any real error). A kernel that is
     not in the cache yet is compiled by one worker at a time (a lock file in the cache
     directory): the first compiles it, the others then find it there and only load it."""
     try:
         warm_io()
-        if kernel_cached(scene_from_toml(scene_toml)) is False:
+        scene = task_scene(scene_toml, model_module, model_directory)
+        if kernel_cached(scene) is False:
             with _compile_lock():
-                load_kernel(scene_toml)
+                load_kernel(scene_toml, model_module, model_directory)
         else:
-            load_kernel(scene_toml)
+            load_kernel(scene_toml, model_module, model_directory)
     except Exception:  # pragma: no cover - best effort, like the fork server's preload
         _log.warning("workbench: preloading the campaign's kernel failed", exc_info=True)
 
@@ -79,12 +83,13 @@ class WorkerReady(WorkerPlugin):
 
     idempotent = True  # the same kernel registered again: nothing to do
 
-    def __init__(self, scene_toml: str) -> None:
+    def __init__(self, scene_toml: str, model_module: str = "", model_directory: str = "") -> None:
         self.scene_toml = scene_toml
+        self.model = (model_module, model_directory)
 
     async def setup(self, worker) -> None:
         # in a thread, so that the worker's event loop (heartbeats) goes on meanwhile
-        await _ready_async(self.scene_toml)
+        await _ready_async(self.scene_toml, *self.model)
 
 
 def plugin_name(scene_toml: str) -> str:
@@ -101,13 +106,17 @@ def plugin_name(scene_toml: str) -> str:
     return f"workbench-kernel-{hooks}-{scene.solver['method']}-{code_of(scene)[:16]}"
 
 
-async def _ready_async(scene_toml: str) -> None:
-    await asyncio.get_running_loop().run_in_executor(None, _ready, scene_toml)
+async def _ready_async(scene_toml: str, *model: str) -> None:
+    await asyncio.get_running_loop().run_in_executor(None, _ready, scene_toml, *model)
 
 
-def ready_workers(client, scene_toml: str) -> str:
+def ready_workers(
+    client, scene_toml: str, model_module: str = "", model_directory: str = ""
+) -> str:
     """Register the :class:`WorkerReady` plugin of a campaign's kernel on ``client``'s cluster
-    (waits until every worker has loaded it, all at once); returns the plugin's name."""
+    (waits until every worker has loaded it, all at once); returns the plugin's name.
+    ``model_module``, ``model_directory``: the campaign's
+    :func:`workbench.campaign.model_source`."""
     name = plugin_name(scene_toml)
-    client.register_plugin(WorkerReady(scene_toml), name=name)
+    client.register_plugin(WorkerReady(scene_toml, model_module, model_directory), name=name)
     return name

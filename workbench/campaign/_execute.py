@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import json
 import os
 import signal
 import sys
@@ -29,7 +30,7 @@ import threading
 import uuid
 from collections.abc import Callable, Iterator
 
-from workbench.campaign._block import PRELOAD_ENV, BlockTask, run_block, worker_start
+from workbench.campaign._block import MODEL_ENV, PRELOAD_ENV, BlockTask, run_block, worker_start
 from workbench.campaign._lifeline import PARENT_ENV
 from workbench.campaign._warm import kernel_cached, load_kernel
 from workbench.scene import scene_from_toml
@@ -97,6 +98,8 @@ def execute(
         The first error a task raised, after the tasks in flight were stopped.
     """
     first = _first_point(tasks[0])
+    # the module of a user's model, which each worker imports before it reads the scene
+    model = (getattr(tasks[0], "model_module", ""), getattr(tasks[0], "model_directory", ""))
     if client is not None:
         if announce and getattr(client, "dashboard_link", None):
             print(f"campaign: dask dashboard at {client.dashboard_link}", file=sys.stderr)
@@ -104,7 +107,7 @@ def execute(
 
         from workbench.campaign._cluster import ready_workers
 
-        ready_workers(client, first)  # every worker imports and loads the kernel once
+        ready_workers(client, first, *model)  # every worker imports and loads the kernel once
         token = uuid.uuid4().hex[:8]
 
         def submit(t: BlockTask):
@@ -115,7 +118,7 @@ def execute(
     if kernel_cached(scene_from_toml(first)) is False:
         # Compiled here, where Ctrl-C stops it at once, not in the fork server's start.
         load_kernel(first)
-    with _local_pool(workers, first) as pool:
+    with _local_pool(workers, first, model) as pool:
 
         def submit_local(t: BlockTask):
             with _uninterrupted_start():
@@ -191,13 +194,15 @@ def _first_point(task: BlockTask) -> str:
 
 
 @contextlib.contextmanager
-def _local_pool(workers: int, preload: str) -> Iterator[concurrent.futures.ProcessPoolExecutor]:
+def _local_pool(
+    workers: int, preload: str, model: tuple[str, str] = ("", "")
+) -> Iterator[concurrent.futures.ProcessPoolExecutor]:
     """A process pool whose workers stop with the campaign: on an error or Ctrl-C the blocks in
     flight are stopped at once (each worker reported its pid when it started), and if this
     process dies, they die with it (``_lifeline``)."""
     from concurrent.futures.process import BrokenProcessPool
 
-    ctx = _mp_context(preload)
+    ctx = _mp_context(preload, model)
     with _uninterrupted_start():  # the queue's lock starts multiprocessing's resource tracker
         pids = ctx.SimpleQueue()
     pool = concurrent.futures.ProcessPoolExecutor(
@@ -223,10 +228,11 @@ def _local_pool(workers: int, preload: str) -> Iterator[concurrent.futures.Proce
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         os.environ.pop(PRELOAD_ENV, None)
+        os.environ.pop(MODEL_ENV, None)
         os.environ.pop(PARENT_ENV, None)
 
 
-def _mp_context(preload: str):
+def _mp_context(preload: str, model: tuple[str, str] = ("", "")):
     """The multiprocessing context of the local pool: dask's ``multiprocessing.context`` if set,
     else a fork server (else spawn). The fork server imports workbench once and, when this call
     starts it, loads the campaign's compiled kernel once (see ``_preload``): workers forked from
@@ -243,5 +249,6 @@ def _mp_context(preload: str):
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["workbench.campaign._block", "workbench.campaign._preload"])
     os.environ[PRELOAD_ENV] = preload  # read by the server if this run starts it
+    os.environ[MODEL_ENV] = json.dumps(list(model))  # the module it imports first
     os.environ[PARENT_ENV] = str(os.getpid())  # the server dies with this process
     return ctx

@@ -56,10 +56,12 @@ class SweepGrid:
 
     @property
     def shape(self) -> tuple[int, ...]:
+        """The number of values of each swept dim, in the order of :attr:`dims`."""
         return tuple(len(v) for v in self.values)
 
     @property
     def size(self) -> int:
+        """The number of points of the grid."""
         return math.prod(self.shape)
 
     def point(self, flat: int) -> dict[str, float]:
@@ -74,6 +76,7 @@ class SweepGrid:
         return [range(s, min(s + chunk, self.size)) for s in range(0, self.size, chunk)]
 
     def as_dict(self) -> dict[str, list[float]]:
+        """The grid as ``{dim: values}`` (JSON-ready, as the manifest stores it)."""
         return {d: list(v) for d, v in zip(self.dims, self.values, strict=True)}
 
 

@@ -34,8 +34,8 @@ with
   the workers, instead of at the campaign's first block.
 
 Nothing is submitted until ``cluster.scale(jobs=...)``. Needs the ``cluster`` extra
-(``pip install workbench[cluster]``: dask-jobqueue, and cryptography for the temporary
-credentials). See docs/cluster.md.
+(``pip install 'clearance-workbench[cluster]'``: dask-jobqueue, and cryptography for the
+temporary credentials). See docs/cluster.md.
 """
 
 from __future__ import annotations
@@ -123,7 +123,7 @@ def cluster_security(security=None):
             except ImportError as exc:
                 raise ImportError(
                     "a cluster's TLS credentials are made with cryptography: pip install "
-                    "'workbench[cluster]' (or cryptography), or name certificates in the dask "
+                    "'clearance-workbench[cluster]' (or cryptography), or name certificates in the dask "
                     "config (distributed.comm.tls.*)"
                 ) from exc
         security, where = Security(), "the dask config"
@@ -471,7 +471,7 @@ def _import_dask_jobqueue():
         import dask_jobqueue
     except ImportError as exc:
         raise ImportError(
-            "jobqueue_cluster needs dask-jobqueue: pip install 'workbench[cluster]' (or "
+            "jobqueue_cluster needs dask-jobqueue: pip install 'clearance-workbench[cluster]' (or "
             "dask-jobqueue)"
         ) from exc
     finally:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 import os
 import shutil
-import sys
 import time
 import warnings
 from collections.abc import Callable
@@ -18,7 +17,7 @@ import xarray as xr
 
 from workbench.archive import DiskFull, WriteFailed, open_run, save_run
 from workbench.campaign._assemble import assemble
-from workbench.campaign._block import BlockTask, failed
+from workbench.campaign._block import BlockTask, failed, model_source
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
 from workbench.campaign._grid import (
@@ -32,7 +31,6 @@ from workbench.campaign._grid import (
 )
 from workbench.campaign._schedule import longest_first, partition
 from workbench.campaign._store import Store
-from workbench.models import get_model
 from workbench.run import format_bytes
 from workbench.scene import Scene, SceneSource, load_scene
 
@@ -256,7 +254,7 @@ def _run_locked(
     blocks = st.blocks(manifest, grid)
     code = code_of(scene, *modules_of(per_point))
     done = st.verified_blocks(manifest, blocks, code)
-    model_module, model_directory = _model_module(scene)
+    model_module, model_directory = model_source(scene)
     tasks = [
         BlockTask(
             scene_toml=scene.to_toml(),
@@ -413,19 +411,6 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
         ),
         stacklevel=3,
     )
-
-
-def _model_module(scene: Scene) -> tuple[str, str]:
-    """The module that defines a user's model (a worker imports it to know the model) and the
-    directory it lies under, or ('', '') for a model of workbench."""
-    module = type(get_model(scene.model)).__module__
-    if module.split(".")[0] == "workbench":
-        return "", ""
-    file = getattr(sys.modules.get(module), "__file__", None)
-    if not file:
-        return module, ""
-    depth = module.count(".") + (Path(file).name == "__init__.py")
-    return module, str(Path(file).resolve().parents[depth])
 
 
 def _bar(total: int, initial: int):

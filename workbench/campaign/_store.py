@@ -28,9 +28,11 @@ import contextlib
 import json
 import os
 import re
+import tomllib
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from workbench.archive import (
     check_output_file,
@@ -68,10 +70,13 @@ class Store:
         self.manifest_path = self.blocks_dir / "manifest.json"
 
     def block_path(self, index: int) -> Path:
+        """The file of block ``index`` in the store's blocks directory."""
         return self.blocks_dir / f"block-{index:05d}.nc"
 
     # manifest
     def read_manifest(self) -> dict | None:
+        """The store's manifest, or None for a new store (CampaignError for block files
+        without a manifest, or a manifest that cannot be read or has another format)."""
         if not self.manifest_path.is_file():
             if self.blocks_dir.is_dir() and any(
                 _BLOCK_RE.match(p.name) for p in self.blocks_dir.iterdir()
@@ -129,12 +134,24 @@ class Store:
         return blocks
 
     def save_manifest(self, data: dict) -> dict:
+        """Write ``data`` as the store's manifest, atomically, and return it."""
         self.blocks_dir.mkdir(parents=True, exist_ok=True)
         write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
         return data
 
     def check_scene(self, stored_toml: str, scene: Scene, where: str) -> None:
-        """CampaignError naming the differences if ``stored_toml`` is not ``scene``."""
+        """CampaignError naming the differences if ``stored_toml`` is not ``scene``. The stored
+        scene is data: a ``[model] module`` it names other than the given scene's is not
+        imported but named as the difference (only the user's scene authorises a module)."""
+        module = _stored_module(stored_toml)
+        if module is not None and module != scene.model_module:
+            given = repr(scene.model_module) if scene.model_module else "none"
+            raise CampaignError(
+                f"{where} holds a campaign of a different scene: it names the model module "
+                f"{module!r} (given: {given}), which is not imported from stored data; to "
+                f"resume it, give the scene file that names model.module = {module!r}, or pass "
+                "restart=True (CLI --restart) to start afresh, or choose another output path"
+            )
         try:
             stored = scene_from_toml(stored_toml)
         except SceneError as exc:
@@ -254,3 +271,12 @@ class Store:
         finally:
             with contextlib.suppress(OSError):
                 self.blocks_dir.rmdir()  # only if empty
+
+
+def _stored_module(stored_toml: str) -> Any:
+    """The ``[model] module`` a stored scene names (None if none, or not a scene's TOML)."""
+    try:
+        model = tomllib.loads(stored_toml).get("model")
+    except (tomllib.TOMLDecodeError, TypeError):
+        return None
+    return model.get("module") if isinstance(model, dict) else None

@@ -6,8 +6,9 @@ from __future__ import annotations
 import os
 import tempfile
 
+from workbench.campaign._block import task_scene
 from workbench.run import derive, integrate, prepare, provenance, to_dataset
-from workbench.scene import Scene, scene_from_toml
+from workbench.scene import Scene
 
 __all__ = ["kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
 
@@ -15,8 +16,8 @@ __all__ = ["kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
 def kernel_cached(scene: Scene) -> bool | None:
     """Whether numba's on-disk cache holds the compiled kernel of a scene's model (None when it
     cannot tell: a scipy method, a model without states, a scene that does not prepare, or a
-    numba that keeps its cache elsewhere). Reads the index of the kernel's main entry point,
-    as numba itself does before it compiles."""
+    numba that keeps its cache elsewhere; a cache that is refused raises its CacheError). Reads
+    the index of the kernel's main entry point, as numba itself does before it compiles."""
     if scene.solver["method"].startswith("scipy:"):
         return None
     try:
@@ -25,20 +26,26 @@ def kernel_cached(scene: Scene) -> bool | None:
         return None
     if problem.y0.size == 0:
         return None
+    from workbench._cache import CacheError
+
     try:
         from workbench.solver._compile import kernel_for
 
         index = kernel_for(problem.hooks).advance._cache._cache_file._load_index()
+    except CacheError:  # a refused cache: said before anything runs
+        raise
     except Exception:  # pragma: no cover - numba internals changed
         return None
     return bool(index)
 
 
-def load_kernel(scene_toml: str) -> None:
+def load_kernel(scene_toml: str, model_module: str = "", model_directory: str = "") -> None:
     """The provenance's package versions, then every compiled function a point of the scene
     runs (from the cache, or compiled into it): the kernel of the scene's model and the model's
-    derived outputs, over an empty interval (one record at the start: nothing is integrated)."""
-    prepared = prepare(scene_from_toml(scene_toml))
+    derived outputs, over an empty interval (one record at the start: nothing is integrated).
+    ``model_module``, ``model_directory``: the campaign's :func:`model_source`, imported first
+    (see :func:`task_scene`)."""
+    prepared = prepare(task_scene(scene_toml, model_module, model_directory))
     provenance(prepared.scene)  # the package versions: importlib.metadata look-ups, once
     if prepared.scene.solver["method"].startswith("scipy:"):
         return

@@ -72,6 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     line on stderr that names what is wrong; warnings are one line each."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    from workbench._cache import CacheError
     from workbench.archive import ArchiveError
     from workbench.campaign import CampaignError
     from workbench.scene import SceneError
@@ -80,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with signals_as_interrupts(), one_line_warnings(args.command):
             return args.func(args)
-    except (SceneError, SolverError, CampaignError, ArchiveError, UsageError) as exc:
+    except (SceneError, SolverError, CampaignError, ArchiveError, CacheError, UsageError) as exc:
         print(f"workbench {args.command}: error: {exc}", file=sys.stderr)
         return exit_code(exc)
     except FileNotFoundError as exc:

@@ -115,6 +115,9 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
             f"{args.run!r} is a campaign; 'workbench analyse' takes one run (written by "
             "'workbench run')"
         )
+    scene = None
+    if args.equations:  # the stored scene is data: it imports only a module trusted here
+        scene = scene_from_toml(ds.attrs["scene"], trust_modules=args.trust_module or ())
     da = _series(ds, args.var, args.select or [])
     label = args.var + "".join(f"[{s}]" for s in args.select or [])
     da, failure = _before_failure(ds, da, args.run)
@@ -182,7 +185,7 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
     if args.equations:
         with warnings.catch_warnings():  # its failed conditions are printed below
             warnings.simplefilter("ignore", analysis.ConvergenceWarning)
-            bench = analysis.lle_from_equations(scene_from_toml(ds.attrs["scene"]))
+            bench = analysis.lle_from_equations(scene)
         equations = float(bench.lle)
         verdict = "converged" if bool(bench.converged) else "not converged"
         print(
@@ -248,6 +251,13 @@ def register_cli(sub) -> None:
         "--equations",
         action="store_true",
         help="also compute the LLE from the equations of the stored scene (slow)",
+    )
+    p.add_argument(
+        "--trust-module",
+        action="append",
+        metavar="NAME",
+        help="with --equations: let the stored scene import its [model] module NAME (it runs "
+        "that module's code; from the import path or the working directory); repeatable",
     )
     p.add_argument("-o", "--output", default=".", metavar="DIR", help="directory for the PNGs")
     p.add_argument("--overwrite", action="store_true", help="replace existing figures")

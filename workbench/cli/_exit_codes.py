@@ -13,8 +13,8 @@ code  class                       outcomes
                                   file, an output that exists (without ``--overwrite``), is a
                                   device, FIFO or socket, or cannot be written (checked before
                                   the work), a write that failed after it (the result kept
-                                  elsewhere, and named), a bad argument; a campaign point with
-                                  ``invalid_parameters``
+                                  elsewhere, and named), a bad argument, a refused kernel cache;
+                                  a campaign point with ``invalid_parameters``
 3     solver limit                ``max_steps`` (raise ``solver.max_steps``)
 4     integration failure         ``step_underflow``, ``non_finite``
 5     model failure               ``model_failure`` (a state outside the model's domain)
@@ -29,6 +29,7 @@ runs or settings, and says how many failed.
 
 from __future__ import annotations
 
+from workbench._cache import CacheError
 from workbench.archive import ArchiveError
 from workbench.campaign import CampaignError
 from workbench.scene import SceneError
@@ -61,7 +62,7 @@ def exit_code(outcome: Status | BaseException) -> int:
         return _BY_STATUS[outcome.status]
     if isinstance(outcome, KeyboardInterrupt):  # Ctrl-C, or a Terminated signal
         return 128 + getattr(outcome, "signum", 2)
-    if isinstance(outcome, SceneError | CampaignError | ArchiveError | UsageError):
+    if isinstance(outcome, SceneError | CampaignError | ArchiveError | CacheError | UsageError):
         return EXIT_INVALID
     if isinstance(outcome, FileNotFoundError):
         return EXIT_INVALID

@@ -419,31 +419,68 @@ def _on_bound(smap, A: OrbitPoint, B: OrbitPoint, bound: float, cfg: Settings) -
 
 
 #: how far past a grazing (a fraction of the parameter's range) the orbits on its other side
-#: are sought when the branch cannot be stepped through it
+#: are sought at least when the branch cannot be stepped through it
 BEYOND = 1e-5
+#: ... and at least where the grazing margin, extrapolated along the branch, lies this many
+#: confirmation tolerances (MARGIN_TOLERANCE of its range) on the other side: a grazing is
+#: confirmed anywhere within one tolerance of zero, on either side, so a fixed short distance
+#: can leave the probe short of the grazing itself, where the branch's own orbit still exists
+PAST_MARGINS = 10.0
+#: ... but never further than this fraction of the parameter's range
+FARTHEST = 1e-2
 #: transitions at a grazing (``transition`` of a grazing bifurcation): the orbit crosses it with
 #: the new contact (persistent); the branch turns back at it (a nonsmooth fold, di Bernardo et
-#: al. 2008, Sec. 3.5); no orbit of the branch's period beyond it, the motion there of another
-#: period (a border collision, with the period in the text) or of none up to 16
+#: al. 2008, Sec. 3.5); no orbit of the branch's period found beyond it, the motion there of
+#: another period (a border collision, with the period in the text) or of none up to 16
 TRANSITIONS = ("persistent", "nonsmooth_fold", "border_collision", "not_typed")
+#: strobe samples per look at the motion, and looks at most after the transient
+ATTRACTOR_SAMPLES = 64
+ATTRACTOR_LOOKS = 4
+#: Newton's tolerance (scaled) on the orbit a repeating stretch of the motion approaches, and
+#: how close (scaled) two of its strobe states must be to count as one (its least period)
+ATTRACTOR_TOLERANCE = 1e-8
+SAME_STATE = 1e-6
 
 
 def _attractor_period(smap: StrobeMap, y, aux, p: float, cycles: int = 200) -> int:
-    """The period (in forcing periods, 0: none up to 16) of the motion from (y, aux) at ``p``
-    after ``cycles`` forcing periods, from its next 64 strobe samples."""
+    """The period (in forcing periods; 0: none found up to 16) of the motion from (y, aux) at
+    ``p``: after ``cycles`` forcing periods, the next :data:`ATTRACTOR_SAMPLES` strobe samples
+    are looked at, and again up to :data:`ATTRACTOR_LOOKS` times. Where they repeat with some
+    period k (:func:`strobe_period`), Newton's method on ``P^k`` from the last sample finds the
+    orbit they approach; its least period is the answer if that orbit is stable, else the
+    motion was passing an unstable orbit and is looked at again. A repeating stretch alone
+    is not the attractor: near a grazing the motion can settle slowly, e.g. onto an orbit
+    whose multiplier is near -1, whose strobe samples then repeat every two of its periods
+    long before they repeat every one."""
     from workbench.continuation._indicators import strobe_period
 
     one = smap.with_periods(1)
+    s = one.scale()
     y, aux = np.array(y, float), np.array(aux, float)
     for _ in range(cycles):
         v = one(y, aux, p, tangent=False)
         y, aux = v.y1, v.aux1
-    samples = []
-    for _ in range(64):
-        v = one(y, aux, p, tangent=False)
-        y, aux = v.y1, v.aux1
-        samples.append(y / one.scale())
-    return strobe_period(np.array(samples))
+    for _ in range(ATTRACTOR_LOOKS):
+        samples = []
+        for _ in range(ATTRACTOR_SAMPLES):
+            v = one(y, aux, p, tangent=False)
+            y, aux = v.y1, v.aux1
+            samples.append(y / s)
+        k = strobe_period(np.array(samples))
+        if k == 0:
+            continue
+        try:
+            orbit = orbit_at(
+                one.with_periods(k), y, aux, p, tolerance=ATTRACTOR_TOLERANCE, max_iterations=12
+            )
+        except NewtonFailure:
+            continue
+        if np.max(np.abs(orbit.multipliers)) > 1.0:
+            continue
+        states = one.with_periods(k).orbit_samples(orbit.y, orbit.aux, p) / s
+        moved = [np.max(np.abs(np.roll(states, -d, axis=0) - states)) for d in range(1, k + 1)]
+        return next(d for d in range(1, k + 1) if k % d == 0 and moved[d - 1] <= SAME_STATE)
+    return 0
 
 
 def _beyond_grazing(
@@ -451,21 +488,52 @@ def _beyond_grazing(
 ) -> tuple[str, OrbitPoint | None, str]:
     """What lies past the grazing ``G``, reached from ``A``, where the branch cannot be stepped
     through it: the orbit a little further on with the new contact (``persistent``: returned,
-    for the branch to go on from), or the same a little back (``nonsmooth_fold``: the branch
-    turns at the grazing), or neither (``border_collision``: the motion beyond has another
-    period, said in the text, or none); Newton from the grazing orbit, continued along the
-    branch's tangent into the contact."""
+    for the branch to go on from; where it is unstable, the text adds the period of the motion
+    there), or the same a little back (``nonsmooth_fold``: the branch turns at the grazing),
+    or neither (``border_collision``: the motion beyond has another period, said in the text
+    with the parameter value, or none); Newton from the grazing orbit, continued along the
+    branch's tangent into the contact.
+
+    "Further on" is the way the branch went at A (its tangent). "A little" is at least BEYOND
+    of the parameter's range, and at least where the grazing margin, extrapolated from A
+    through G, lies PAST_MARGINS confirmation tolerances on the other side; where A lies past
+    G already, twice as far past as A; at most FARTHEST of the range."""
     lo, hi = cfg.bounds
-    ahead = math.copysign(1.0, G.p - A.p)
+    # the branch's way: A's tangent, not G - A (the steps may have passed the grazing before
+    # they collapsed, and the grazing was then located behind A)
+    tau_p = float(A.tau[-1]) if A.tau is not None else 0.0
+    ahead = math.copysign(1.0, tau_p if tau_p != 0.0 else G.p - A.p)
     counts = sequence_of(smap, A).counts
     s = smap.scale()
     n = G.y.size
+
+    def distance() -> float:
+        least = BEYOND * cfg.pscale
+        if (G.p - A.p) * ahead <= 0.0:  # A lies past G: at least as far past as A
+            return min(max(least, 2.0 * abs(G.p - A.p)), FARTHEST * cfg.pscale)
+        seq = sequence_of(smap, G)
+        k, phase, m_g = seq.smallest_margin()
+        if k < 0:
+            return least
+        kind = float(seq.extrema[k][np.argmin(np.abs(seq.extrema[k][:, 1] - m_g)), 2])
+        m_a = _extremum_value(smap, k, phase, kind)(A)
+        if not (np.isfinite(m_a) and np.isfinite(m_g)) or m_a == m_g:
+            return least
+        target = -math.copysign(PAST_MARGINS * MARGIN_TOLERANCE * float(seq.scale[k]), m_a)
+        need = abs((target - m_g) * (G.p - A.p) / (m_g - m_a))
+        return min(max(least, need), FARTHEST * cfg.pscale)
+
+    def motion(p: float) -> str:
+        k = _attractor_period(smap, G.y, G.aux, p)
+        return f"period {k} at {p:.10g}" if k else f"no period up to 16 at {p:.10g}"
+
+    past = distance()
     for side in (ahead, -ahead):
-        p = G.p + side * BEYOND * cfg.pscale
+        p = G.p + side * past
         if not lo <= p <= hi:
             continue
         # the state a little past the grazing along the branch's tangent: into the contact
-        y = G.y + s * (BEYOND * G.tau[:n] / max(abs(G.tau[-1]), 1e-3))
+        y = G.y + s * (past / cfg.pscale * G.tau[:n] / max(abs(G.tau[-1]), 1e-3))
         try:
             pt = orbit_at(
                 smap, y, G.aux, p, tolerance=cfg.tolerance, max_iterations=START_ITERATIONS
@@ -474,15 +542,22 @@ def _beyond_grazing(
             continue
         if sequence_of(smap, pt).counts != counts:  # the new contact: the other side's orbit
             kind = "persistent" if side == ahead else "nonsmooth_fold"
-            return kind, pt, f"an orbit with the new contact at {p:.10g}"
-    p = G.p + ahead * BEYOND * cfg.pscale
+            text = f"an orbit with the new contact at {p:.10g}"
+            mu = float(np.max(np.abs(pt.multipliers)))
+            if side == ahead and mu > 1.0:
+                text += f", unstable (|multiplier| {mu:.3g})"
+                try:
+                    text += f"; {motion(p)}"
+                except Exception as exc:  # noqa: BLE001 - the reason is reported
+                    text += f"; the motion there failed ({exc})"
+            return kind, pt, text
+    p = G.p + ahead * past
     if lo <= p <= hi:
         try:
-            k = _attractor_period(smap, G.y, G.aux, p)
+            what = motion(p)
         except Exception as exc:  # noqa: BLE001 - the reason is reported
             return "not_typed", None, f"the motion past it failed ({exc})"
-        what = f"period {k}" if k else "no period up to 16"
-        return "border_collision", None, f"no period-{smap.periods} orbit past it; {what} there"
+        return "border_collision", None, f"no period-{smap.periods} orbit found past it; {what}"
     return "not_typed", None, "its other side lies outside the parameter's range"
 
 

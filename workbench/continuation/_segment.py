@@ -26,10 +26,11 @@ from workbench.campaign import (
     code_of,
     invalid_outcome,
     run_outcome,
+    task_scene,
 )
 from workbench.models import get_model
 from workbench.run import derive, integrate, prepare, to_dataset
-from workbench.scene import Scene, SceneError, scene_from_toml
+from workbench.scene import Scene, SceneError
 from workbench.solver import Status
 
 __all__ = ["SEED_ATTRS", "SegmentTask", "continue_point", "run_segment", "segment_code"]
@@ -63,6 +64,8 @@ class SegmentTask:
     block: int
     seed_state: tuple[float, ...] | None = None  # chained: the state to start from
     seed_aux: tuple[float, ...] | None = None
+    model_module: str = ""  # workbench.campaign.model_source: imported in the worker first
+    model_directory: str = ""
 
 
 def _settled(scene: Scene, c) -> Scene:
@@ -144,7 +147,7 @@ def run_segment(task: SegmentTask) -> dict:
     """Run a segment (in a worker) and write its block file (atomically); the summary has the
     fields of :func:`workbench.campaign._block.run_block`'s."""
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    scene = scene_from_toml(task.scene_toml)
+    scene = task_scene(task.scene_toml, task.model_module, task.model_directory)
     carried = None
     if task.seed_state is not None:
         carried = (np.array(task.seed_state), np.array(task.seed_aux or ()))

@@ -18,6 +18,7 @@ from workbench.campaign import (
     campaign_id,
     execute,
     expand_sweep,
+    model_source,
 )
 from workbench.continuation._plan import BRUTE, CHAINED, Plan, SegmentSpec
 from workbench.continuation._seams import attractor_distance, cloud, line_scale
@@ -195,6 +196,7 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
 def _task(scene: Scene, plan: Plan, st: Store, cid: str, seg: SegmentSpec, kind: int, seed=None):
     values = tuple(tuple(plan.grid.point(f).values()) for f in seg.flat)
     block = plan.block(kind, seg)
+    model_module, model_directory = model_source(scene)
     return SegmentTask(
         scene_toml=scene.to_toml(),
         dims=plan.grid.dims,
@@ -206,6 +208,8 @@ def _task(scene: Scene, plan: Plan, st: Store, cid: str, seg: SegmentSpec, kind:
         block=block,
         seed_state=None if seed is None else tuple(float(x) for x in seed[0]),
         seed_aux=None if seed is None else tuple(float(x) for x in seed[1]),
+        model_module=model_module,
+        model_directory=model_directory,
     )
 
 

@@ -58,6 +58,7 @@ _BUILTIN = {
     "bouncing_ball": "workbench.models.bouncing_ball",
     "duffing": "workbench.models.duffing",
     "free_journal": "workbench.models.free_journal",
+    "impact_oscillator": "workbench.models.impact_oscillator",
     "lorenz": "workbench.models.lorenz",
     "ninebar": "workbench.models.ninebar",
     "slider_crank": "workbench.models.slider_crank",

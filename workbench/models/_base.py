@@ -125,9 +125,11 @@ class Model:
         raise KeyError(name)
 
     def default_parameters(self) -> dict[str, float]:
+        """Each parameter's default value, by name."""
         return {p.name: float(p.default) for p in self.parameters}
 
     def default_effects(self) -> dict[str, Any]:
+        """Each effect's default setting, by name."""
         return {e.name: e.default for e in self.effects}
 
     def states(self, effects: Mapping[str, Any]) -> tuple[Quantity, ...]:

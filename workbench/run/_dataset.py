@@ -21,7 +21,15 @@ from workbench.run._prepare import Prepared
 from workbench.scene import Scene
 from workbench.solver import TEMPLATE_MODULES, RunResult, SolverError, Status
 
-__all__ = ["TIME_ATTRS", "derive", "provenance", "run_status", "status_attrs", "to_dataset"]
+__all__ = [
+    "TIME_ATTRS",
+    "derive",
+    "provenance",
+    "references",
+    "run_status",
+    "status_attrs",
+    "to_dataset",
+]
 
 _PACKAGES = ("workbench", "numpy", "scipy", "numba", "xarray", "netCDF4", "dask")
 TIME_ATTRS = {"units": "s", "long_name": "time", "standard_name": "time"}
@@ -135,7 +143,8 @@ def run_status(ds: xr.Dataset) -> Status:
 def provenance(scene: Scene, *, by: str = "workbench.simulate") -> dict:
     """Global attributes every stored dataset carries (CF conventions, scene, versions).
 
-    ``by`` names the function that created the dataset (in ``history``).
+    ``by`` names the function that created the dataset (in ``history``); ``references`` cites
+    the model's source (:attr:`workbench.models.Model.reference`) and this package.
     """
     now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
     versions, source = _versions()
@@ -144,12 +153,22 @@ def provenance(scene: Scene, *, by: str = "workbench.simulate") -> dict:
         "title": scene.title or f"workbench run of model {scene.model}",
         "history": f"{now} created by {by}",
         "source": source,
+        "references": references(scene.model),
         "scene": scene.to_toml(),
         "package_versions": versions,
         "code_digest": results_digest(scene.model),
         **processor_attrs(),
         "format_version": np.int32(FORMAT_VERSION),
     }
+
+
+@cache
+def references(model: str) -> str:
+    """The global attribute ``references`` of a dataset of ``model``: the model's source, then
+    this package (its version and distribution name)."""
+    package = f"computed with workbench {__version__} (Python distribution clearance-workbench)"
+    cited = get_model(model).reference
+    return f"{cited}; {package}" if cited else package
 
 
 @cache

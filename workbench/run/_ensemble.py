@@ -44,6 +44,7 @@ __all__ = [
 
 DEFAULT_PERTURBATION = 1e-9
 REALISATION_ATTRS = {
+    "standard_name": "realization",  # CF: "labelling members of a model ensemble"
     "units": "1",
     "long_name": "realisation of the ensemble (0: unperturbed initial state; k > 0: initial "
     "state perturbed by perturbation * atol_scale * N(0, 1), generator seeded by k)",

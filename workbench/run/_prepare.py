@@ -140,6 +140,7 @@ def record_times(scene: Scene, t0: float, period: float | None) -> tuple[np.ndar
     Parameters
     ----------
     scene : Scene
+        The scene whose ``[run]`` and ``[record]`` give the records.
     t0 : float
         Initial time of the run, s.
     period : float or None

@@ -14,11 +14,9 @@ True
 
 from __future__ import annotations
 
-import importlib
 import math
 import os
-import sys
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -28,6 +26,7 @@ import tomli_w
 
 from workbench._errors import SceneError
 from workbench.models import available_models, get_model
+from workbench.scene._modules import check_module_name, check_trusted, import_model_module
 from workbench.scene._tables import (
     RUN_SWEEP_KEYS,
     finite,
@@ -84,7 +83,9 @@ class Scene:
         Parameter name -> the values of that campaign dimension (empty for a single run).
     model_module : str
         The module that defines a model of one's own (``[model] module``; imported, and so
-        registered, when the scene is loaded: see ``docs/own-models.md``); '' for a built-in model.
+        registered, when a scene given directly is loaded, and trusted for the rest of the
+        process; stored text imports only a trusted module: see :func:`scene_from_toml` and
+        ``docs/own-models.md``); '' for a built-in model.
     continuation : Mapping
         The ``[sweep]`` table's ``continuation`` settings, defaults filled in (empty: every point
         of the sweep starts from the scene's initial state; see :mod:`workbench.continuation`).
@@ -182,6 +183,12 @@ SceneSource: TypeAlias = "Scene | str | os.PathLike | Mapping[str, Any]"
 def load_scene(source: SceneSource) -> Scene:
     """A validated scene from a Scene (returned as it is), a TOML file or a mapping.
 
+    A scene given here is the user's own: the module its ``[model] module`` names is imported
+    (after the rest of the scene that does not need the model is validated), from the normal
+    import path, else beside the scene file or in the working directory (loaded by file path;
+    the folder is not put on ``sys.path``). Stored text goes through :func:`scene_from_toml`,
+    which imports nothing it is not told to trust.
+
     Parameters
     ----------
     source : Scene, str, PathLike or Mapping
@@ -201,7 +208,7 @@ def load_scene(source: SceneSource) -> Scene:
     if isinstance(source, Scene):
         return source
     if isinstance(source, Mapping):
-        return _validate(dict(check_nesting(source)))
+        return _validate(dict(check_nesting(source)), (Path.cwd(),))
     if not isinstance(source, str | os.PathLike):
         raise SceneError(
             "", f"a scene is a Scene, a TOML file path or a mapping; got {type(source).__name__}"
@@ -218,89 +225,89 @@ def load_scene(source: SceneSource) -> Scene:
             else ""
         )
         raise SceneError("", f"scene file {str(source)!r} does not exist{hint}")
-    return _parse(read_scene_file(path), repr(str(path)), path.resolve().parent)
+    data = _parse(read_scene_file(path), repr(str(path)))
+    return _validate(data, (path.resolve().parent, Path.cwd()))
 
 
-def scene_from_toml(text: str) -> Scene:
+def scene_from_toml(text: str, *, trust_modules: Iterable[str] = ()) -> Scene:
     """A validated scene from TOML text (e.g. a stored run's ``scene`` attribute).
+
+    Stored text runs no code: a scene that names a ``[model] module`` is refused unless that
+    module is trusted, by ``trust_modules`` or because it was imported on the user's word
+    earlier in this process (a scene file or mapping given to :func:`load_scene` that names
+    it). A trusted module is imported like :func:`load_scene` does it, from the normal import
+    path or the working directory.
+
+    Parameters
+    ----------
+    text : str
+        TOML text of a scene.
+    trust_modules : str or iterable of str
+        Modules the text may name and so import (command line: ``--trust-module NAME``).
 
     Raises
     ------
     SceneError
-        If the text is not TOML or the scene is invalid (naming the key).
+        If the text is not TOML or the scene is invalid (naming the key), or names a module
+        that is not trusted (naming the module and how to trust it).
     """
-    return _parse(text, "the scene text")
+    trusted = (trust_modules,) if isinstance(trust_modules, str) else tuple(trust_modules)
+    return _validate(_parse(text, "the scene text"), (Path.cwd(),), trusted)
 
 
-def _parse(text: str, where: str, directory: Path | None = None) -> Scene:
-    return _validate(parse_toml(text, where), directory)
+def _parse(text: str, where: str) -> dict[str, Any]:
+    return parse_toml(text, where)
 
 
-def _import_model_module(module: Any, directory: Path | None) -> str:
-    """Import the module of ``[model] module`` (its import registers the model): by name, else
-    from the scene file's directory or the working directory."""
-    if not isinstance(module, str) or not module.strip():
-        raise SceneError(
-            "model.module", f"must be a module name (e.g. 'rossler_model'), got {module!r}"
-        )
-    try:
-        importlib.import_module(module)
-        return module
-    except ModuleNotFoundError as exc:
-        if exc.name != module.split(".")[0]:  # the module itself failed to import something
-            raise SceneError("model.module", f"importing {module!r} failed: {exc}") from None
-    top = module.split(".")[0]
-    for where in (directory, Path.cwd()):
-        if where is None:
-            continue
-        if (where / f"{top}.py").is_file() or (where / top / "__init__.py").is_file():
-            sys.path.insert(0, str(where))
-            importlib.import_module(module)
-            return module
-    raise SceneError(
-        "model.module",
-        f"cannot import {module!r}: put {module.split('.')[0]}.py beside the scene file or in "
-        "the working directory, or on PYTHONPATH",
-    )
-
-
-def _validate(data: Mapping[str, Any], directory: Path | None = None) -> Scene:
+def _validate(
+    data: Mapping[str, Any], directories: tuple[Path, ...], trusted: tuple[str, ...] | None = None
+) -> Scene:
+    """The scene of ``data``. Everything that does not need the model (the tables, their types,
+    the solver, the model's name and module name) is checked before the module ``[model]
+    module`` is imported: from ``directories`` if not on the import path, and only if
+    ``trusted`` is None (the user's own scene) or it is trusted (stored text)."""
     unknown_keys("", data, _TABLES)
     for key in ("title", "description"):
         if key in data and not isinstance(data[key], str):
             raise SceneError(key, f"must be a string, got {data[key]!r}")
     model_t = table(data, "model")
     unknown_keys("model", model_t, ("name", "module"))
-    module = _import_model_module(model_t["module"], directory) if "module" in model_t else ""
+    tables = {k: table(data, k) for k in _TABLES[3:]}
+    solver = validate_solver(tables["solver"])
     name = model_t.get("name")
     if name is None:
         raise SceneError(
             "model.name", "is required; available models: " + ", ".join(available_models())
         )
+    module = ""
+    if "module" in model_t:
+        module = check_module_name(model_t["module"])
+        if trusted is not None:
+            check_trusted(module, trusted)
+        import_model_module(module, directories)
     if name not in available_models():
         raise SceneError(
             "model.name", f"unknown model {name!r}; available: {', '.join(available_models())}"
         )
     model = get_model(name)
 
-    effects = validate_effects(model, table(data, "effects"))
-    parameters = validate_parameters(model, table(data, "parameters"), "parameters")
+    effects = validate_effects(model, tables["effects"])
+    parameters = validate_parameters(model, tables["parameters"], "parameters")
     resolved = model.default_parameters()
     resolved.update(parameters)
     model.validate(resolved, effects)
 
     states = {q.name for q in model.states(effects)}
-    initial_t = table(data, "initial")
+    initial_t = tables["initial"]
     unknown_keys("initial", initial_t, states)
     initial = {k: finite(f"initial.{k}", v) for k, v in initial_t.items()}
 
-    solver = validate_solver(table(data, "solver"))
     period = model.forcing_period(resolved)
-    run_t = table(data, "run")
+    run_t = tables["run"]
     ensemble = validate_ensemble(run_t)  # takes its keys out of run_t
     run = validate_run(run_t, period is not None) | ensemble
-    record = validate_record(table(data, "record"), model, effects, period is not None, run)
-    sweep_t = table(data, "sweep")
+    record = validate_record(tables["record"], model, effects, period is not None, run)
+    sweep_t = tables["sweep"]
     continuation_t = sweep_t.pop("continuation", None)
     sweep = validate_sweep(model, sweep_t, effects)
     continuation = (

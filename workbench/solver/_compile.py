@@ -1,14 +1,19 @@
-"""Generate and import the compiled code of one model from the templates.
+"""Generate and load the compiled code of one model from the templates.
 
 Numba cannot cache a compiled function that receives other compiled functions as arguments or
 closes over them (its cache then recompiles every process, seconds each time). Instead each
 template of :mod:`workbench.solver._templates` (real, importable, lintable Python) is written
 once per model into the cache directory with its tagged import lines (``# @@HOOKS@@``, ...)
-pointing at the model's module and at the other generated modules, and imported from there as a
-module of the package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an
-ordinary module whose functions call global compiled functions, which numba caches on disk.
-Every process after the first (a CLI call, a dask worker) loads machine code instead of
-compiling. What is generated, for hooks module ``H`` (a model's ``rhs``, ``event_values``,
+pointing at the model's module and at the other generated modules, and executed as a module of
+the package ``workbench_kernels`` (:data:`workbench._cache.KERNEL_PACKAGE`): an ordinary module
+whose functions call global compiled functions, which numba caches on disk (and loads only as
+:mod:`workbench._cache` checks it). Every process after the first (a CLI call, a dask worker)
+loads machine code instead of compiling. A generated module is executed from the text generated
+in this process, never read back from the cache folder, which the import system does not search
+either (a package, a ``.py`` or a ``.pyc`` planted there is not imported); its file is written
+for numba and tracebacks.
+
+What is generated, for hooks module ``H`` (a model's ``rhs``, ``event_values``,
 ``apply_event``, optional ``jacobian`` and ``step_end``; a loop whose hooks have no ``step_end``
 is compiled without the call, flag ``HAS_STEP_END``):
 
@@ -29,16 +34,27 @@ from __future__ import annotations
 
 import ast
 import importlib
+import importlib.util
+import linecache
 import os
 import re
+import stat
 import sys
+import tempfile
 import threading
 import types
+import warnings
 from functools import cache
 from pathlib import Path
 from types import ModuleType
 
-from workbench._cache import KERNEL_PACKAGE, kernel_directory
+from workbench._cache import (
+    KERNEL_PACKAGE,
+    CacheError,
+    CacheWarning,
+    kernel_directory,
+    read_regular,
+)
 from workbench._sources import source_digest
 
 _TEMPLATES = Path(__file__).parent / "_templates"
@@ -61,14 +77,74 @@ TEMPLATE_MODULES = tuple(f"{__package__}._templates.{name}" for name in _SOURCES
 
 
 def _directory() -> Path:
-    directory = kernel_directory()
-    directory.mkdir(parents=True, exist_ok=True)
+    directory = kernel_directory()  # the checked cache root: CacheError if refused
+    directory.mkdir(exist_ok=True)
     if KERNEL_PACKAGE not in sys.modules:
-        # a namespace for the generated modules, so that they import each other by name
+        # a namespace for the generated modules, so that they import each other by name; its
+        # path is empty: a module is found in sys.modules (put there by _load) or not at all
         package = types.ModuleType(KERNEL_PACKAGE)
-        package.__path__ = [str(directory)]
+        package.__path__ = []
+        package.directory = str(directory)  # where the files are (workbench._sources)
         sys.modules[KERNEL_PACKAGE] = package
     return directory
+
+
+_LOADING = threading.RLock()  # one thread at a time writes and executes a generated module
+_GENERATED: dict[str, str] = {}  # the text of each generated module of this process, by path
+
+
+def _write(path: Path, source: str) -> None:
+    """Write ``source`` at ``path`` unless a regular file there holds it already (atomically:
+    concurrent workers or threads never see half a file); a folder there is refused."""
+    data = source.encode()
+    try:
+        if read_regular(path) == data:
+            return
+    except OSError:  # a link, a FIFO, ...: replaced below; a folder: refused
+        if stat.S_ISDIR(os.lstat(path).st_mode):
+            raise CacheError(
+                f"{path} is a folder where workbench writes a generated kernel module; "
+                "remove it (workbench never imports it)"
+            ) from None
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}-", suffix=".tmp")
+    with os.fdopen(fd, "wb") as f:
+        f.write(data)
+    os.chmod(tmp, 0o644)
+    os.replace(tmp, path)
+
+
+def _load(name: str, path: Path, source: str) -> ModuleType:
+    """Module ``workbench_kernels.<name>`` executed from ``source`` (written at ``path`` first),
+    or the one this process already has."""
+    qualified = f"{KERNEL_PACKAGE}.{name}"
+    with _LOADING:
+        module = sys.modules.get(qualified)
+        if module is not None:
+            return module
+        _write(path, source)
+        if (path.parent / name).is_dir():
+            warnings.warn(
+                CacheWarning(
+                    f"{path.parent / name} is a folder named like the generated module "
+                    f"{path.name}: ignored (workbench imports only the module it generates)"
+                ),
+                stacklevel=4,
+            )
+        spec = importlib.util.spec_from_loader(qualified, loader=None, origin=str(path))
+        module = importlib.util.module_from_spec(spec)
+        module.__file__ = str(path)
+        code = compile(source, str(path), "exec", dont_inherit=True)
+        # tracebacks and inspect show the executed text, whatever the file holds later
+        linecache.cache[str(path)] = (len(source), None, source.splitlines(True), str(path))
+        _GENERATED[str(path)] = source
+        sys.modules[qualified] = module
+        try:
+            exec(code, module.__dict__)
+        except BaseException:
+            del sys.modules[qualified]
+            raise
+        setattr(sys.modules[KERNEL_PACKAGE], name, module)
+        return module
 
 
 def _substitute(source: str, marker: str, module: str) -> str:
@@ -109,7 +185,7 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
     """Write ``template`` with its tagged import lines pointed at ``modules`` (marker -> module)
     and its tagged flags set (``flags``: name -> bool) as module
     ``workbench_kernels.<prefix>_<label>_<digest>`` (the digest of its code and of everything it
-    imports, :func:`workbench._sources.source_digest`), and import it."""
+    imports, :func:`workbench._sources.source_digest`), and execute it (:func:`_load`)."""
     source = _SOURCES[template]
     for marker, module in modules.items():
         source = _substitute(source, marker, module)
@@ -121,12 +197,7 @@ def _specialise(template: str, prefix: str, hooks: str, modules: dict, flags=Non
     directory = _directory()
     label = f"{prefix}_{_label(hooks)}"
     name = f"{label}_{source_digest(source, f'{KERNEL_PACKAGE}.{label}')}"
-    path = directory / f"{name}.py"
-    if not path.exists() or path.read_text() != source:
-        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-        tmp.write_text(source)
-        os.replace(tmp, path)  # atomic: concurrent workers (or threads) never see half a file
-    return importlib.import_module(f"{KERNEL_PACKAGE}.{name}")
+    return _load(name, directory / f"{name}.py", source)
 
 
 def kernel_for(hooks: str) -> ModuleType:
@@ -215,5 +286,4 @@ def generated_source(hooks: str, what: str = "kernel") -> tuple[Path, str]:
         module = (jacobian_for if what == "jacobian" else tangent_for)(hooks)
     else:
         raise ValueError(f"what: got {what!r}; allowed: kernel, steps, implicit, jacobian, tangent")
-    path = Path(module.__file__)
-    return path, path.read_text()
+    return Path(module.__file__), _GENERATED[module.__file__]

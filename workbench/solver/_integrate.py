@@ -88,6 +88,7 @@ def integrate(
     Parameters
     ----------
     problem : Problem
+        The compiled right-hand side, its events, initial state and tolerances' scales.
     t_rec : array_like
         Record times, s, ascending, the first at or after ``problem.t0``.
     method : str

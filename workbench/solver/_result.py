@@ -73,6 +73,7 @@ class SolverError(RuntimeError):
     Parameters
     ----------
     message : str
+        What failed, where and the likely cause, in one line.
     time : float
         Simulated time of the failure, s.
     state : dict[str, float]
