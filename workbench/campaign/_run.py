@@ -373,10 +373,10 @@ def _warn_disk(st: Store, size: float) -> None:
 def _resumable(exc: DiskFull, st: Store) -> DiskFull:
     """A full disk during a campaign, with where its finished work is and how to resume."""
     kept = st.kept_note()
-    rest = "to compute the rest and assemble the archive" if kept else ""
+    then = " to compute the rest and assemble the archive" if kept else ""
     return DiskFull(
         f"{exc}; {kept or 'no block was finished'}: free some space and run the campaign "
-        f"again{rest and ' '}{rest}",
+        f"again{then}",
         exc.path,
         exc.needed,
         exc.free,

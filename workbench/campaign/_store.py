@@ -122,10 +122,14 @@ class Store:
         do not cover the grid's points once each."""
         if "block_points" not in manifest:
             return [tuple(r) for r in grid.blocks(int(manifest["chunk"]))]
-        arrays = [np.asarray(b, np.int64).reshape(-1) for b in manifest["block_points"]]
-        flat = np.concatenate(arrays) if arrays else np.zeros(0, np.int64)
+        try:
+            arrays = [np.asarray(b, np.int64) for b in manifest["block_points"]]
+        except (TypeError, ValueError):  # not lists of integers
+            arrays = [np.zeros((0, 0), np.int64)]
+        flat = np.concatenate(arrays, axis=None) if arrays else np.zeros(0, np.int64)
         once = (
-            len(flat) == grid.size
+            all(b.ndim == 1 for b in arrays)
+            and len(flat) == grid.size
             and (flat >= 0).all()
             and (flat < grid.size).all()
             and (np.bincount(flat, minlength=grid.size) == 1).all()
