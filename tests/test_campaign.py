@@ -399,3 +399,19 @@ def test_an_interrupt_names_the_kept_blocks_only_when_there_are(tmp_path, capsys
         f"'{store}.blocks/': run the same command again to compute the rest"
     ]
     assert store_paths(store)["blocks"].is_dir()
+
+
+def test_a_large_grid_says_what_it_plans_before_planning(tmp_path, capsys, monkeypatch):
+    """With progress on, a grid of a million points or more (here the threshold lowered to 3)
+    says what is being planned before the planning starts, and then shows its progress."""
+    import workbench.campaign._run as run_module
+
+    monkeypatch.setattr(run_module, "_PLAN_NOTICE", 3)
+    spec = {**BASE, "sweep": {"gamma": [0.3, 0.4, 0.5]}}
+    workbench.run_campaign(spec, tmp_path / "c.nc", workers=1, progress=True)
+    err = capsys.readouterr().err
+    assert err.startswith("campaign: planning 3 points (gamma 3)\n"), err
+    smaller = {**spec, "sweep": {"gamma": [0.3, 0.4]}}
+    workbench.run_campaign(smaller, tmp_path / "d.nc", workers=1, progress=True)
+    err = capsys.readouterr().err
+    assert "campaign" in err and "planning" not in err  # the progress alone
