@@ -191,11 +191,12 @@ def test_an_error_stops_the_blocks_in_flight(tmp_path, monkeypatch):
     t0 = time.monotonic()
     with (
         dask.config.set({"multiprocessing.context": "fork"}),  # the workers know the model
-        pytest.raises(DiskFull, match="the finished blocks are kept in"),
+        pytest.raises(DiskFull, match="; no block was finished: free some space") as caught,
     ):
         workbench.run_campaign(scene, store, workers=2, chunk=1)
     assert time.monotonic() - t0 < 20
     assert not list(store_paths(store)["blocks"].glob("block-*.nc"))
+    assert "kept" not in str(caught.value)  # issue 37: no folder of blocks that are not there
 
 
 KILL = {
@@ -305,13 +306,13 @@ def test_longest_blocks_run_first(tmp_path):
     (cycles x 2 pi / omega) and are started first (Graham's rule), whatever dask's own order of
     task names; with one worker the execution order is visible in each block file."""
     from workbench.campaign import expand_sweep
-    from workbench.campaign._schedule import longest_first, simulated_span
+    from workbench.campaign._schedule import longest_first, simulated_spans
 
     scene = workbench.load_scene(
         {**BASE, "sweep": {"omega": [0.8, 1.0, 1.2, 1.4, 0.5, 2.0]}}  # slowest at flat 4
     )
     grid = expand_sweep(scene)
-    assert simulated_span(scene, grid, 4) == pytest.approx(6 * 2 * np.pi / 0.5, rel=1e-12)
+    assert simulated_spans(scene, grid)[4] == pytest.approx(6 * 2 * np.pi / 0.5, rel=1e-12)
     store = tmp_path / "c.nc"
     workbench.run_campaign(scene, store, workers=1, chunk=1)
     blocks = store_paths(store)["blocks"]
@@ -328,6 +329,89 @@ def _tasks(scene, grid):
     from workbench.campaign._block import BlockTask
 
     return [
-        BlockTask(scene.to_toml(), grid.dims, (f,), (tuple(grid.point(f).values()),), "", "", f)
+        BlockTask(scene.to_toml(), grid.dims, (f,), grid.values, "", "", f)
         for f in range(grid.size)
     ]
+
+
+def test_a_grid_above_the_limit_of_points_is_refused_before_anything_runs(tmp_path, capsys):
+    """Issue 37: a grid of 10^7 points ran minutes of planning before any sign of life. A
+    campaign has a limit on its points (10^6 by default), stated with how to raise it."""
+    huge = {
+        **BASE,
+        "sweep": {
+            "gamma": {"start": 0.2, "stop": 0.5, "num": 10000},
+            "delta": {"start": 0.1, "stop": 0.4, "num": 1000},
+        },
+    }
+    store = tmp_path / "huge.nc"
+    with pytest.raises(CampaignError) as caught:
+        workbench.run_campaign(huge, store, workers=1)
+    assert str(caught.value) == (
+        "the [sweep] grid has 10000000 points (gamma 10000 x delta 1000), more than the limit "
+        "of 1000000 points per campaign; sweep fewer points, or raise the limit if this size "
+        "is meant (max_points=10000000, CLI --max-points 10000000)"
+    )
+    assert not store_paths(store)["blocks"].exists()
+    small = {**BASE, "sweep": {"gamma": [0.3, 0.4, 0.5]}}
+    with pytest.raises(CampaignError, match="has 3 points .*limit of 2 points"):
+        workbench.run_campaign(small, store, workers=1, max_points=2)
+    with pytest.raises(ValueError, match="max_points must be a positive integer or None"):
+        workbench.run_campaign(small, store, workers=1, max_points=0)
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(workbench.load_scene(small).to_toml())
+    argv = ["campaign", str(scene), "-o", str(store), "--workers", "1", "-q"]
+    assert main([*argv, "--max-points", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "limit of 2 points per campaign" in err[0], err
+    assert "--max-points 3" in err[0] and not store.exists()
+    assert main([*argv, "--max-points", "3"]) == 0
+    assert workbench.open_run(store).sizes["gamma"] == 3
+
+
+def test_an_interrupt_names_the_kept_blocks_only_when_there_are(tmp_path, capsys, monkeypatch):
+    """Issue 37: SIGTERM during the planning of a huge grid said that blocks were kept in a
+    folder that did not exist. The line names the folder only when it holds finished blocks."""
+    import workbench.campaign as campaign
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(SCENE_TOML)
+    store = tmp_path / "c.nc"
+    argv = ["campaign", str(scene), "-o", str(store), "--workers", "1", "-q"]
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:  # before any block: nothing is kept
+        m.setattr(campaign, "run_campaign", interrupted)
+        assert main(argv) == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["workbench campaign: interrupted"]
+    assert main(argv) == 0  # 3 blocks
+    store.unlink()  # as if it had been stopped before the assembly
+    capsys.readouterr()
+    with monkeypatch.context() as m:
+        m.setattr(campaign, "run_campaign", interrupted)
+        assert main(argv) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"workbench campaign: interrupted; the finished blocks are kept in "
+        f"'{store}.blocks/': run the same command again to compute the rest"
+    ]
+    assert store_paths(store)["blocks"].is_dir()
+
+
+def test_a_large_grid_says_what_it_plans_before_planning(tmp_path, capsys, monkeypatch):
+    """With progress on, a grid of a million points or more (here the threshold lowered to 3)
+    says what is being planned before the planning starts, and then shows its progress."""
+    import workbench.campaign._run as run_module
+
+    monkeypatch.setattr(run_module, "_PLAN_NOTICE", 3)
+    spec = {**BASE, "sweep": {"gamma": [0.3, 0.4, 0.5]}}
+    workbench.run_campaign(spec, tmp_path / "c.nc", workers=1, progress=True)
+    err = capsys.readouterr().err
+    assert err.startswith("campaign: planning 3 points (gamma 3)\n"), err
+    smaller = {**spec, "sweep": {"gamma": [0.3, 0.4]}}
+    workbench.run_campaign(smaller, tmp_path / "d.nc", workers=1, progress=True)
+    err = capsys.readouterr().err
+    assert "campaign" in err and "planning" not in err  # the progress alone

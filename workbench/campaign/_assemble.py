@@ -17,7 +17,7 @@ from workbench.campaign._block import (
     failed,
     stat_attrs,
 )
-from workbench.campaign._grid import SweepGrid, forcing_period, format_point, parameter_attrs
+from workbench.campaign._grid import SweepGrid, format_point, grid_periods, parameter_attrs
 from workbench.campaign._store import Store
 from workbench.models import get_model
 from workbench.run import (
@@ -37,13 +37,13 @@ _PER_POINT = ("status", "failure", *STATS, "point_wall_time")
 def _grid_attrs(scene: Scene, grid: SweepGrid) -> tuple[dict, np.ndarray | None]:
     """Attributes of the record grid shared by every point, and the per-point forcing period (s,
     None for an autonomous model)."""
-    periods = [forcing_period(scene, grid, flat) for flat in range(grid.size)]
-    if any(p is None for p in periods):
+    periods = grid_periods(scene, grid)
+    if periods is None:
         periods_arr = None
         variants = [record_times(scene, 0.0, None)[1]]
     else:
-        periods_arr = np.array(periods, np.float64).reshape(grid.shape)
-        variants = [record_times(scene, 0.0, p)[1] for p in sorted(set(periods))]
+        periods_arr = np.array(np.broadcast_to(periods, grid.shape))
+        variants = [record_times(scene, 0.0, p)[1] for p in np.unique(periods).tolist()]
     shared = {k: v for k, v in variants[0].items() if all(w.get(k) == v for w in variants)}
     return shared, periods_arr
 

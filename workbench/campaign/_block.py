@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import save_run, sha256_file
-from workbench.campaign._grid import code_of, modules_of
+from workbench.campaign._grid import SweepGrid, code_of, modules_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
@@ -94,16 +94,18 @@ MODEL_ENV = "WORKBENCH_CAMPAIGN_MODEL"  # its model_source(), JSON: imported the
 
 @dataclass(frozen=True)
 class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points, where to write, and the
-    module that defines the scene's model when it is not one of workbench's (a user's model,
-    registered when imported: a worker process that did not import it yet does so first), and
-    the function (if any) that measures each point's run in the worker (``per_point``, see
-    :func:`workbench.run_campaign`)."""
+    """What one task needs: the campaign scene (TOML), which points (``flat``, indices into the
+    grid of the swept values ``axes``), where to write, and the module that defines the
+    scene's model when it is not one of workbench's (a user's model, registered when imported:
+    a worker process that did not import it yet does so first), and the function (if any) that
+    measures each point's run in the worker (``per_point``, see
+    :func:`workbench.run_campaign`). Each point's values are looked up when the block runs
+    (:attr:`values`), not when it is planned."""
 
     scene_toml: str
     dims: tuple[str, ...]
     flat: tuple[int, ...]
-    values: tuple[tuple[float, ...], ...]
+    axes: tuple[tuple[float, ...], ...]  # the values of each dim (SweepGrid.values)
     path: str
     campaign_id: str
     block: int
@@ -111,6 +113,11 @@ class BlockTask:
     model_module: str = ""  # model_source(): the module the user named, imported in the worker
     model_directory: str = ""  # where it lies, for a worker without it on its import path
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None
+
+    @property
+    def values(self) -> tuple[tuple[float, ...], ...]:
+        """The parameter values of each point of the block, in ``dims`` order."""
+        return SweepGrid(self.dims, self.axes).rows(self.flat)
 
 
 def worker_start(pids, campaign: int) -> None:

@@ -222,7 +222,7 @@ def _local_pool(
             raise RuntimeError(
                 "a worker process of the local pool died (killed, out of memory, or the calling "
                 "script lacks the `if __name__ == '__main__':` guard that process pools need); "
-                "the finished blocks are kept: run the campaign again to compute the rest"
+                "run the campaign again to compute the blocks not finished"
             ) from exc
         raise
     finally:

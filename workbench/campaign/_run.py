@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import sys
 import time
 import warnings
 from collections.abc import Callable
@@ -21,9 +22,11 @@ from workbench.campaign._block import BlockTask, failed, model_source
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
 from workbench.campaign._grid import (
+    MAX_POINTS,
     SweepGrid,
     campaign_id,
     check_archive_memory,
+    check_points,
     code_of,
     expand_sweep,
     format_point,
@@ -37,6 +40,7 @@ from workbench.scene import Scene, SceneSource, load_scene
 __all__ = ["run_campaign", "store_paths"]
 
 _BLOCKS_PER_WORKER = 4
+_PLAN_NOTICE = 10**6  # a grid of this many points takes about a second to plan: say so
 
 
 def _positive_int(name: str, value: Any) -> int | None:
@@ -58,6 +62,7 @@ def run_campaign(
     progress: bool = False,
     max_memory: float | str | None = None,
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None,
+    max_points: int | None = MAX_POINTS,
 ) -> xr.Dataset:
     """Run every point of a scene's ``[sweep]`` grid in parallel and return one dataset.
 
@@ -103,6 +108,11 @@ def run_campaign(
         units), which become variables over the parameter dims (NaN where a run failed). A
         module-level function (it is pickled to the workers); its qualified name is part of
         the campaign's identity, so a store of another measurement is refused.
+    max_points : int or None
+        Refuse, before anything else is checked or planned, a grid of more points than this
+        (default one million; None: no limit): a :class:`CampaignError` that names the size
+        and how to raise the limit. Planning and assembling a campaign take memory and time
+        in proportion to its points.
 
     Returns
     -------
@@ -126,13 +136,15 @@ def run_campaign(
     Raises
     ------
     CampaignError
-        The scene has no ``[sweep]``, or the store holds a campaign of another scene or chunk
-        size (the message lists the differences; pass ``restart=True``).
+        The scene has no ``[sweep]``, its grid has more than ``max_points`` points, the forcing
+        period of a point cannot be computed, or the store holds a campaign of another scene or
+        chunk size (the message lists the differences; pass ``restart=True``).
     workbench.archive.StoreLocked
         Another live process is writing the store (the message names its pid and host). The
         lock is held for the whole call; a lock left by a dead process is taken over.
     RuntimeError
-        A worker process died (killed, out of memory); the blocks finished so far are kept.
+        A worker process died (killed, out of memory); the blocks finished so far are kept
+        (the message says where, when there are any).
         (A point that raises an exception does not stop the campaign: it is flagged ``error``
         in ``status``, with the exception in ``failure``.)
 
@@ -177,9 +189,12 @@ def run_campaign(
             "sweep.continuation"
         )
     grid = expand_sweep(scene)
-    size = check_archive_memory(scene, grid, max_memory)
+    check_points(grid, _positive_int("max_points", max_points))
     workers = _positive_int("workers", workers)
     chunk = _positive_int("chunk", chunk)
+    if progress and grid.size >= _PLAN_NOTICE:
+        print(f"campaign: planning {grid.size} points ({grid.describe()})", file=sys.stderr)
+    size = check_archive_memory(scene, grid, max_memory)
     if client is not None and workers is not None:
         raise ValueError(
             f"workers={workers!r} sets the size of the local pool, but a client brings its own "
@@ -233,13 +248,9 @@ def _run_locked(
             n = available_workers(client, workers)
             chunk = max(1, math.ceil(grid.size / (_BLOCKS_PER_WORKER * n)))
         cid = campaign_id(scene, chunk, per_point)
+        blocks = partition(scene, grid, chunk)
         manifest = st.write_manifest(
-            scene,
-            grid,
-            chunk,
-            cid,
-            partition(scene, grid, chunk),
-            code_of(scene, *modules_of(per_point)),
+            scene, grid, chunk, cid, blocks, code_of(scene, *modules_of(per_point))
         )
     else:
         chunk = st.check_manifest(manifest, scene, chunk)
@@ -250,8 +261,8 @@ def _run_locked(
                 f"(per_point={_name(per_point)}); pass restart=True (CLI --restart) to start "
                 "afresh, or choose another output path"
             )
+        blocks = st.blocks(manifest, grid)
     st.remove_temporaries()
-    blocks = st.blocks(manifest, grid)
     code = code_of(scene, *modules_of(per_point))
     done = st.verified_blocks(manifest, blocks, code)
     model_module, model_directory = model_source(scene)
@@ -259,8 +270,8 @@ def _run_locked(
         BlockTask(
             scene_toml=scene.to_toml(),
             dims=grid.dims,
-            flat=tuple(rng),
-            values=tuple(tuple(grid.point(f).values()) for f in rng),
+            flat=points,
+            axes=grid.values,
             path=str(st.block_path(i)),
             campaign_id=cid,
             block=i,
@@ -269,7 +280,7 @@ def _run_locked(
             model_directory=model_directory,
             per_point=per_point,
         )
-        for i, rng in enumerate(blocks)
+        for i, points in enumerate(blocks)
         if i not in done
     ]
     tasks = longest_first(scene, grid, tasks)
@@ -297,6 +308,9 @@ def _run_locked(
             )
         except WriteFailed as exc:  # a block's write (in a worker): a full disk, ...
             raise _resumable(exc, st) from None
+        except RuntimeError as exc:  # a worker died: say what is kept
+            exc.add_note(st.kept_note() or "no block was finished")
+            raise
         finally:
             if bar is not None:
                 bar.close()
@@ -359,9 +373,10 @@ def _resumable(exc: WriteFailed, st: Store) -> WriteFailed:
     """A failed write during a campaign (a full disk, ...), with where its finished work is and
     how to resume."""
     fix = "free some space" if isinstance(exc, DiskFull) else "remove the cause"
+    kept = st.kept_note()
+    then = " to compute the rest and assemble the archive" if kept else ""
     return exc.reworded(
-        f"{exc}; the finished blocks are kept in {str(st.blocks_dir)!r}: {fix} and run the "
-        "campaign again to compute the rest and assemble the archive"
+        f"{exc}; {kept or 'no block was finished'}: {fix} and run the campaign again{then}"
     )
 
 

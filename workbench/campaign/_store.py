@@ -34,6 +34,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from workbench.archive import (
     check_output_file,
     file_problem,
@@ -58,6 +60,7 @@ class Store:
     """Paths and bookkeeping of one campaign store (see the module docstring)."""
 
     def __init__(self, archive: str | os.PathLike) -> None:
+        self.given = os.fspath(archive)  # as the caller named it, for messages
         self.archive = Path(archive).expanduser().resolve()
         if self.archive.is_dir():
             raise CampaignError(
@@ -68,6 +71,7 @@ class Store:
         check_output_file(self.archive, "store", overwrite=True)  # e.g. not under a file
         self.blocks_dir = self.archive.with_name(self.archive.name + ".blocks")
         self.manifest_path = self.blocks_dir / "manifest.json"
+        self._points: tuple[object, str] = (None, "")  # block_points and their JSON text
 
     def block_path(self, index: int) -> Path:
         """The file of block ``index`` in the store's blocks directory."""
@@ -123,21 +127,44 @@ class Store:
         do not cover the grid's points once each."""
         if "block_points" not in manifest:
             return [tuple(r) for r in grid.blocks(int(manifest["chunk"]))]
-        blocks = [tuple(int(f) for f in b) for b in manifest["block_points"]]
-        flat = sorted(f for b in blocks for f in b)
-        if flat != list(range(grid.size)) or len(blocks) != manifest.get("blocks"):
+        try:
+            arrays = [np.asarray(b, np.int64) for b in manifest["block_points"]]
+        except (TypeError, ValueError):  # not lists of integers
+            arrays = [np.zeros((0, 0), np.int64)]
+        flat = np.concatenate(arrays, axis=None) if arrays else np.zeros(0, np.int64)
+        once = (
+            all(b.ndim == 1 for b in arrays)
+            and len(flat) == grid.size
+            and (flat >= 0).all()
+            and (flat < grid.size).all()
+            and (np.bincount(flat, minlength=grid.size) == 1).all()
+        )
+        if not once or len(arrays) != manifest.get("blocks"):
             raise CampaignError(
                 f"{str(self.manifest_path)!r} lists blocks that do not hold each of the "
                 f"{grid.size} points of the grid once; pass restart=True (CLI --restart) to "
                 "start afresh"
             )
-        return blocks
+        return [tuple(b.tolist()) for b in arrays]
 
     def save_manifest(self, data: dict) -> dict:
         """Write ``data`` as the store's manifest, atomically, and return it."""
         self.blocks_dir.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(self.manifest_path, json.dumps(data, indent=1) + "\n")
+        write_text_atomic(self.manifest_path, self._manifest_text(data))
         return data
+
+    def _manifest_text(self, data: dict) -> str:
+        """The manifest as JSON, each block's points on one line (a campaign of millions of
+        points would otherwise take a line per point); those lines are encoded once and reused
+        by each commit's rewrite."""
+        points = data.get("block_points")
+        if points is None:
+            return json.dumps(data, indent=1) + "\n"
+        if self._points[0] is not points:
+            lines = ",\n".join(f"  {json.dumps(b, separators=(',', ':'))}" for b in points)
+            self._points = (points, f'"block_points": [\n{lines}\n ]')
+        head = json.dumps({k: v for k, v in data.items() if k != "block_points"}, indent=1)
+        return f"{head[:-2]},\n {self._points[1]}\n}}\n"
 
     def check_scene(self, stored_toml: str, scene: Scene, where: str) -> None:
         """CampaignError naming the differences if ``stored_toml`` is not ``scene``. The stored
@@ -259,6 +286,22 @@ class Store:
         manifest.setdefault("checksums", {})[str(block)] = sha256
         manifest.setdefault("code_digests", {})[str(block)] = code
         self.save_manifest(manifest)
+
+    def kept_note(self) -> str | None:
+        """Where the finished blocks of a stopped campaign are, as a clause for its message
+        (``the finished blocks are kept in 'sweep.nc.blocks/'``, the store as the caller named
+        it), or None when there are none: no block committed in the manifest has its file."""
+        if not self.blocks_dir.is_dir():
+            return None
+        names = (_BLOCK_RE.match(p.name) for p in self.blocks_dir.iterdir())
+        files = {int(m.group(1)) for m in names if m}
+        try:
+            committed = {int(k) for k in json.loads(self.manifest_path.read_text())["checksums"]}
+        except (OSError, ValueError, TypeError, KeyError):  # no manifest: the files alone
+            committed = files
+        if not files & committed:
+            return None
+        return f"the finished blocks are kept in '{self.given}.blocks/'"
 
     @contextlib.contextmanager
     def lock(self) -> Iterator[dict]:

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.campaign._block import INVALID, RAISED, STATUS, failed
+from workbench.campaign._grid import MAX_POINTS, check_points
 from workbench.cli._console import (
     add_quiet,
     max_memory_option,
@@ -41,7 +42,7 @@ def _client(address: str, timeout: float):
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from workbench.campaign import CampaignError, run_campaign, summary
+    from workbench.campaign import CampaignError, Store, expand_sweep, run_campaign, summary
     from workbench.cli._console import check_store_output, compile_kernel
     from workbench.scene import load_scene
 
@@ -54,6 +55,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
             f"{args.scheduler!r} brings its own workers; give one of them"
         )
     check_store_output(args.output)
+    max_points = MAX_POINTS if args.max_points is None else args.max_points
+    if not scene.continuation:
+        check_points(expand_sweep(scene), max_points)  # before a kernel is compiled
     client = None
     try:
         if args.scheduler:
@@ -76,12 +80,12 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
                     restart=args.restart,
                     progress=not args.quiet,
                     max_memory=args.max_memory,
+                    max_points=max_points,
                 )
     except KeyboardInterrupt as exc:
-        exc.add_note(
-            f"the finished blocks are kept in '{args.output}.blocks/': run the same command "
-            "again to compute the rest"
-        )
+        kept = Store(args.output).kept_note()
+        if kept:
+            exc.add_note(f"{kept}: run the same command again to compute the rest")
         raise
     finally:
         if client is not None:
@@ -103,8 +107,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 def _check_continued(args: argparse.Namespace) -> None:
     """Refuse, before any work, the options a continued sweep (``[sweep] continuation``) does
-    not take: ``--chunk`` (segments, not chunks, make its tasks) and ``--max-memory``
-    (:func:`workbench.continuation.continued_sweep` takes no memory limit)."""
+    not take: ``--chunk`` (segments, not chunks, make its tasks), ``--max-memory`` and
+    ``--max-points`` (:func:`workbench.continuation.continued_sweep` takes neither limit)."""
     if args.chunk is not None:
         raise UsageError(
             f"--chunk {args.chunk}: a continued sweep ([sweep] continuation) is cut into "
@@ -117,6 +121,11 @@ def _check_continued(args: argparse.Namespace) -> None:
             f"--max-memory {format_bytes(args.max_memory)}: a continued sweep ([sweep] "
             "continuation) takes no memory limit; drop --max-memory (each point's run is still "
             "checked against $WORKBENCH_MAX_MEMORY, else half of the machine's memory)"
+        )
+    if args.max_points is not None:
+        raise UsageError(
+            f"--max-points {args.max_points}: a continued sweep ([sweep] continuation) takes "
+            "no limit on its points; drop --max-points"
         )
 
 
@@ -172,5 +181,12 @@ def register_cli(sub) -> None:
     add_quiet(p)
     max_memory_option(
         p, "the campaign's archive (or one point's records; not with [sweep] continuation)"
+    )
+    p.add_argument(
+        "--max-points",
+        type=positive_int,
+        metavar="N",
+        help=f"refuse a [sweep] grid of more than N points, before any work (default "
+        f"{MAX_POINTS}; not with [sweep] continuation)",
     )
     p.set_defaults(func=_cmd_campaign)
