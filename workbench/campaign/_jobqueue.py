@@ -123,8 +123,8 @@ def cluster_security(security=None):
             except ImportError as exc:
                 raise ImportError(
                     "a cluster's TLS credentials are made with cryptography: pip install "
-                    "'clearance-workbench[cluster]' (or cryptography), or name certificates in the dask "
-                    "config (distributed.comm.tls.*)"
+                    "'clearance-workbench[cluster]' (or cryptography), or name certificates in "
+                    "the dask config (distributed.comm.tls.*)"
                 ) from exc
         security, where = Security(), "the dask config"
         keys = {"ca_file": "ca-file", **{r: f"{r}.cert" for r in ROLES}}
