@@ -25,6 +25,7 @@ import ast
 import hashlib
 import sys
 import sysconfig
+import threading
 from functools import cache, lru_cache
 from pathlib import Path
 
@@ -34,6 +35,7 @@ __all__ = [
     "environment",
     "file_digest",
     "module_path",
+    "parse",
     "source_digest",
 ]
 
@@ -99,9 +101,15 @@ def _strip_docstrings(tree: ast.AST) -> ast.AST:
     return tree
 
 
+def parse(source: str | bytes, filename: str = "<unknown>") -> ast.Module:
+    """``ast.parse`` one source at a time in this process (see :data:`_PARSE`)."""
+    with _PARSE:
+        return ast.parse(source, filename=filename)
+
+
 def _analyse(source: str | bytes, filename: str) -> tuple[str, tuple[_Import, ...]]:
     """(SHA-256 of the code, its import statements) of Python source."""
-    tree = ast.parse(source, filename=filename)
+    tree = parse(source, filename)
     imports = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
@@ -110,6 +118,12 @@ def _analyse(source: str | bytes, filename: str) -> tuple[str, tuple[_Import, ..
             imports.append((node.module or "", tuple(a.name for a in node.names), node.level))
     digest = hashlib.sha256(ast.dump(_strip_docstrings(tree)).encode()).hexdigest()
     return digest, tuple(imports)
+
+
+#: Python 3.11's parser is not safe to run in two threads at once (``SystemError: AST
+#: constructor recursion depth mismatch``, seen when the threads of one dask worker digest the
+#: code of their first blocks together): one parse at a time
+_PARSE = threading.Lock()
 
 
 @cache

@@ -55,7 +55,7 @@ from workbench._cache import (
     kernel_directory,
     read_regular,
 )
-from workbench._sources import source_digest
+from workbench._sources import parse, source_digest
 
 _TEMPLATES = Path(__file__).parent / "_templates"
 # read at import: the generated modules are these texts (their digest keys their names)
@@ -155,7 +155,7 @@ def _substitute(source: str, marker: str, module: str) -> str:
     lines = source.splitlines(keepends=True)
     tagged = {i for i, line in enumerate(lines) if line.rstrip().endswith(tag)}
     rewritten = set()
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(parse(source)):
         if not isinstance(node, ast.ImportFrom):
             continue
         span = set(range(node.lineno - 1, node.end_lineno))
