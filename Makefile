@@ -34,7 +34,6 @@ format: $(STAMP)
 # the docs site built with warnings as errors, and the notebooks checked against the code.
 test: lint
 	$(PY) -m pytest -q --timeout=900 --doctest-modules tests workbench
-	$(MAKE) --no-print-directory test-generic
 
 # The tests that assert chaotic or statistical numbers (marker `chaotic`) once more as another
 # processor would run them: kernels compiled for numba's generic CPU (in a cache folder of

@@ -295,16 +295,20 @@ def test_the_fold_curve_passes_its_cusp_and_agrees_with_harmonic_balance():
     a = c.test_cusp.values
     assert (a[: at.min()] < 0).all() and (a[at.max() + 1 :] > 0).all()
     # each curve point on one of the two harmonic-balance folds at its gamma, both met
-    met = set()
+    met, compared = set(), 0
     for i in range(0, c.sizes["curve_point"], 6):
         g, w = float(c.gamma[i]), float(c.omega[i])
         if g < 0.06:  # the single-harmonic start of the balance needs both folds apart
             continue
-        folds = hb_folds(**dict(HARDENING, gamma=g), H=7)
+        try:
+            folds = hb_folds(**dict(HARDENING, gamma=g), H=7)
+        except RuntimeError:  # the balance's own Newton from its one-harmonic start
+            continue
         k = int(np.argmin(np.abs(np.array(folds) - w)))
         assert abs(w - folds[k]) < 1e-6, (g, w, folds)
         met.add(k)
-    assert met == {0, 1}
+        compared += 1
+    assert met == {0, 1} and compared >= 4, (met, compared)
     start = int(np.flatnonzero(c.label.values == 1)[0])
     assert float(c.omega[start]) == pytest.approx(1.1161418, abs=1e-7)
 
