@@ -428,8 +428,8 @@ def test_pauses_are_invisible_with_hidden_contacts(monkeypatch, method):
     monkeypatch.setattr(loop, "_FIRST_BUDGET", 1)
     calls = []
     split = integrate(problem, t, method=how, rtol=1e-9, atol=1e-11, progress=calls.append)
-    assert len(calls) >= whole.stats["steps"]  # a pause after every step
-    assert whole.stats["events"] == 10  # two per period, each found inside a step
-    np.testing.assert_array_equal(whole.Y, split.Y)
+    assert len(calls) >= split.stats["steps"]  # a pause after every step
+    assert whole.stats["events"] == 10  # two per period
     for key in ("steps", "rejected_steps", "rhs_evaluations", "events", "event_retries"):
         assert whole.stats[key] == split.stats[key], key
+    np.testing.assert_array_equal(whole.Y, split.Y)
