@@ -442,9 +442,10 @@ def hermite_extremum(direction, g0, g1, d0, d1, h):
       bounded by the interpolant's deviation from the chord at x, ``B = |p(x) - chord(x)|``,
       about ``g'' h^2 x (1 - x) / 2``: for g that varies at frequencies up to omega
       (``g'''' ~ omega^2 g''``) their ratio is ``(h omega)^2 x (1 - x) / 12 <= (h omega)^2
-      / 48``, below 1/5 for every step that resolves g (h omega <= 3; the explicit pairs'
-      accuracy and stability bounds keep h omega below that at any useful tolerance). B
-      itself, a 100 % margin on the extremum's rise above the chord, is the band;
+      / 48``, below 1/5 while h omega <= 3, longer than the steps an explicit pair takes on a
+      harmonic motion at rtol 1e-3 or tighter (their error per step grows like
+      ``(h omega)^(p + 1)``). B itself, a 100 % margin on the extremum's rise above the
+      chord, is the band;
     - the rates' forward-difference error (:func:`rate_step`, about sqrt(eps) relative) moves
       the interpolant by ``sqrt(eps) h (|d0| + |d1|)`` at most, and g's rounding by a few eps
       of its size: both are added.
