@@ -137,7 +137,9 @@ class State(NamedTuple):
 
 class Scratch(NamedTuple):
     """Scratch arrays of one call of ``advance``: stages, dense-output coefficients, the trial
-    step's end, stage and interpolated states, event functions there, stiff decay rates."""
+    step's end, stage and interpolated states, event functions there, stiff decay rates; the
+    event functions' rates (1/s times their units) at the step's start and end, and where in
+    the step each one's monitored extremum lies (-1: none to check)."""
 
     K: np.ndarray
     F: np.ndarray
@@ -147,6 +149,9 @@ class Scratch(NamedTuple):
     g_new: np.ndarray
     gtmp: np.ndarray
     decay_new: np.ndarray
+    dg_old: np.ndarray
+    dg_new: np.ndarray
+    x_ext: np.ndarray
 
 
 class Implicit(NamedTuple):

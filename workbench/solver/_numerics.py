@@ -343,3 +343,196 @@ def dop853_stiffness(K, h, scale):
     if den <= 0.0:
         return 0.0
     return abs(h) * np.sqrt(num / den)
+
+
+# -- monitoring of the event functions inside a step ----------------------------------------------
+#: sqrt of the unit roundoff of a double, 2^-26
+SQRT_EPS = 1.4901161193847656e-08
+#: the unit roundoff, 2^-52
+EPS = 2.220446049250313e-16
+#: samples of the corrected quartic in (0, 1) before its extremum is polished by Newton's method
+QUARTIC_SAMPLES = 64
+
+
+@njit(cache=True, nogil=True)
+def rate_step(y, f, rtol, atol):
+    """Time step (s) of the forward difference ``(g(t + d, y + d f) - g(t, y)) / d`` that gives
+    the event functions' rates dg/dt along the derivative ``f`` at ``y``: the time in which the
+    state moves by sqrt(eps) of its size in the RMS norm of the error control,
+    ``d = sqrt(eps) / rms(f_i / (|y_i| + atol_i / rtol))``. This balances the difference's two
+    errors for an event function that varies on the scale of the state: its rounding,
+    ``eps |g| / d``, and its truncation, ``d/2`` times g's second derivative along ``f``, are then
+    both about sqrt(eps) times g's rate at the state's pace (the classical step of a
+    directional difference, e.g. Dennis & Schnabel 1983, Sec. 5.4). The result depends on the
+    point only (not on the step size), so that a run split into pauses recomputes the same
+    rates. Returns 0 where ``f`` vanishes or is not finite (no rate can be differenced)."""
+    n = y.size
+    acc = 0.0
+    for i in range(n):
+        acc += (f[i] / (abs(y[i]) + atol[i] / rtol)) ** 2
+    speed = np.sqrt(acc / n)
+    if not (speed > 0.0 and np.isfinite(speed)):
+        return 0.0
+    return SQRT_EPS / speed
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _side(direction, g0, g1):
+    """+1 where a crossing of an event in ``direction`` can hide in a step whose ends are both
+    on the "before" side of a rising crossing (g <= 0: a maximum of g), -1 where both are on the
+    "beyond" side of a falling one (g > 0: a minimum), 0 where the step's ends show a crossing
+    or an end lies on the side the event does not cross from."""
+    if direction >= 0 and g0 <= 0.0 and g1 <= 0.0:
+        return 1.0
+    if direction <= 0 and g0 > 0.0 and g1 > 0.0:
+        return -1.0
+    return 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _cubic(u0, u1, a, b, x):
+    """The cubic Hermite interpolant on [0, 1] with values u0, u1 and slopes a, b (per unit x)
+    at its ends, at x: ``u0 + x (a + x (c2 + x c3))``."""
+    d = u1 - u0
+    c2 = 3.0 * d - 2.0 * a - b
+    c3 = a + b - 2.0 * d
+    return u0 + x * (a + x * (c2 + x * c3))
+
+
+@njit(cache=True, nogil=True)
+def cubic_maximum(u0, u1, a, b):
+    """The interior local maximum x in (0, 1) of the cubic Hermite interpolant with values u0,
+    u1 and slopes a, b at its ends (-1 where it has none). Its derivative ``a + 2 c2 x + 3 c3
+    x^2`` vanishes at ``(-c2 -+ r) / (3 c3)``, ``r = sqrt(c2^2 - 3 a c3)``; the maximum is the
+    root where the second derivative, ``-2 r``, is negative, written without cancellation
+    (as ``a / (r - c2)`` for c2 <= 0; also the quadratic's vertex where c3 = 0)."""
+    d = u1 - u0
+    c2 = 3.0 * d - 2.0 * a - b
+    c3 = a + b - 2.0 * d
+    disc = c2 * c2 - 3.0 * a * c3
+    if not disc > 0.0:  # no critical point, or a double one (an inflection); NaN fails too
+        return -1.0
+    r = np.sqrt(disc)
+    if c2 <= 0.0:
+        x = a / (r - c2)
+    elif c3 != 0.0:
+        x = (-c2 - r) / (3.0 * c3)
+    else:
+        return -1.0  # a convex parabola: no maximum
+    if x > 0.0 and x < 1.0:
+        return x
+    return -1.0
+
+
+@njit(cache=True, nogil=True)
+def hermite_extremum(direction, g0, g1, d0, d1, h):
+    """Where in a step an event function's crossing could hide although its ends show none:
+    the position x in (0, 1) of the extremum of the cubic Hermite interpolant of g from its
+    values g0, g1 and rates d0, d1 (per s) at the step's ends (step h, s), or -1 where no
+    crossing can hide.
+
+    A crossing hides where both ends lie before it and g reaches beyond zero in between: a
+    maximum with both ends g <= 0 (direction +1 or 0: a contact entered and left inside the
+    step) or a minimum with both ends g > 0 (direction -1 or 0: a lasting contact that lifts
+    off and touches again). The extremum is returned where the interpolant's value there lies
+    beyond zero or closer to it than the band of the interpolant's own error, so that the
+    caller checks the true g there:
+
+    - the interpolation error, ``g''''(xi) h^4 x^2 (1 - x)^2 / 24`` for the cubic Hermite, is
+      bounded by the interpolant's deviation from the chord at x, ``B = |p(x) - chord(x)|``,
+      about ``g'' h^2 x (1 - x) / 2``: for g that varies at frequencies up to omega
+      (``g'''' ~ omega^2 g''``) their ratio is ``(h omega)^2 x (1 - x) / 12 <= (h omega)^2
+      / 48``, below 1/5 while h omega <= 3, longer than the steps an explicit pair takes on a
+      harmonic motion at rtol 1e-3 or tighter (their error per step grows like
+      ``(h omega)^(p + 1)``). B itself, a 100 % margin on the extremum's rise above the
+      chord, is the band;
+    - the rates' forward-difference error (:func:`rate_step`, about sqrt(eps) relative) moves
+      the interpolant by ``sqrt(eps) h (|d0| + |d1|)`` at most, and g's rounding by a few eps
+      of its size: both are added.
+
+    The check of the true g costs one evaluation of the event functions on the dense output
+    (prepared where no crossing or record needed it), only in the steps whose extremum lies
+    within that band of zero: near a grazing.
+    """
+    s = _side(direction, g0, g1)
+    if s == 0.0:
+        return -1.0
+    u0 = s * g0
+    u1 = s * g1
+    a = s * h * d0
+    b = s * h * d1
+    if not np.isfinite(u0 + u1 + a + b):
+        return -1.0
+    x = cubic_maximum(u0, u1, a, b)
+    if x < 0.0:
+        return -1.0
+    u = _cubic(u0, u1, a, b, x)
+    band = abs(u - (u0 + x * (u1 - u0)))
+    band += SQRT_EPS * (abs(a) + abs(b)) + 4.0 * EPS * max(abs(u0), abs(u1))
+    if u + band > 0.0:
+        return x
+    return -1.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _quartic(u0, u1, a, b, kappa, x):
+    """The cubic Hermite interpolant plus ``kappa x^2 (1 - x)^2``, and its first and second
+    derivatives in x."""
+    d = u1 - u0
+    c2 = 3.0 * d - 2.0 * a - b
+    c3 = a + b - 2.0 * d
+    w = x * (1.0 - x)
+    value = u0 + x * (a + x * (c2 + x * c3)) + kappa * w * w
+    slope = a + x * (2.0 * c2 + 3.0 * x * c3) + kappa * 2.0 * w * (1.0 - 2.0 * x)
+    curvature = 2.0 * c2 + 6.0 * c3 * x + kappa * (2.0 - 12.0 * x + 12.0 * x * x)
+    return value, slope, curvature
+
+
+@njit(cache=True, nogil=True)
+def quartic_extremum(direction, g0, g1, d0, d1, h, x1, gx):
+    """A second look where the true g at the cubic's extremum x1 (:func:`hermite_extremum`)
+    showed no crossing: the cubic Hermite interpolant's error is, to leading order,
+    ``kappa x^2 (1 - x)^2`` (its error term's shape), whose coefficient the true value
+    ``gx`` at x1 measures; the extremum x2 of the corrected quartic is returned where it
+    predicts g beyond zero, or short of it by less than its rise over ``gx`` (the same 100 %
+    margin as the cubic's band), else -1. Arguments as :func:`hermite_extremum`."""
+    s = _side(direction, g0, g1)
+    w1 = x1 * (1.0 - x1)
+    if s == 0.0 or not w1 > 0.0:
+        return -1.0
+    u0 = s * g0
+    u1 = s * g1
+    a = s * h * d0
+    b = s * h * d1
+    ux = s * gx
+    kappa = (ux - _cubic(u0, u1, a, b, x1)) / (w1 * w1)
+    if not np.isfinite(kappa):
+        return -1.0
+    best = -1.0
+    top = -np.inf
+    for i in range(1, QUARTIC_SAMPLES):
+        x = i / QUARTIC_SAMPLES
+        v, _, _ = _quartic(u0, u1, a, b, kappa, x)
+        if v > top:
+            top = v
+            best = x
+    lo = best - 1.0 / QUARTIC_SAMPLES
+    hi = best + 1.0 / QUARTIC_SAMPLES
+    x = best
+    for _ in range(8):  # Newton on the slope, kept in the sample's neighbourhood
+        _, slope, curvature = _quartic(u0, u1, a, b, kappa, x)
+        if not curvature < 0.0:
+            break
+        step = -slope / curvature
+        x = min(max(x + step, lo), hi)
+        if abs(step) <= 1e-12:
+            break
+    v, _, _ = _quartic(u0, u1, a, b, kappa, x)
+    if v < top:
+        v = top
+        x = best
+    if not (x > 0.0 and x < 1.0):
+        return -1.0
+    if v + (v - ux) > 0.0:
+        return x
+    return -1.0

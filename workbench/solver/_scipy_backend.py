@@ -5,6 +5,14 @@ output and event location (Brent's method), so agreement between the two is an i
 Events that change the state stop scipy's integration (``terminal=True``); the update is applied
 and a new ``solve_ivp`` call continues. Rejected steps are not reported by scipy (stored as -1).
 
+solve_ivp finds an event only where its function changes sign between the ends of a step, so
+it misses a crossing that both ends hide: a contact entered and left within one step, or a
+lasting contact that lifts off and touches again (a shallow contact near a grazing). The
+compiled loop monitors its event functions inside each step for these (see
+:mod:`workbench.solver._templates.integration_loop`); this backend does not, so near a
+grazing the two can disagree on the contacts, and a smaller ``max_step`` or tighter tolerances
+are this backend's only remedy.
+
 ``solver.max_steps`` bounds the right-hand side evaluations (``EVALUATIONS_PER_STEP`` per
 step: solve_ivp does not count its steps as it goes), and an initial state whose first step
 cannot be formed is refused (:func:`cannot_start`), as in the compiled loop.

@@ -37,6 +37,8 @@ from workbench.solver._numerics import (
     illinois_update,
     min_step,
     n_stages,
+    quartic_extremum,
+    rate_step,
     read_decay,
     reject_factor,
     root_tolerance,
@@ -204,6 +206,55 @@ def _locate(method, k, t_old, h, y_old, F, t_a, g_a, t_b, g_b, m, aux, yint, gtm
         event_values(t_m, yint, p, ip, aux, work, gtmp)
         t_a, g_a, t_b, g_b, side = illinois_update(t_a, g_a, t_b, g_b, side, t_m, gtmp[k])
     return t_b
+
+
+@njit(cache=True, nogil=True)
+def _event_rates(t, y, f, g, s, m, aux, ytmp, gtmp, dg):
+    """The event functions' rates dg/dt at (t, y), where they are ``g`` and the state's
+    derivative is ``f``, into ``dg``: one evaluation of the event functions at the point
+    advanced by the step of :func:`workbench.solver._numerics.rate_step` along ``f`` (0 where
+    ``f`` vanishes). ``ytmp``, ``gtmp``: scratch."""
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
+    delta = rate_step(y, f, s.rtol, s.atol)
+    if delta == 0.0:
+        dg[:] = 0.0
+        return
+    for i in range(y.size):
+        ytmp[i] = y[i] + delta * f[i]
+    event_values(t + delta, ytmp, p, ip, aux, work, gtmp)
+    for k in range(g.size):
+        dg[k] = (gtmp[k] - g[k]) / delta
+
+
+@njit(cache=True, nogil=True)
+def _hidden_root(method, k, t_old, h, y_old, F, g_a, g_b, dg_a, dg_b, x, m, aux, yint, gtmp):
+    """A crossing of event k that both ends of the last step (t_old, t_old + h) hide, with
+    the dense output prepared: the true g at the monitored extremum ``x`` (a fraction of the
+    step, from :func:`workbench.solver._numerics.hermite_extremum`), and where that shows no
+    crossing, once more at the extremum of the corrected quartic
+    (:func:`workbench.solver._numerics.quartic_extremum`). Where g lies beyond zero there, the
+    root before it is located as :func:`_locate` does for a crossing of the step's ends.
+    ``g_a``, ``g_b``, ``dg_a``, ``dg_b``: g and dg/dt at the step's ends.
+
+    Returns ``(found, t_root)``.
+    """
+    p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
+    direction = m.ev_dir[k]
+    for look in range(2):
+        t_x = t_old + x * h
+        dense_eval(method, t_old, h, y_old, F, t_x, yint)
+        event_values(t_x, yint, p, ip, aux, work, gtmp)
+        g_x = gtmp[k]
+        if crossed(direction, g_a, g_x):
+            t_root = _locate(
+                method, k, t_old, h, y_old, F, t_old, g_a, t_x, g_x, m, aux, yint, gtmp
+            )
+            return True, t_root
+        if look == 0:
+            x = quartic_extremum(direction, g_a, g_b, dg_a, dg_b, h, x, g_x)
+            if x < 0.0:
+                break
+    return False, t_old
 
 
 @njit(cache=True, nogil=True)

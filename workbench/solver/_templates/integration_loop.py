@@ -21,7 +21,8 @@ Hooks (all ``numba.njit``), in SI units of the model's state:
     Writes dy/dt; returns 0, or a positive model failure code (the step is then rejected and
     retried smaller; if it persists the run fails with that code).
 ``event_values(t, y, p, ip, aux, work, g) -> None``
-    Writes the event functions g_k; an event fires where g_k changes sign in its direction.
+    Writes the event functions g_k; an event fires where g_k changes sign in its direction,
+    between the ends of a step or inside it (monitoring, below).
 ``apply_event(k, t, y, p, ip, aux, work) -> int``
     Applies the update of event k in place (state ``y`` and discrete state ``aux``); returns 1 to
     stop the integration, else 0.
@@ -55,6 +56,31 @@ writes ``a_k`` into ``work[stiff_slot[k]]`` on every call.
 Step-size control and initial step as in Hairer's
 codes and ``scipy.integrate`` (Hairer et al. 1993, Sec. II.4); event location by the Illinois
 variant of regula falsi (Dowell & Jarratt 1971) on the dense output.
+
+Monitoring of the event functions inside a step: the sign test at a step's ends misses a
+crossing that both ends hide, a contact entered and left within one step (g <= 0 at both ends,
+> 0 in between) or a lasting contact that lifts off and touches again (g > 0 at both ends);
+the step-size control does not see it either where few stages fall into the contact. So after
+every accepted step each event function that did not cross is interpolated by the cubic
+Hermite polynomial of its values and rates dg/dt at the step's ends (the rates by a forward
+difference along the state's derivative there, the explicit pairs' last stage or Radau's
+``f_new``: one more call of ``event_values`` per step, none for a model without events;
+:func:`workbench.solver._numerics.rate_step`). Where that interpolant has an extremum of the
+crossing kind (a maximum between two ends g <= 0 for a rising event, a minimum between two
+ends g > 0 for a falling one, either for direction 0) whose value lies beyond zero or within
+the band of the interpolant's own error (:func:`workbench.solver._numerics.
+hermite_extremum`), the dense output is prepared and the true g evaluated there, and once
+more at the extremum of the interpolant corrected by that value
+(:func:`workbench.solver._numerics.quartic_extremum`). Where g lies beyond zero there, its
+first root in the step is located on the dense output as for a crossing of the ends; where it
+is the step's earliest event, the step is retried to end at that root: the dense output of a
+step whose stages straddled a whole contact does not follow the motion before the contact to
+the tolerance, although the step's end, which the error control checked, does. The crossing
+then shows at the end of that step or of a later one and is located and applied as any
+other. The rates at a step's start are recomputed from the point alone wherever the loop
+restarts (after an event, at each call of ``advance``), so that pauses stay invisible; where
+no hidden crossing is found nothing but the evaluation count of the monitoring's dense outputs
+differs from a loop without it.
 """
 
 from __future__ import annotations
@@ -113,6 +139,7 @@ from workbench.solver._numerics import (
     crossed,
     dense_eval,
     dop853_stiffness,
+    hermite_extremum,
     initial_difference,
     initial_norms,
     min_step,
@@ -128,7 +155,9 @@ from workbench.solver._radau import (
 )
 from workbench.solver._templates.explicit_steps import (  # @@STEPS@@
     _dense_prepare,
+    _event_rates,
     _explicit_attempts,
+    _hidden_root,
     _locate,
 )
 from workbench.solver._templates.placeholder_hooks import (  # @@HOOKS@@
@@ -278,6 +307,9 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
         np.empty(ne),
         np.empty(ne),
         np.empty(ms),
+        np.empty(ne),
+        np.empty(ne),
+        np.empty(ne),
     )
     K = w.K
     F = w.F
@@ -286,6 +318,9 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
     g_new = w.g_new
     gtmp = w.gtmp
     decay_new = w.decay_new
+    dg_old = w.dg_old
+    dg_new = w.dg_new
+    x_ext = w.x_ext
     t = ctrl[CT_T]
     h_abs = ctrl[CT_H]
     f_inside = ctrl[CT_F_INSIDE] > 0.0
@@ -297,6 +332,8 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
         Yrec[i_rec, :] = y
         AUXrec[i_rec, :] = aux
         i_rec += 1
+    if ne > 0:  # the rates at the start: a function of the point, as at every restart
+        _event_rates(t, y, f, g_old, s, m, aux, w.ytmp, gtmp, dg_old)
     while True:
         if t >= t_end:
             status = DONE
@@ -334,25 +371,78 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
         # the dense output is needed where an event function crossed (to locate its root) or a
         # record lies inside the step (the records before an event's root lie before t_new)
         dense = i_rec < nrec and t_rec[i_rec] < t_new
+        monitor = False
         if ne > 0:
             event_values(t_new, y_new, p, ip, aux, work, g_new)
+            # the rates at the end (the derivative there: FSAL stage, or Radau's f_new), and
+            # the extremum of each event function's cubic Hermite interpolant where a crossing
+            # could hide between ends that show none
+            f_end = K[n_stages(current)]
+            if im is not None:
+                if current == RADAU5:
+                    f_end = im.f_new
+            _event_rates(t_new, y_new, f_end, g_new, s, m, aux, w.ytmp, gtmp, dg_new)
             for k in range(ne):
+                x_ext[k] = -1.0
                 if crossed(ev_dir[k], g_old[k], g_new[k]):
                     dense = True
-        if dense:
+                else:
+                    x_ext[k] = hermite_extremum(
+                        ev_dir[k], g_old[k], g_new[k], dg_old[k], dg_new[k], h
+                    )
+                    if x_ext[k] > 0.0:
+                        monitor = True
+        if dense or monitor:
+            rhs_dense = stats[ST_RHS]
             code = _dense_prepare(current, t, h, m, st, w, im)
             if code != 0:
                 stats[ST_MODEL_CODE] = code
                 status = MODEL_FAILURE
                 break
+            if not dense:
+                # evaluations for the monitoring alone: not the method's cost in the automatic
+                # method's comparison
+                before = (before[0] + stats[ST_RHS] - rhs_dense, before[1], before[2])
+        hidden = False
         for k in range(ne):
-            if crossed(ev_dir[k], g_old[k], g_new[k]):
+            found = False
+            ends = crossed(ev_dir[k], g_old[k], g_new[k])
+            t_k = t_new
+            if ends:
+                found = True
                 t_k = _locate(
                     current, k, t, h, y, F, t, g_old[k], t_new, g_new[k], m, aux, yint, gtmp
                 )
+            elif x_ext[k] > 0.0:
+                found, t_k = _hidden_root(
+                    current, k, t, h, y, F, g_old[k], g_new[k], dg_old[k], dg_new[k], x_ext[k],
+                    m, aux, yint, gtmp,
+                )  # fmt: skip
+            if found:
                 if fired < 0 or t_k < t_stop:
                     fired = k
                     t_stop = t_k
+                    hidden = not ends
+        if hidden and t_stop - t > 2.0 * min_step(t):
+            # the earliest event is a crossing that the step's ends hide: the step's stages
+            # straddled a whole excursion beyond the surface, which its dense output does not
+            # follow (it passed the error control without resolving it). The step is retried
+            # to end at the located root, with every stage before the excursion; its end or a
+            # later step then shows the crossing. (A root within the smallest step of the
+            # start fires at once, as a crossing of the ends would.)
+            stats[ST_STEPS] -= 1
+            stats[ST_REJECTED] += 1
+            stats[ST_EVENT_RETRIES] += 1
+            if im is not None:
+                if current == RADAU5:
+                    # the step's collocation polynomial and its place in the predictive
+                    # controller's history are discarded with it
+                    im.stats[IS_STEPS] -= 1
+                    im.stats[IS_REJECTED] += 1
+                    im.rc[RC_H_OLD] = 0.0
+                    im.rc[RC_H_ACC] = 0.0
+            h_abs = t_stop - t
+            continue
         while i_rec < nrec and t_rec[i_rec] <= t_stop:
             if t_rec[i_rec] == t_new and fired < 0:
                 Yrec[i_rec, :] = y_new
@@ -395,6 +485,7 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
                 stats[ST_MODEL_CODE] = code
                 status = MODEL_FAILURE
                 break
+            _event_rates(t, y, f, g_old, s, m, aux, w.ytmp, gtmp, dg_old)
             if stop != 0:
                 status = TERMINATED
                 break
@@ -411,10 +502,13 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
             f_inside = inside_end
             if ne > 0:
                 g_old[:] = g_new
+                dg_old[:] = dg_new
             if HAS_STEP_END:
                 if hooks_step_end(t, y, p, ip, aux, work, f) != 0:
                     if im is not None:
                         forget_jacobian(im.rc)  # the state's representation changed
+                    if ne > 0:  # the rates' difference step follows the state and f
+                        _event_rates(t, y, f, g_old, s, m, aux, w.ytmp, gtmp, dg_old)
         current = next_method
         if im is not None:
             im.rc[RC_CURRENT] = current
