@@ -15,6 +15,7 @@ import math
 import numpy as np
 import pytest
 from helpers import ENERGY, energy_residual
+from test_lyapunov import flow_map_copies, flow_map_tangent
 from test_ninebar_lean import lean_against_reference
 
 import workbench
@@ -206,6 +207,28 @@ def test_lean_rhs_equals_the_reference(friction):
         record={"dt": 1e-3, "variables": ["clearance_x", "driver_work"]},
     )
     assert lean_against_reference(scene) < 1e-12
+
+
+def test_tangent_map_through_impacts_without_memory_matches_copies():
+    """A free journal launched obliquely under Hunt-Crossley: impacts with no discrete state
+    (the problem has none; the force is continuous at onset and end, so the saltation is the
+    identity). The tangent map equals the shared-step finite differences of the flow map, as
+    under LN (test_lyapunov)."""
+    scene = workbench.load_scene(
+        {
+            "model": {"name": "free_journal"},
+            "effects": {"contact": "hunt_crossley"},
+            "parameters": {"hunt_crossley_damping": 1.0},
+            "initial": {"vy": 0.2},
+            "run": {"duration": 0.01},
+        }
+    )
+    pb = workbench.prepare(scene).problem
+    assert pb.aux0.size == 1 and pb.aux_scale[0] == np.inf  # the last onset's record only
+    M, _, events = flow_map_tangent(pb, 0.006, 1e-11)
+    assert events >= 4
+    F = flow_map_copies(pb, 0.006, 1e-11)
+    assert np.abs(M - F).max() < 1e-4 * np.abs(F).max()
 
 
 def test_an_unknown_contact_law_is_one_line(tmp_path, capsys):
