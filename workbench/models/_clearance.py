@@ -1,11 +1,11 @@
 """Declarations shared by every mechanism with revolute clearance joints (Python side).
 
-The parameters of the contact law (Lankarani & Nikravesh 1990, stiffness from Hertz, Eq. 4 of
-Chen et al. 2019) and of the friction laws (modified Coulomb, Ambrosio 2003; LuGre, Canudas de
-Wit et al. 1995), the friction effect, the per-joint output variables, the cross-field checks and
-the packing of the compiled parameter blocks of :mod:`workbench.models._mechanism_layouts`
-(layouts JOINT, FRICTION). What every such mechanism does alike as a model is
-:class:`workbench.models._mechanism.Mechanism`.
+The parameters of the contact laws (Lankarani & Nikravesh 1990 or Hunt & Crossley 1975, stiffness
+from Hertz, Eq. 4 of Chen et al. 2019) and of the friction laws (modified Coulomb, Ambrosio 2003;
+LuGre, Canudas de Wit et al. 1995), the contact and friction effects, the per-joint output
+variables, the cross-field checks and the packing of the compiled parameter blocks of
+:mod:`workbench.models._mechanism_layouts` (layouts JOINT, FRICTION). What every such mechanism does
+alike as a model is :class:`workbench.models._mechanism.Mechanism`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from workbench.models._mechanism_layouts import (
     FRICTION,
     JOINT,
 )
-from workbench.models.contact import hertz_internal_stiffness
+from workbench.models.contact import CONTACT_LAWS, hertz_internal_stiffness
 
 _POS = {"lower": 0.0, "lower_open": True}
 
@@ -35,6 +35,30 @@ FRICTION_CODES = {"none": 0, "coulomb": 1, "lugre": 2}
 FRICTION_EFFECT = Effect(
     "friction", "coulomb", "choice", "friction law in the clearance joints", tuple(FRICTION_CODES)
 )
+
+CONTACT_EFFECT = Effect(
+    "contact",
+    "lankarani_nikravesh",
+    "choice",
+    "normal contact force law in the clearance joints: Lankarani-Nikravesh (damping scaled by "
+    "the onset velocity, held through each contact) or Hunt-Crossley (a material damping "
+    "constant, no memory)",
+    tuple(CONTACT_LAWS),
+)
+
+
+def contact_law(effects: Mapping[str, Any]) -> str:
+    """The contact law the effects name (a value of :data:`CONTACT_EFFECT`): the default,
+    Lankarani-Nikravesh, for effects that do not name one (a model that does not declare the
+    effect)."""
+    return effects.get("contact", CONTACT_EFFECT.default)
+
+
+#: the default Hunt-Crossley damping constant (s m-1): the one whose free impact at
+#: HUNT_CROSSLEY_REFERENCE_VELOCITY rebounds with the default restitution 0.9
+#: (workbench.models.contact.hunt_crossley_damping(0.9, 1.0) = 0.11099 s m-1)
+HUNT_CROSSLEY_DAMPING = 0.111
+HUNT_CROSSLEY_REFERENCE_VELOCITY = 1.0  # m s-1
 
 
 def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[Parameter, ...]:
@@ -57,7 +81,14 @@ def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[P
     :mod:`workbench.models.friction`). ``lugre_damping_velocity = 0`` gives the paper's
     constant damping; ``lugre_sigma1 = 0.2`` with it the largest passive constant one. Every
     LuGre run records how far its friction coefficient went
-    (:mod:`workbench.models._friction_report`)."""
+    (:mod:`workbench.models._friction_report`).
+
+    The Hunt-Crossley damping constant ``hunt_crossley_damping`` (used with the effect
+    ``contact = "hunt_crossley"`` only) defaults to HUNT_CROSSLEY_DAMPING = 0.111 s m-1: the
+    constant whose free impact at 1 m s-1 rebounds with the restitution 0.9 that the LN law
+    takes for steel (the exact relation of :func:`workbench.models.contact.
+    hunt_crossley_restitution`; 0.1 s m-1 by the first-order e = 1 - alpha v). A scene that
+    compares the laws at another impact velocity v sets ``hunt_crossley_damping(c_e, v)``."""
     return (
         Parameter("clearance", clearance, "m", "radial clearance c of the joints", **_POS),
         Parameter("bearing_radius", 10.0e-3, "m", "bearing radius R1", **_POS),
@@ -94,6 +125,15 @@ def contact_parameters(clearance: float, friction_coefficient: float) -> tuple[P
             "m s-1",
             "floor of the onset velocity in the LN damping (grazing contact)",
             **_POS,
+        ),
+        Parameter(
+            "hunt_crossley_damping",
+            HUNT_CROSSLEY_DAMPING,
+            "s m-1",
+            "material damping constant alpha of the Hunt-Crossley law, F = K delta^n "
+            "(1 + 1.5 alpha delta_dot); its restitution is 1 - alpha v for small alpha v "
+            "(effects.contact = 'hunt_crossley' only)",
+            lower=0.0,
         ),
         Parameter(
             "max_penetration",
@@ -234,9 +274,10 @@ def friction_block(params: Mapping[str, float]) -> np.ndarray:
     )
 
 
-def joint_block(params: Mapping[str, float], clearance: float) -> np.ndarray:
+def joint_block(params: Mapping[str, float], clearance: float, contact: str) -> np.ndarray:
     """One joint's parameters (clearance in m) in the JOINT layout of
-    :mod:`workbench.models._mechanism_layouts`."""
+    :mod:`workbench.models._mechanism_layouts`, for the contact law ``contact`` (a value of
+    the effect ``contact``)."""
     r1 = params["bearing_radius"]
     return JOINT.pack(
         {
@@ -248,6 +289,8 @@ def joint_block(params: Mapping[str, float], clearance: float) -> np.ndarray:
             "ce": params["restitution"],
             "dmax": params["max_penetration"],
             "vfloor": params["impact_velocity_floor"],
+            "law": CONTACT_LAWS[contact],
+            "alpha": params["hunt_crossley_damping"],
         }
     )
 

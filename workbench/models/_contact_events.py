@@ -1,6 +1,9 @@
 """The contact events of a mechanism's clearance joints (hooks ``event_values`` and
 ``apply_event``): per joint with a clearance its penetration, twice (onset and end); at an
-onset the normal velocity is held and the LuGre bristles reset."""
+onset the normal velocity is held (where the problem holds one: the Lankarani-Nikravesh law;
+the Hunt-Crossley law has no memory and no discrete state) and the LuGre bristles reset. The
+events are located whatever the law: the solver steps to each contact's onset and end (where
+the force law changes form) and counts them."""
 
 from __future__ import annotations
 
@@ -32,17 +35,20 @@ def contact_event_values(y, p, ip, g, P, IP, n_joints):
 @njit(cache=True)
 def contact_event(k, y, ip, aux, IP, n_joints):
     """Apply event k of :func:`contact_event_values` (hook ``apply_event``): at a contact onset
-    hold the normal velocity in aux (and reset the joint's LuGre bristles); at its end clear it.
-    Returns 0 (the integration goes on)."""
+    hold the normal velocity in aux (where aux has the joint's slot: under the LN law) and
+    reset the joint's LuGre bristles; at its end clear it. Returns 0 (the integration goes
+    on)."""
     nf = ip[IP.nf]
     slot = k - k % 2
     for j in range(n_joints):
         if ip[IP.slot + j] == slot:
+            held = j < aux.size
             if k % 2 == 0:
-                aux[j] = onset_velocity(y[slot], y[slot + 1], y[nf + slot], y[nf + slot + 1])
+                if held:
+                    aux[j] = onset_velocity(y[slot], y[slot + 1], y[nf + slot], y[nf + slot + 1])
                 iz = ip[IP.z + j]
                 if iz >= 0:
                     y[iz] = 0.0
-            else:
+            elif held:
                 aux[j] = 0.0
     return 0

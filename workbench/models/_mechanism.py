@@ -20,6 +20,7 @@ from workbench.models._clearance import (
     ENERGY_STATES,
     FRICTION_CODES,
     clearance_states,
+    contact_law,
     energy_outputs,
     failure_messages,
     friction_block,
@@ -64,8 +65,9 @@ class Mechanism(Model):
     assembly: ClassVar[str]
     #: module of the compiled hooks, with the layouts P, IP, W, RECORD and ``evaluate_many``
     dynamics: ClassVar[ModuleType]
-    #: event functions: each clearance joint's penetration (onset, end); discrete state: each
-    #: joint's normal velocity held from its contact onset (0 out of contact)
+    #: event functions: each clearance joint's penetration (onset, end); discrete state (under
+    #: the Lankarani-Nikravesh law; none under Hunt-Crossley's): each joint's normal velocity
+    #: held from its contact onset (0 out of contact)
     event_units = "m"
     discrete_state_units = "m s-1"
 
@@ -229,7 +231,9 @@ def mechanism_problem(
         Module of the compiled hooks.
     effects, initial, requested
         As :meth:`workbench.models.Model.problem` receives them; ``effects["clearance"]``
-        names the joints with a clearance, ``effects["friction"]`` the friction law.
+        names the joints with a clearance, ``effects["friction"]`` the friction law,
+        ``effects["contact"]`` the contact law (the Lankarani-Nikravesh law holds each
+        joint's onset velocity in the discrete state; the Hunt-Crossley law has none).
     joints : tuple of str
         Every joint of the mechanism that can have a clearance, in the order of its blocks.
     clearances : mapping of str to float
@@ -257,7 +261,8 @@ def mechanism_problem(
         :func:`clearance_states`), the friction-law quadratures of
         :mod:`workbench.models._friction_report` when LuGre's ``time_above_static_friction``
         or ``time_beyond_friction_law`` is requested, and the energy quadratures when
-        ``driver_work`` or ``dissipated_energy`` is.
+        ``driver_work`` or ``dissipated_energy`` is. Discrete state: one held onset velocity
+        per joint under the Lankarani-Nikravesh law, none under the Hunt-Crossley law.
     """
     present = [j for j in joints if j in effects["clearance"]]
     lugre = effects["friction"] == "lugre"
@@ -303,16 +308,17 @@ def mechanism_problem(
     stiff = [joints.index(name) for name in present] if lugre else []
     c_min = min(clearances[j] for j in present) if present else 1.0
     codes = failure_messages(assembly)
+    held = n if contact_law(effects) == "lankarani_nikravesh" else 0  # held onset velocities
     return Problem(
         hooks=hooks,
         states=tuple(states),
         y0=np.array(y0, dtype=float),
         p=p,
         ip=ip,
-        aux0=np.zeros(n),
+        aux0=np.zeros(held),
         event_direction=np.array([1, -1] * len(present), dtype=np.int64),
         atol_scale=state_scales(states, c_min, omega),
-        aux_scale=np.full(n, c_min * omega),  # held onset velocities, m s-1
+        aux_scale=np.full(held, c_min * omega),  # held onset velocities, m s-1
         work_size=work.size,
         failure=lambda code: codes.get(code, f"model failure code {code}"),
         data={"joints": tuple(present), "all_joints": joints, "IP": IP},

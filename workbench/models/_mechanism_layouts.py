@@ -47,6 +47,8 @@ JOINT = layout(
         ("ce", 1),  # restitution
         ("dmax", 1),  # largest allowed penetration, m
         ("vfloor", 1),  # impact-velocity floor of the LN damping, m s-1
+        ("law", 1),  # contact law: CONTACT_LAWS code of workbench.models.contact (0 LN, 1 HC)
+        ("alpha", 1),  # material damping constant of the Hunt-Crossley law, s m-1
     ],
 )
 

@@ -30,6 +30,7 @@ from workbench.models._reduced import (
     dissipated_power,
     friction_excess,
     friction_parameters,
+    held_onset,
     joint_forces,
     joint_parameters,
     moment_arm,
@@ -296,7 +297,7 @@ def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
             y=q[ix + 1],
             vx=qd[ix],
             vy=qd[ix + 1],
-            onset=aux[j],
+            onset=held_onset(aux, j),
             z=y[iz] if iz >= 0 else 0.0,
         )
         e, delta, ddot, fn, fdamp, ft, mu, vt, z, zdot, decay = clearance_joint(
@@ -387,6 +388,6 @@ def rates_from_record(y, ip, aux, work, dydt, mech):
         dydt[iw + 1] = work[W.pdiss]
     for j in range(n_joints):
         delta = work[W.joint + j * JOINT_RECORD.size + JOINT_RECORD.delta]
-        if ip[IP.has + j] == 1 and aux[j] == 0.0 and delta > 0.0:
-            return EVENT_INSIDE_STEP  # in contact, but its onset has not been located
+        if ip[IP.has + j] == 1 and held_onset(aux, j) == 0.0 and delta > 0.0:
+            return EVENT_INSIDE_STEP  # in contact, with no onset velocity held (held_onset)
     return 0

@@ -11,7 +11,8 @@ are Chen et al. 2019, Sec. 3)
     M qdd + h = Q,   M_kl = sum_b m_b Jc_k . Jc_l + I_b Jphi_k Jphi_l,
     h_k = sum_b m_b Jc_k . gam_c + I_b Jphi_k gam_phi,
 
-and a clearance joint adds the Lankarani-Nikravesh normal force and a friction force at the
+and a clearance joint adds the normal force of its contact law (Lankarani-Nikravesh or
+Hunt-Crossley, :mod:`workbench.models.contact`) and a friction force at the
 material contact points of journal and bearing (:func:`joint_forces`). Every model with
 clearance joints (``ninebar``, ``slider_crank``) uses these functions, so the contact mechanics
 and the body sums exist once, in two forms that share them:
@@ -42,6 +43,8 @@ from workbench.models._mechanism_layouts import (
     JOINT,
 )
 from workbench.models.contact import (
+    CONTACT_HUNT_CROSSLEY,
+    hunt_crossley,
     lankarani_nikravesh,
 )
 from workbench.models.friction import (
@@ -78,11 +81,27 @@ def moment_arm(px, py, cx, cy, fx, fy):
 
 
 @njit(cache=True, inline="always")
+def held_onset(aux, j):
+    """Joint j's normal velocity held since its contact's onset (m s-1; 0 out of contact or
+    before the onset is located): aux[j] where the problem holds one (the Lankarani-Nikravesh
+    law), 0 where it holds none (a law without memory: no discrete state, aux shorter). A
+    joint in contact with 0 here has its onset not located, or no onset to locate: the
+    right-hand side then says EVENT_INSIDE_STEP, so that the solver still steps to the
+    onset's event. Without memory every state in contact says so, and the solver's search for
+    a contact that begins and ends within one step (which it runs only for steps that start
+    without EVENT_INSIDE_STEP) covers the steps that start with every joint out of contact:
+    while one joint's contact lasts, a contact of another joint shorter than a step is not
+    forced to be located (its force still acts at the stages that see it)."""
+    return aux[j] if j < aux.size else 0.0
+
+
+@njit(cache=True, inline="always")
 def joint_parameters(p, jb):
     """The JOINT block of p at offset ``jb`` as a tuple (in the JOINT layout's order)."""
     return (
         p[jb + JOINT.r1], p[jb + JOINT.r2], p[jb + JOINT.c], p[jb + JOINT.k], p[jb + JOINT.n],
-        p[jb + JOINT.ce], p[jb + JOINT.dmax], p[jb + JOINT.vfloor],
+        p[jb + JOINT.ce], p[jb + JOINT.dmax], p[jb + JOINT.vfloor], p[jb + JOINT.law],
+        p[jb + JOINT.alpha],
     )  # fmt: skip
 
 
@@ -107,7 +126,8 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
         Clearance vector (journal centre minus bearing centre, m; the same numbers the model's
         contact events see) and its rate (m s-1).
     onset : float
-        Normal velocity held since the contact began (m s-1; 0 if not located).
+        Normal velocity held since the contact began (m s-1; 0 if not located); read by the
+        Lankarani-Nikravesh law only (the Hunt-Crossley law has no memory).
     bcx, bcy : float
         Bearing centre, m.
     vj, vb : tuple of 5 floats
@@ -144,15 +164,18 @@ def joint_forces(x, y, vx, vy, onset, bcx, bcy, vj, vb, jp, fp, friction, z, hg)
     nx = x / e
     ny = y / e
     ddot = nx * vx + ny * vy
-    fn, fdamp = lankarani_nikravesh(
-        delta,
-        ddot,
-        onset if onset > 0.0 else ddot,
-        jp[JOINT.k],
-        jp[JOINT.n],
-        jp[JOINT.ce],
-        jp[JOINT.vfloor],
-    )
+    if jp[JOINT.law] == CONTACT_HUNT_CROSSLEY:
+        fn, fdamp = hunt_crossley(delta, ddot, jp[JOINT.k], jp[JOINT.n], jp[JOINT.alpha])
+    else:
+        fn, fdamp = lankarani_nikravesh(
+            delta,
+            ddot,
+            onset if onset > 0.0 else ddot,
+            jp[JOINT.k],
+            jp[JOINT.n],
+            jp[JOINT.ce],
+            jp[JOINT.vfloor],
+        )
     r1 = jp[JOINT.r1]
     r2 = jp[JOINT.r2]
     jx = bcx + x + r2 * nx

@@ -29,7 +29,8 @@ Two evaluations share these formulas (:mod:`workbench.models._reduced`,
 State y = [q_f (m), qd_f (m s-1), z per clearance joint (m, LuGre only), per clearance joint
 the times above mu_s and beyond the law's envelope (s, LuGre, when requested), driver work (J)
 and dissipated energy (J) when requested]. Discrete state aux = [onset normal velocity per joint
-(m s-1; 0 = not in contact)], set by the contact-onset event of each joint.
+(m s-1; 0 = not in contact)], set by the contact-onset event of each joint, under the
+Lankarani-Nikravesh law only; under the Hunt-Crossley law, which has no memory, aux is empty.
 """
 
 from __future__ import annotations
@@ -62,6 +63,7 @@ from workbench.models._reduced import (
     driver_power,
     friction_excess,
     friction_parameters,
+    held_onset,
     joint_parameters,
     lean_joint,
     pass_term,
@@ -276,20 +278,22 @@ def rhs(t, y, p, ip, aux, work, dydt):
     gx = p[P.gx]
     gy = p[P.gy]
     hg = work[W.hg]
+    onset_a = held_onset(aux, 0)
+    onset_b = held_onset(aux, 1)
     friction = ip[IP.friction]
     fp = friction_parameters(p, P.friction)
     # joint forces; only the journals' bodies move with the free coordinates (not the cranks)
     jpa = joint_parameters(p, P.joint)
     da, dda, fda, fta, mua, vta, za, zdota, decaya, jxa, jya, bxa, bya, fxa, fya, arma, _ = (
         lean_joint(
-            x1, y1, vx1, vy1, aux[0], za, friction, jpa, fp, hg, rates, cen, LINK2, CRANK1,
+            x1, y1, vx1, vy1, onset_a, za, friction, jpa, fp, hg, rates, cen, LINK2, CRANK1,
             point(state, PT_A),
         )
     )  # fmt: skip
     jpb = joint_parameters(p, P.joint + JOINT.size)
     db, ddb, fdb, ftb, mub, vtb, zb, zdotb, decayb, jxb, jyb, bxb, byb, fxb, fyb, armb, _ = (
         lean_joint(
-            x2, y2, vx2, vy2, aux[1], zb, friction, jpb, fp, hg, rates, cen, LINK3, CRANK4,
+            x2, y2, vx2, vy2, onset_b, zb, friction, jpb, fp, hg, rates, cen, LINK3, CRANK4,
             point(state, PT_B),
         )
     )  # fmt: skip
@@ -353,8 +357,8 @@ def rhs(t, y, p, ip, aux, work, dydt):
             return CODE_NONFINITE
         dydt[iw] = power
         dydt[iw + 1] = p_diss
-    if (da > 0.0 and aux[0] == 0.0) or (db > 0.0 and aux[1] == 0.0):
-        return EVENT_INSIDE_STEP  # in contact, but its onset has not been located
+    if (da > 0.0 and onset_a == 0.0) or (db > 0.0 and onset_b == 0.0):
+        return EVENT_INSIDE_STEP  # in contact, with no onset velocity held (see held_onset)
     return 0
 
 
@@ -368,5 +372,5 @@ def event_values(t, y, p, ip, aux, work, g):
 
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):
-    """Contact onset: hold the normal velocity (and reset the LuGre bristles); end: clear it."""
+    """Contact onset: hold the normal velocity (LN) and reset the LuGre bristles; end: clear it."""
     return contact_event(k, y, ip, aux, IP, N_JOINTS)

@@ -9,7 +9,9 @@ import numpy as np
 from workbench.models import register
 from workbench.models._base import Effect, Parameter
 from workbench.models._clearance import (
+    CONTACT_EFFECT,
     FRICTION_EFFECT,
+    contact_law,
     contact_parameters,
     joint_block,
     validate_joint,
@@ -104,6 +106,7 @@ class NineBar(Mechanism):
     effects = (
         Effect("clearance", ("A", "B"), "subset", "joints with a radial clearance", JOINTS),
         FRICTION_EFFECT,
+        CONTACT_EFFECT,
         Effect("gravity", True, "bool", "apply gravity"),
     )
 
@@ -137,6 +140,8 @@ class NineBar(Mechanism):
                 **mechanism_parameters(params, effects, BODY_NAMES),
                 "theta10": params["theta10"],
                 "theta40": params["theta40"],
-                "joint": np.concatenate([joint_block(params, clearances[j]) for j in JOINTS]),
+                "joint": np.concatenate(
+                    [joint_block(params, clearances[j], contact_law(effects)) for j in JOINTS]
+                ),
             }
         )

@@ -1,17 +1,18 @@
 """Compiled dynamics of the slider-crank mechanism with a revolute clearance joint (solver hooks).
 
 Reduced (Lagrange) formulation in q = (theta1, x, y) (Flores et al. 2006): the crank angle is
-driven, theta1 = theta10 + omega t; the free coordinates are the clearance vector (x, y) of the
-rod / slider joint. The equations of motion, contact (Lankarani-Nikravesh) and friction (modified
-Coulomb, LuGre) are those of every mechanism (:mod:`workbench.models._reduced`); the crank
-torque is the motor's reaction. As for the nine-bar (:mod:`workbench.models.ninebar._dynamics`)
-two evaluations share the formulas: the lean :func:`rhs` (the free columns only: the crank does
-not move with them, the rod and the slider do; both feel the contact force) and the record-time
+driven, theta1 = theta10 + omega t; the free coordinates are the clearance vector (x, y) of the rod
+/ slider joint. The equations of motion, contact (Lankarani-Nikravesh or Hunt-Crossley) and friction
+(modified Coulomb, LuGre) are those of every mechanism (:mod:`workbench.models._reduced`); the crank
+torque is the motor's reaction. As for the nine-bar (:mod:`workbench.models.ninebar._dynamics`) two
+evaluations share the formulas: the lean :func:`rhs` (the free columns only: the crank does not move
+with them, the rod and the slider do; both feel the contact force) and the record-time
 :func:`evaluate` with every output, the reference of the tests.
 
 State y = [x, y (m), vx, vy (m s-1), z (m, LuGre only), the times above mu_s and beyond the
 law's envelope (s, LuGre, when requested), driver work and dissipated energy (J) when
-requested]; aux = [onset normal velocity (m s-1; 0 = not in contact)].
+requested]; aux = [onset normal velocity (m s-1; 0 = not in contact)] under the
+Lankarani-Nikravesh law, empty under the Hunt-Crossley law (no memory).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from workbench.models._reduced import (
     driver_power,
     friction_excess,
     friction_parameters,
+    held_onset,
     joint_parameters,
     lean_joint,
     pass_term,
@@ -193,8 +195,9 @@ def rhs(t, y, p, ip, aux, work, dydt):
     gy = p[P.gy]
     jp = joint_parameters(p, P.joint)
     fp = friction_parameters(p, P.friction)
+    onset = held_onset(aux, 0)
     delta, ddot, fdamp, ft, mu, vt, z, zdot, decay, jx, jy, bx, by, fx, fy, arm, barm = lean_joint(
-        x, yy, vx, vy, aux[0], y[max(iz, 0)], ip[IP.friction], jp, fp, work[W.hg], rates, cen,
+        x, yy, vx, vy, onset, y[max(iz, 0)], ip[IP.friction], jp, fp, work[W.hg], rates, cen,
         ROD, SLIDER, point(state, PT_B),
     )  # fmt: skip
     if delta > jp[JOINT.dmax]:
@@ -238,8 +241,8 @@ def rhs(t, y, p, ip, aux, work, dydt):
             return CODE_NONFINITE
         dydt[iw] = power
         dydt[iw + 1] = p_diss
-    if delta > 0.0 and aux[0] == 0.0:
-        return EVENT_INSIDE_STEP  # in contact, but its onset has not been located
+    if delta > 0.0 and onset == 0.0:
+        return EVENT_INSIDE_STEP  # in contact, with no onset velocity held (see held_onset)
     return 0
 
 
@@ -253,5 +256,5 @@ def event_values(t, y, p, ip, aux, work, g):
 
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):
-    """Contact onset: hold the normal velocity (and reset the LuGre bristles); end: clear it."""
+    """Contact onset: hold the normal velocity (LN) and reset the LuGre bristles; end: clear it."""
     return contact_event(k, y, ip, aux, IP, N_JOINTS)

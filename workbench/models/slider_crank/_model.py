@@ -17,7 +17,9 @@ from workbench._errors import SceneError
 from workbench.models import register
 from workbench.models._base import Effect, Parameter
 from workbench.models._clearance import (
+    CONTACT_EFFECT,
     FRICTION_EFFECT,
+    contact_law,
     contact_parameters,
     joint_block,
     validate_joint,
@@ -83,6 +85,7 @@ class SliderCrank(Mechanism):
     effects = (
         Effect("clearance", ("B",), "subset", "joints with a radial clearance", JOINTS),
         dataclasses.replace(FRICTION_EFFECT, default="none"),
+        CONTACT_EFFECT,
         Effect("gravity", True, "bool", "apply gravity"),
     )
 
@@ -111,6 +114,6 @@ class SliderCrank(Mechanism):
                 "geometry": geometry_array({f: params[n] for n, f, _ in _GEOMETRY_PARAMETERS}),
                 **mechanism_parameters(params, effects, BODY_NAMES),
                 "theta10": params["theta10"],
-                "joint": joint_block(params, params["clearance"]),
+                "joint": joint_block(params, params["clearance"], contact_law(effects)),
             }
         )
