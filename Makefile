@@ -32,8 +32,12 @@ format: $(STAMP)
 # What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests,
 # every python block of README.md and of the docs' pages (tests/test_readme.py, test_docs.py),
 # the docs site built with warnings as errors, and the notebooks checked against the code.
+# The suite's files are shared among TEST_WORKERS processes (pytest-xdist; one file stays in
+# one process, so a module's fixtures are computed once): the suite's CPU time is about 26 min,
+# and CI has 2 cores.
+TEST_WORKERS ?= 2
 test: lint
-	$(PY) -m pytest -q --timeout=900 --doctest-modules tests workbench
+	$(PY) -m pytest -q --timeout=900 -n $(TEST_WORKERS) --dist loadfile --durations=15 --doctest-modules tests workbench
 
 # The tests that assert chaotic or statistical numbers (marker `chaotic`) once more as another
 # processor would run them: kernels compiled for numba's generic CPU (in a cache folder of
