@@ -59,6 +59,30 @@ def one_worker(scene, tmp_path_factory):
     return workbench.run_campaign(scene, tmp_path_factory.mktemp("one") / "c.nc", workers=1)
 
 
+def test_a_campaign_names_the_processor_that_computed_its_points(one_worker):
+    """Issue 36: one processor and compile target for every point -> the campaign's attributes
+    (no per-point variable); blocks from different targets -> ``compiled_on`` per point."""
+    from workbench._processor import processor_attrs
+    from workbench.campaign._assemble import _compiled_on
+
+    assert {k: one_worker.attrs[k] for k in processor_attrs()} == processor_attrs()
+    assert "compiled_on" not in one_worker
+
+    def block(points, **attrs):
+        return xr.Dataset(coords={"point": ("point", np.array(points))}, attrs=attrs)
+
+    host = processor_attrs()
+    generic = {**host, "compile_target": "x86_64-unknown-linux-gnu generic"}
+    blocks = [block([0, 1], **host), block([2, 5], **generic), block([3, 4])]
+    var, attrs = _compiled_on(blocks, 6, (2, 3), ("gamma", "omega"))
+    assert var.dims == ("gamma", "omega") and var.attrs["units"] == "1"
+    np.testing.assert_array_equal(var.values, [[0, 0, 1], [2, 2, 1]])
+    assert attrs["processor"].startswith("mixed")
+    listing = var.attrs["compile_targets"].split("; ")
+    assert listing[1].startswith("1: ") and "generic" in listing[1]
+    assert listing[2] == "2: " + ", ".join(f"{a} not recorded" for a in host)
+
+
 def test_same_numbers_with_one_or_two_workers_and_as_single_runs(scene, one_worker, tmp_path):
     two = workbench.run_campaign(scene, tmp_path / "c.nc", workers=2)
     assert one_worker.attrs["campaign_chunk"] != two.attrs["campaign_chunk"]  # other blocks too

@@ -18,7 +18,10 @@ import platform
 from functools import cache
 from pathlib import Path
 
-__all__ = ["compile_target", "processor_attrs"]
+__all__ = ["PROCESSOR_ATTRS", "compile_target", "processor_attrs"]
+
+# the global attributes of a result that name what computed it (:func:`processor_attrs`)
+PROCESSOR_ATTRS = ("processor", "compile_target", "compile_features")
 
 
 @cache

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import xarray as xr
 
+from workbench._processor import PROCESSOR_ATTRS
 from workbench.archive import open_run
 from workbench.campaign._block import (
     FAILURE_ATTRS,
@@ -181,7 +182,47 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
         solver_max_steps=s["max_steps"],
     )
     ds.attrs.update(grid_attrs)
+    compiled_on, processor = _compiled_on(blocks, n, shape, pdims)
+    ds.attrs.update(processor)
+    if compiled_on is not None:
+        ds["compiled_on"] = compiled_on
     return ds
+
+
+NOT_RECORDED = "not recorded"  # a block written before 0.6.0 names no processor
+
+
+def _compiled_on(
+    blocks: list[xr.Dataset], n: int, shape: tuple[int, ...], pdims: tuple[str, ...]
+) -> tuple[xr.DataArray | None, dict[str, str]]:
+    """Which processor and compile target computed each point (each block records its worker's,
+    :func:`workbench._processor.processor_attrs`): the campaign's attributes when every block
+    names the same, else those attributes say "mixed" and the variable ``compiled_on`` (over the
+    parameter dims) gives each point's index into the attribute ``compile_targets``."""
+    keys = [tuple(b.attrs.get(a, NOT_RECORDED) for a in PROCESSOR_ATTRS) for b in blocks]
+    distinct = list(dict.fromkeys(keys))
+    if len(distinct) == 1:
+        return None, dict(zip(PROCESSOR_ATTRS, distinct[0], strict=True))
+    index = np.full(n, -1, np.int16)
+    for b, key in zip(blocks, keys, strict=True):
+        index[b["point"].values] = distinct.index(key)
+    listing = "; ".join(
+        f"{i}: " + ", ".join(f"{a} {v}" for a, v in zip(PROCESSOR_ATTRS, key, strict=True))
+        for i, key in enumerate(distinct)
+    )
+    var = xr.DataArray(
+        index.reshape(shape),
+        dims=pdims,
+        attrs={
+            "long_name": "index of the processor and compile target that computed the point",
+            "units": "1",
+            "compile_targets": listing,
+            "comment": "other processors round differently: a chaotic quantity agrees across "
+            "them within its error, not in digits (docs/cluster.md)",
+        },
+    )
+    mixed = "mixed: see the variable compiled_on"
+    return var, dict.fromkeys(PROCESSOR_ATTRS, mixed)
 
 
 def _measured(name: str, tail: tuple[int, ...], n: int, blocks: list[xr.Dataset]) -> np.ndarray:

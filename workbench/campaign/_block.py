@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench._processor import processor_attrs
 from workbench.archive import save_run, sha256_file
 from workbench.campaign._grid import SweepGrid, code_of, modules_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
@@ -328,7 +329,7 @@ def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
         coords[d] = (d, list(values), dict(attrs))
     ds = xr.Dataset(data_vars, coords=coords)
     ds = ds.merge(_measured(runs), combine_attrs="override")
-    ds.attrs.update(model=scene.model)
+    ds.attrs.update(model=scene.model, **processor_attrs())  # this worker's: one per block
     return ds
 
 

@@ -50,10 +50,10 @@ import math
 import numpy as np
 from numba import njit
 
+from workbench._errors import SceneError
 from workbench.models import EVENT_INSIDE_STEP, register
 from workbench.models._base import Model, Parameter, Problem, Quantity
 from workbench.models.stop_oscillator import grazing_amplitude
-from workbench.scene import SceneError
 
 __all__ = ["ImpactOscillator", "grazing_amplitude"]
 
