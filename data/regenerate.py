@@ -15,7 +15,9 @@ code writes.
   CF attributes), not what they hold, rewrite each shipped archive in place with the current
   writer, its values untouched (checked), instead of recomputing it (the maps cost an hour
   each): read by ``open_run`` (an older format upgraded), given the global attributes every
-  archive now carries that it lacks (``Conventions``, ``references``), a line in
+  archive now carries that it lacks (``Conventions``, ``references``), the scalar
+  coordinates of parameters the model declared since (at their defaults: a run whose scene
+  set one is refused and must be recomputed), a line in
   ``history`` that says so, and written as it was (netCDF-3 for the maps and periodic_end.nc).
 
 - ``<map>_map.nc``: a chaos map of ``studies/chaos_maps/<map>.toml`` (``make chaos-maps``
@@ -93,6 +95,7 @@ def upgrade(path: Path) -> Path:
     ds = workbench.open_run(path)
     found = int(ds.attrs.pop("upgraded_from_format", ds.attrs["format_version"]))
     attrs = ds.attrs
+    lacks = not {"Conventions", "references"} <= set(attrs)
     attrs.setdefault("Conventions", "CF-1.11")
     attrs.setdefault("references", references(attrs["model"]))
     now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
@@ -100,6 +103,14 @@ def upgrade(path: Path) -> Path:
         f"{now} rewritten by workbench {workbench.__version__} (data/regenerate.py --upgrade): "
         f"archive format {found} -> {workbench.FORMAT_VERSION}, values untouched"
     )
+    added = _declared_since(ds)
+    if found == workbench.FORMAT_VERSION and not added and not lacks:
+        return path  # nothing to upgrade: left as it is
+    if added:
+        line += (
+            f"; parameters declared since, added at their defaults (the run did not use them): "
+            f"{', '.join(added)}"
+        )
     attrs["history"] = f"{attrs['history']}\n{line}" if attrs.get("history") else line
     with_values = ds.copy(deep=True)
     workbench.save_run(ds, path, classic=classic)
@@ -111,6 +122,34 @@ def upgrade(path: Path) -> Path:
         assert np.all(same) and back[name].dims == var.dims, f"{path.name}: {name} changed"
     assert back.identical(with_values), f"{path.name}: the attributes read back differ"
     return path
+
+
+def _declared_since(ds) -> list[str]:
+    """Add to ``ds`` (in place) the scalar coordinates of the model's parameters declared after
+    the archive was written (e.g. ``hunt_crossley_damping``, 0.6.0), at the values the code
+    would record for its scene: their defaults, which the stored run's effects did not use
+    (checked: a scene naming one is refused). The attribute ``model_parameters`` lists them
+    in the model's order. Returns their names."""
+    from workbench.models import get_model
+    from workbench.run import PARAMETERS_ATTR, parameter_coords
+
+    if PARAMETERS_ATTR not in ds.attrs:  # an archive that records no parameters
+        return []
+    scene = workbench.scene_from_toml(ds.attrs["scene"])
+    model = get_model(scene.model)
+    listed = ds.attrs[PARAMETERS_ATTR].split()
+    fresh = parameter_coords(model, scene.resolved_parameters, skip=ds.dims, taken=[])
+    added = [name for name in fresh if name not in listed and name not in ds.coords]
+    named = set(scene.to_dict().get("parameters", {}))
+    assert not named & set(added), f"the scene sets {named & set(added)}: recompute the run"
+    for name in added:
+        ds.coords[name] = fresh[name]
+    order = [p.name for p in model.parameters]
+    for name in added:  # after the nearest parameter declared before it
+        before = [n for n in order[: order.index(name)] if n in listed]
+        listed.insert(listed.index(before[-1]) + 1 if before else len(listed), name)
+    ds.attrs[PARAMETERS_ATTR] = " ".join(listed)
+    return added
 
 
 def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:

@@ -517,11 +517,15 @@ def test_contracting_nine_bar_orbit_reads_a_negative_exponent():
         assert 400.0 < rate < 650.0, rate  # 1/s: "some 500 times a second"
     assert np.all(np.abs(shrinks / r.renormalisations.values - 0.5) < 0.1)
     # docs/analysis.md: the copies' and the tangent vector's log growth within 0.5 e-fold of each
-    # other over the first 2.8 s (-107 e-folds), apart by more after (25 e-folds at the end)
+    # other over the first 2.8 s (-107 e-folds) but at isolated samples (at most 1 %, each
+    # back within 0.5 at the next sample: the two copies on either side of a contact event
+    # there), apart by more after (25 e-folds at the end)
     elapsed = r.elapsed.values
     copies, tangent = (r[v].values * elapsed for v in ("running", "running_variational"))
     first = elapsed <= 2.8 + 1e-9
-    assert np.abs(copies - tangent)[first].max() < 0.5
+    apart = np.abs(copies - tangent)[first] > 0.5
+    assert apart.sum() <= 0.01 * first.sum() and not np.any(apart[:-1] & apart[1:])
+    assert not apart[-1]
     assert abs(float(tangent[first][-1]) - -107) < 1.0
     assert abs(copies[-1] - tangent[-1]) > 10.0
 

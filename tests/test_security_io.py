@@ -344,7 +344,7 @@ def test_a_campaign_whose_archive_cannot_be_written_keeps_its_blocks(
     line = one_line(err)
     assert code == 2
     assert f"cannot write '{out}': EIO: input/output error" in line, line
-    assert f"the finished blocks are kept in '{out}.blocks'" in line, line
+    assert f"the finished blocks are kept in '{out}.blocks/'" in line, line
     assert not out.exists() and len(list(Path(f"{out}.blocks").glob("block-*.nc"))) == 4
     code, stdout, _ = run_cli(["campaign", archives["sweep"], "-o", out, "-q"], capsys)
     assert code == 0 and "(0 computed, 4 reused)" in stdout
