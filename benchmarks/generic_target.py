@@ -89,5 +89,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    with recording():
+    with recording(__file__):
         main()

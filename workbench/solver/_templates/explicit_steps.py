@@ -227,13 +227,37 @@ def _event_rates(t, y, f, g, s, m, aux, ytmp, gtmp, dg):
 
 
 @njit(cache=True, nogil=True)
-def _hidden_root(method, k, t_old, h, y_old, F, g_a, g_b, dg_a, dg_b, x, m, aux, yint, gtmp):
+def _resolution(k, t, y, g_k, s, m, aux, ytmp, gtmp):
+    """How far event function k moves when the state ``y`` at ``t`` (where it is ``g_k``) moves
+    by one unit of the error control, ``atol_i + rtol |y_i|``, in each component in turn: the
+    sum of those changes. A value of g_k beyond zero by no more than this lies within the
+    integration's own error: not a crossing the steps resolve, but a grazing within the
+    tolerance. ``ytmp``, ``gtmp``: scratch (n evaluations of the event functions)."""
+    p, ip, work = m.p, m.ip, m.work
+    total = 0.0
+    ytmp[:] = y
+    for i in range(y.size):
+        ytmp[i] = y[i] + (s.atol[i] + s.rtol * abs(y[i]))
+        event_values(t, ytmp, p, ip, aux, work, gtmp)
+        total += abs(gtmp[k] - g_k)
+        ytmp[i] = y[i]
+    return total
+
+
+@njit(cache=True, nogil=True)
+def _hidden_root(
+    method, k, t_old, h, y_old, F, g_a, g_b, dg_a, dg_b, x, s, m, aux, yint, ytmp, gtmp
+):
     """A crossing of event k that both ends of the last step (t_old, t_old + h) hide, with
     the dense output prepared: the true g at the monitored extremum ``x`` (a fraction of the
     step, from :func:`workbench.solver._numerics.hermite_extremum`), and where that shows no
     crossing, once more at the extremum of the corrected quartic
     (:func:`workbench.solver._numerics.quartic_extremum`). Where g lies beyond zero there, the
-    root before it is located as :func:`_locate` does for a crossing of the step's ends.
+    root before it is located as :func:`_locate` does for a crossing of the step's ends,
+    unless it lies beyond zero by no more than the integration resolves (:func:`_resolution`:
+    a grazing within the tolerance, which a step retried to end at its root would not show;
+    the steps that followed it crawled through the contact, the state at the surface within
+    rounding, the right-hand side's kink felt at random stages).
     ``g_a``, ``g_b``, ``dg_a``, ``dg_b``: g and dg/dt at the step's ends.
 
     Returns ``(found, t_root)``.
@@ -246,6 +270,8 @@ def _hidden_root(method, k, t_old, h, y_old, F, g_a, g_b, dg_a, dg_b, x, m, aux,
         event_values(t_x, yint, p, ip, aux, work, gtmp)
         g_x = gtmp[k]
         if crossed(direction, g_a, g_x):
+            if abs(g_x) <= _resolution(k, t_x, yint, g_x, s, m, aux, ytmp, gtmp):
+                return False, t_old
             t_root = _locate(
                 method, k, t_old, h, y_old, F, t_old, g_a, t_x, g_x, m, aux, yint, gtmp
             )

@@ -416,7 +416,7 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
             elif x_ext[k] > 0.0:
                 found, t_k = _hidden_root(
                     current, k, t, h, y, F, g_old[k], g_new[k], dg_old[k], dg_new[k], x_ext[k],
-                    m, aux, yint, gtmp,
+                    s, m, aux, yint, w.ytmp, gtmp,
                 )  # fmt: skip
             if found:
                 if fired < 0 or t_k < t_stop:
