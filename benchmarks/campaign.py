@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 from workbench.campaign import store_paths

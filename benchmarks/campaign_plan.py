@@ -30,7 +30,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 ROOT = Path(__file__).resolve().parents[1]
 GRIDS = ("gamma x delta", "omega x gamma")

@@ -23,8 +23,9 @@
    the points' wall times). Corners are no estimate of a map: a periodic point takes seconds, a
    chaotic one minutes, more with more friction.
 
-Prints every figure with the CPU time (``time.process_time``), the wall time and the load
-(appended to ``benchmarks/RESULTS.md``, :mod:`_results`); writes the continued diagram to
+Prints every figure with the CPU time (``time.process_time``), the wall time and the load, and
+records them (``benchmarks/records/continuation/``, :mod:`_results`: ``newton``,
+``continued_sweep`` and ``brute_force``, ``chaos_map_corners``); writes the continued diagram to
 ``benchmarks/results/continuation_fig32.png``.
 
 Run: ``python benchmarks/continuation.py [--parts newton,fig32,chaos_maps] [--points 300]`` (the
@@ -41,7 +42,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import record, recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 from workbench.analysis import bifurcation_diagram
@@ -94,14 +95,15 @@ def fig32(args) -> None:
         for p in sorted((Path(d) / "fig32.nc.blocks").glob("block-*.nc")):
             seg_cpu.append(workbench.open_run(p).attrs["block_cpu_time"])
     cpu = float(ds.attrs["campaign_cpu_time"])
+    load1, rounds = os.getloadavg()[0], int(ds.attrs["continuation_rounds"])
+    seams = int(ds.seam_chained.sum()) if "seam_chained" in ds else 0
     print(
         f"continued sweep (up): {args.points} points x ({args.transient} + {args.cycles}) "
         f"cycles, {args.segments} segments (seeds 100 + {args.cycles} from rest), "
-        f"{ds.attrs['continuation_rounds']} round(s), chained seams "
-        f"{int(ds.seam_chained.sum()) if 'seam_chained' in ds else 0}: workers' CPU "
+        f"{rounds} round(s), chained seams {seams}: workers' CPU "
         f"{cpu / 60:.1f} min, longest segment {max(seg_cpu) / 60:.1f} min; wall "
         f"{wall / 60:.1f} min on {args.workers} workers (load {load0:.1f} -> "
-        f"{os.getloadavg()[0]:.1f}); on an idle machine >= {cpu / args.workers / 60:.1f} min"
+        f"{load1:.1f}); on an idle machine >= {cpu / args.workers / 60:.1f} min"
     )
     bf, n = brute_force_cpu(scene, args.stride)
     total = bf * args.points / n
@@ -110,6 +112,24 @@ def fig32(args) -> None:
         f"{bf / 60:.2f} min -> {total / 60:.1f} min for all, {total / args.workers / 60:.1f} "
         f"min on {args.workers} workers; continuation {total / cpu:.1f}x less CPU"
     )
+    record(
+        {
+            "continued_sweep": {
+                "points": args.points, "transient_cycles": args.transient,
+                "cycles": args.cycles, "segments": args.segments, "seed_transient_cycles": 100,
+                "seed_cycles": args.cycles, "rounds": rounds, "chained_seams": seams,
+                "workers_cpu_min": cpu / 60, "longest_segment_min": max(seg_cpu) / 60,
+                "wall_min": wall / 60, "workers": args.workers, "load_before": load0,
+                "load_after": load1, "idle_min": cpu / args.workers / 60,
+            },
+            "brute_force": {
+                "transient_cycles": 100, "cycles": 100, "points_run": n,
+                "points": args.points, "cpu_min": bf / 60, "cpu_min_all": total / 60,
+                "min_on_workers": total / args.workers / 60, "workers": args.workers,
+                "cpu_ratio": total / cpu,
+            },
+        }
+    )  # fmt: skip
     diagram = bifurcation_diagram(ds.sel(joint="A"), "clearance_x", "omega")
     from workbench.plot import bifurcation_figure
 
@@ -138,12 +158,25 @@ def newton(args) -> None:
         c1 = time.process_time()
         smap.parameter_derivative(pt.y, pt.aux, pt.p, v.live, 1.0)
         c2 = time.process_time()
+        largest, load = float(np.abs(np.linalg.eigvals(v.M)).max()), os.getloadavg()[0]
         print(
             f"Newton step at omega = {w} pi ({smap.monodromy}): map and Jacobian {c1 - c0:.2f} s "
             f"CPU ({v.stats['steps']} steps, {smap.monodromy} of {v.M.shape[0]} unknowns), "
-            f"parameter derivative {c2 - c1:.2f} s; largest |multiplier| "
-            f"{np.abs(np.linalg.eigvals(v.M)).max():.4f}; load {os.getloadavg()[0]:.1f}"
+            f"parameter derivative {c2 - c1:.2f} s; largest |multiplier| {largest:.4f}; "
+            f"load {load:.1f}"
         )
+        record(
+            {
+                "newton": {
+                    f"{w}": {
+                        "monodromy": smap.monodromy, "map_jacobian_cpu_s": c1 - c0,
+                        "steps": v.stats["steps"], "unknowns": v.M.shape[0],
+                        "derivative_cpu_s": c2 - c1, "largest_multiplier": largest,
+                        "load": load,
+                    }
+                }
+            }
+        )  # fmt: skip
 
 
 def chaos_maps(args) -> None:
@@ -168,6 +201,17 @@ def chaos_maps(args) -> None:
                 f"{int(found.strobe_period)}, K {float(found.zero_one_K):.2f}, lle "
                 f"{float(found.lle):.3g} +- {float(found.lle_stderr):.2g} s-1)"
             )
+            record(
+                {
+                    "chaos_map_corners": {
+                        f"{path.stem} at {shown}": {
+                            "cpu_s": cpu[-1], "strobe_period": int(found.strobe_period),
+                            "zero_one_K": float(found.zero_one_K), "lle": float(found.lle),
+                            "lle_stderr": float(found.lle_stderr),
+                        }
+                    }
+                }
+            )  # fmt: skip
         shape = " x ".join(f"{d} {len(v)}" for d, v in zip(dims, grid, strict=True))
         shipped = ROOT / "data" / f"{path.stem}_map.nc"
         measured = "no archive in data/"
@@ -188,6 +232,7 @@ def chaos_maps(args) -> None:
             f"{float(np.mean(cpu)):.1f} s CPU per point; {measured}; "
             f"load {os.getloadavg()[0]:.1f}"
         )
+        record({"chaos_map_cpu_s_per_point": {path.stem: float(np.mean(cpu))}})
 
 
 def main() -> None:

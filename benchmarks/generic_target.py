@@ -24,7 +24,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "studies" / "ninebar.toml"

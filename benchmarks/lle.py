@@ -23,13 +23,14 @@ separations d0 = 1e-10 .. 1e-4 and the variational equations ride one fiducial t
 rtol 1e-6 (10 cycles per start) and 1e-10 (5 cycles) by default (``--scan-configs
 RTOL:CYCLES ...``, ``--max-step`` S to cap the steps); printed per d0: each start's estimate
 minus the variational exponent on the same trajectory, their mean and its standard error
-(``benchmarks/results/lle_separation_scan.json``).
+(``benchmarks/results/lle_separation_scan.json``, and the run's record: per tolerance,
+``separations``, ``mean_difference``, ``stderr_difference``).
 
 ``--chaos RTOL [RTOL ...]``: the default call ``lle_from_equations(chaos, cycles=40,
 budget=80, rtol=RTOL)`` (four starts), its value +/- error, cycles, verdict, the variational
 exponent on the same trajectories +/- error, the difference, the copies' renormalisations
 (all, and those on shrinkage), CPU time and load (``benchmarks/results/lle_chaos.json``, one
-entry per tolerance).
+entry per tolerance, and the run's record: the same per tolerance).
 
 Run: ``python benchmarks/lle.py [--skip-ninebar | --scan | --chaos 1e-6 1e-10]``.
 """
@@ -47,7 +48,7 @@ import warnings
 
 import nolds
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import record, recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 from workbench.analysis import ConvergenceWarning, lle_from_equations, lyapunov_spectrum, wolf_lle
@@ -181,6 +182,7 @@ def scan(configs: list[tuple[float, int]], max_step: float | None = None) -> Non
             "stderr_difference": se.tolist(),
             "cpu_s": cpu,
         }
+    record(out)
     path = os.path.join(RESULTS_DIR, "lle_separation_scan.json")
     data = json.load(open(path)) if os.path.exists(path) else {}
     data.setdefault("scan", {}).update(out)
@@ -217,27 +219,30 @@ def chaos_calls(rtols: list[float]) -> None:
         )
         for line in r.attrs["failed"].splitlines():
             print(f"    failed: {line}")
-        _save(
-            "lle_chaos.json",
-            f"{rtol:g}",
-            {
-                "lle": float(r.lle), "stderr": float(r.stderr),
-                "stderr_starts": float(r.stderr_starts),
-                "stderr_batches": float(r.stderr_batches),
-                "start_lle": r.start_lle.values.tolist(),
-                "cycles": r.attrs["cycles"], "starts": r.attrs["starts"],
-                "converged": bool(r.converged), "failed": r.attrs["failed"],
-                "lle_variational": float(r.lle_variational),
-                "stderr_variational": float(r.stderr_variational),
-                "difference": float(r.difference),
-                "stderr_difference": float(r.stderr_difference),
-                "lle_tight": float(r.lle_tight), "stderr_tight": float(r.stderr_tight),
-                "estimates": r.estimate.values.tolist(), "rtol_used": r.attrs["rtol"],
-                "renormalisations": r.renormalisations.values.tolist(),
-                "shrink_renormalisations": r.shrink_renormalisations.values.tolist(),
-                "cpu_s": cpu, "wall_s": wall, "load": [load0, load1],
-            },
-        )  # fmt: skip
+        entry = {
+            "lle": float(r.lle), "stderr": float(r.stderr),
+            "stderr_starts": float(r.stderr_starts),
+            "stderr_batches": float(r.stderr_batches),
+            "start_lle": r.start_lle.values.tolist(),
+            "cycles": r.attrs["cycles"], "starts": r.attrs["starts"],
+            "converged": bool(r.converged), "failed": r.attrs["failed"],
+            "lle_variational": float(r.lle_variational),
+            "stderr_variational": float(r.stderr_variational),
+            "difference": float(r.difference),
+            "stderr_difference": float(r.stderr_difference),
+            "lle_tight": float(r.lle_tight), "stderr_tight": float(r.stderr_tight),
+            "estimates": r.estimate.values.tolist(), "rtol_used": r.attrs["rtol"],
+            "renormalisations": r.renormalisations.values.tolist(),
+            "shrink_renormalisations": r.shrink_renormalisations.values.tolist(),
+            "cpu_s": cpu, "wall_s": wall, "load": [load0, load1],
+        }  # fmt: skip
+        _save("lle_chaos.json", f"{rtol:g}", entry)
+        extra = {
+            "cycles_per_start": r.attrs["cycles_per_start"],
+            "rtol_tight": max(rtol / 100, 1e-11),
+            "solver_steps": r.attrs["solver_steps"],
+        }
+        record({f"{rtol:g}": entry | extra})
 
 
 def main() -> None:

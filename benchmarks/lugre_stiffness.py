@@ -14,7 +14,7 @@ import importlib
 from pathlib import Path
 
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 from workbench.models import get_model

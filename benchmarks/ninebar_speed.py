@@ -53,7 +53,7 @@ from pathlib import Path
 
 import ninebar_reference_hooks  # noqa: F401  (imported: the loop's cache follows its file)
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 from numba import njit
 
 import workbench

@@ -5,7 +5,7 @@ that a refactor of the record-time evaluation (``workbench.models._record``) cha
     python benchmarks/record_identical.py record /tmp/record_before.npz   # on the old code
     python benchmarks/record_identical.py compare /tmp/record_before.npz  # on the new code: exit
                                                                            # 0 if all are equal
-                                                      # (appended to benchmarks/RESULTS.md)
+                                                      # (a record in benchmarks/records/)
 
 The scenes, 2 cycles from rest each: the nine-bar's default scene (studies/ninebar.toml: joints
 A and B, 0.5 mm, omega = 2.5 pi) with modified Coulomb and with LuGre friction, and the ideal
@@ -21,7 +21,7 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 
@@ -103,7 +103,7 @@ def main(mode: str, path: str) -> int:
 
 
 if __name__ == "__main__":
-    if sys.argv[1] == "compare":  # the comparison is recorded in RESULTS.md, not the baseline
+    if sys.argv[1] == "compare":  # the comparison is recorded, not the baseline
         with recording(__file__):
             code = main(sys.argv[1], sys.argv[2])
         sys.exit(code)

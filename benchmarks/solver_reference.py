@@ -7,7 +7,7 @@ Run: ``python benchmarks/solver_reference.py``.
 
 from __future__ import annotations
 
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 

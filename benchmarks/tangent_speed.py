@@ -15,7 +15,9 @@ steps, right-hand-side evaluations (of the system integrated: one tangent evalua
 about 2 m + 1 model evaluations, the Jacobian by central differences) and events per cycle,
 re-orthonormalisations per cycle, the CPU ratio to the plain run, and the sum check: the sum of
 the m exponents against the mean rate of the integrated log volume the vectors span (relative
-difference).
+difference). Recorded (``benchmarks/records/tangent_speed/``): the window (``cycles``, ``t0`` in
+s, ``rtol``, ``defect``) and, per run (``runs``: "plain", "m = 1", ...), the columns as named
+figures.
 
 Run: ``python benchmarks/tangent_speed.py [--cycles 2] [--exponents 1,4,8] [--rtol R]`` (the
 first run compiles the tangent kernel, ~1-2 min).
@@ -28,7 +30,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import record, recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 from workbench.analysis._lyapunov import DEFECT, tangent_run
@@ -90,6 +92,7 @@ def main() -> None:
         f"{'run':>7} {'CPU s/cyc':>10} {'x plain':>8} {'steps/cyc':>10} {'rej/cyc':>8} "
         f"{'evals/cyc':>10} {'events/cyc':>10} {'QR/cyc':>8}  sum check (sum, volume rate, rel)"
     )
+    runs = {}
     for label, r in rows:
         s = r["stats"]
         check = "" if r["check"] is None else "{:.6g} {:.6g} {:.2g}".format(*r["check"])
@@ -99,6 +102,19 @@ def main() -> None:
             f"{s['rhs_evaluations'] / k:10.6g} {s['events'] / k:10.6g} "
             f"{r['reorthonormalisations'] / k:8.6g}  {check}"
         )
+        runs[label] = {
+            "cpu_s_per_cycle": r["cpu"] / k,
+            "times_plain": r["cpu"] / k / base,
+            "steps_per_cycle": s["steps"] / k,
+            "rejected_per_cycle": s["rejected_steps"] / k,
+            "evaluations_per_cycle": s["rhs_evaluations"] / k,
+            "events_per_cycle": s["events"] / k,
+            "reorthonormalisations_per_cycle": r["reorthonormalisations"] / k,
+        }
+        if r["check"] is not None:
+            names = ("exponent_sum", "volume_rate", "sum_check")
+            runs[label] |= dict(zip(names, r["check"], strict=True))
+    record({"cycles": k, "t0": prep.problem.t0, "rtol": rtol, "defect": args.defect, "runs": runs})
 
 
 if __name__ == "__main__":

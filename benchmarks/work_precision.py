@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from _results import recording  # benchmarks/_results.py: appends to RESULTS.md
+from _results import recording  # benchmarks/_results.py: a JSON record per run
 
 import workbench
 from workbench import accuracy, recommend

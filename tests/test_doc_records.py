@@ -1,17 +1,18 @@
 """The numbers docs/analysis.md and docs/robustness.md quote from benchmark records and from the
 code (the project's rule: the docs quote only what the code produces now, and a test checks
-each number). Each test parses the page and the record of benchmarks/RESULTS.md it names and
+each number). Each test reads the page and the records it names (benchmarks/records/: one JSON
+file per run, benchmarks/_results.py) or the measurement made by hand (benchmarks/NOTES.md) and
 asserts that they agree: a current figure is the newest record of its benchmark (and window),
-a "before" figure the record the page names."""
+a "before" figure the record the page names. A record's numbers are formatted as the benchmark
+prints them (and the page quotes them)."""
 
+import importlib.util
 import json
 import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "RESULTS.md"
-#: where benchmarks/tangent_speed.py recorded before its runs went to RESULTS.md (from 56c825a)
-TANGENT_RESULTS = ROOT / "benchmarks" / "results" / "tangent_speed.md"
+NOTES = ROOT / "benchmarks" / "NOTES.md"
 
 #: `benchmarks/lle.py` records made before the copies were renormalised on shrinkage as well
 #: (25aee46), which docs/analysis.md quotes as "before": the separation scans and the default call
@@ -19,20 +20,27 @@ BEFORE_SHRINK_SCANS = ("d99dfdb", "968e2fe", "968e2fe-dirty")
 BEFORE_SHRINK_CHAOS = "be0fa29"
 
 
+def _results_module():
+    """benchmarks/_results.py (the records' reader and the results page's generator)."""
+    spec = importlib.util.spec_from_file_location(
+        "benchmark_results", ROOT / "benchmarks" / "_results.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+results = _results_module()
+
+
+def records(benchmark: str) -> list[dict]:
+    """The records of ``benchmark`` (its script's name), in the order its runs ended."""
+    return results.load_records(benchmark=benchmark)
+
+
 def _page(name: str) -> str:
     """A page of docs/ with its whitespace collapsed."""
     return " ".join((ROOT / "docs" / name).read_text().split())
-
-
-def _entries(script: str, path: Path = RESULTS) -> list[str]:
-    """The entries of a results file (benchmarks/RESULTS.md) that ``script`` appended, oldest
-    first."""
-    return [e for e in path.read_text().split("\n## ") if e.startswith(f"{script}: ")]
-
-
-def _commit(entry: str) -> str:
-    """An entry's commit as it writes it (with any "-dirty")."""
-    return re.search(r"commit (\S+)", entry).group(1)
 
 
 def _and(items) -> str:
@@ -51,14 +59,14 @@ def _e(token: str) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-#: the hand-written section of benchmarks/RESULTS.md on the tangent's re-orthonormalisation
+#: the hand-written section of benchmarks/NOTES.md on the tangent's re-orthonormalisation
 DEFECT_SECTION = "The tangent system re-orthonormalised at step ends"
 
 
 def defect_record() -> tuple[str, str, str, str]:
     """That section's title, the commit it was measured at, and the steps per cycle it gives
     for ``defect`` 10 and 1 (8 exponents over 0.1 cycle)."""
-    text = " ".join(RESULTS.read_text().split())
+    text = " ".join(NOTES.read_text().split())
     found = re.search(rf"## {DEFECT_SECTION} .*? runs were measured at (\w+),", text)
     d10, d1 = re.search(
         r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
@@ -69,49 +77,47 @@ def defect_record() -> tuple[str, str, str, str]:
 
 
 # -- benchmarks/tangent_speed.py ------------------------------------------------------------------
-_WINDOW = re.compile(
-    r"nine-bar chaos case, ([\d.]+) cycles after the default transient \(t0 = ([\d.]+) s\), "
-    r"DOP853, rtol (\S+), defect (\S+)"
+#: the columns of a run's row as the script prints them (figure, format): CPU s/cyc, x plain,
+#: steps/cyc, rej/cyc, evals/cyc, events/cyc, QR/cyc, sum, volume rate, rel
+COLUMNS = (
+    ("cpu_s_per_cycle", ".4g"),
+    ("times_plain", ".4g"),
+    ("steps_per_cycle", ".6g"),
+    ("rejected_per_cycle", ".6g"),
+    ("evaluations_per_cycle", ".6g"),
+    ("events_per_cycle", ".6g"),
+    ("reorthonormalisations_per_cycle", ".6g"),
+    ("exponent_sum", ".6g"),
+    ("volume_rate", ".6g"),
+    ("sum_check", ".2g"),
 )
-#: the columns of a run's row: CPU s/cyc, x plain, steps/cyc, rej/cyc, evals/cyc, events/cyc,
-#: QR/cyc, sum, volume rate, rel
 CPU, RATIO, STEPS, EVENTS, QR, REL = 0, 1, 2, 5, 6, 9
 
 
 def _tangent_records() -> list[dict]:
-    """Every ``tangent_speed.py`` entry, oldest first (those of benchmarks/results/
-    tangent_speed.md, then those of RESULTS.md): its file, commit, window and table rows."""
-    records = []
-    for path in (TANGENT_RESULTS, RESULTS):
-        for entry in _entries("tangent_speed.py", path):
-            cycles, t0, rtol, defect = _WINDOW.search(entry).groups()
-            rows = {
-                m.group(1): m.group(2).split()
-                for m in re.finditer(r"^  (plain|m = \d+) +(.*)$", entry, re.M)
-            }
-            records.append(
-                {"file": str(path.relative_to(ROOT)), "commit": _commit(entry), "rows": rows}
-                | {"cycles": cycles, "t0": t0, "rtol": rtol, "defect": defect, "entry": entry}
-            )
-    return records
+    """Every ``tangent_speed.py`` record, oldest first: its file, commit, note, window (as the
+    script prints it) and each run's row of columns (as printed)."""
+    found = []
+    for r in records("tangent_speed.py"):
+        f = r["figures"]
+        rows = {
+            run: [format(values[k], spec) for k, spec in COLUMNS if k in values]
+            for run, values in f["runs"].items()
+        }
+        window = {"cycles": f"{f['cycles']:g}", "t0": f"{f['t0']:.3f}", "rtol": f"{f['rtol']:g}"}
+        found.append(
+            {"file": r["file"], "commit": r["commit"], "note": r.get("note", ""), "rows": rows}
+            | window
+            | {"defect": f"{f['defect']:g}"}
+        )
+    return found
 
 
-def _date(record: dict) -> str:
-    return re.match(r"tangent_speed\.py: (\S+ \S+) UTC", record["entry"]).group(1)
-
-
-def test_the_tangent_records_are_in_order():
-    """Every entry of benchmarks/results/tangent_speed.md was made before the first of RESULTS.md
-    (from 56c825a on), so that the last of the two lists is the newest."""
-    records = _tangent_records()
-    old = [r for r in records if r["file"] != "benchmarks/RESULTS.md"]
-    new = [r for r in records if r["file"] == "benchmarks/RESULTS.md"]
-    assert old and new and max(map(_date, old)) < min(map(_date, new))
-    assert new[0]["commit"].removesuffix("-dirty") == "56c825a"
-    assert (
-        f"its records from {new[0]['commit']} on are in `benchmarks/RESULTS.md`, the earlier "
-        "ones in `benchmarks/results/tangent_speed.md`"
-    ) in _page("analysis.md")
+def test_the_analysis_page_names_where_the_tangent_records_are():
+    """docs/analysis.md names the folder of the tangent_speed records, which holds them all."""
+    found = _tangent_records()
+    assert len(found) >= 11 and {Path(r["file"]).parent.name for r in found} == {"tangent_speed"}
+    assert "its records are in `benchmarks/records/tangent_speed/`" in _page("analysis.md")
 
 
 def _newest(records: list[dict], cycles: str, rtol: str, defect: str, run: str) -> dict:
@@ -166,7 +172,7 @@ def test_the_tangent_cost_is_the_newest_tangent_speed_record():
         f'0.1 cycle, measured at {measured_at}: `benchmarks/RESULTS.md`, "{section}")'
     ) in page
 
-    (before,) = [r for r in records if "re-orthonormalisation by a located event" in r["entry"]]
+    (before,) = [r for r in records if "re-orthonormalisation by a located event" in r["note"]]
     assert before["cycles"] == "2" and (before["rtol"], before["defect"]) == ("1e-06", "10")
     old, new = before["rows"]["m = 8"], two["m = 8"]["rows"]["m = 8"]
     assert (
@@ -218,28 +224,48 @@ def test_the_sum_checks_are_the_newest_tangent_speed_records():
 
 
 # -- benchmarks/lle.py ---------------------------------------------------------------------------
-def _chaos_numbers(entry: str) -> tuple[str, ...]:
-    """An ``lle.py --chaos`` entry's rtol 1e-6 line: the estimate and its error, the variational
-    exponent, their difference and its error, as the record writes them."""
-    return re.search(
-        r"rtol 1e-06: two trajectories ([\d.]+) \+/- ([\d.]+) 1/s .*?; variational \(same "
-        r"trajectories\) ([\d.]+) \+/- [\d.]+; difference ([+-][\d.]+) \+/- ([\d.]+);",
-        entry,
-    ).groups()
+def chaos_records() -> list[dict]:
+    """The ``benchmarks/lle.py --chaos`` records, oldest first."""
+    return [
+        r for r in records("lle.py") if r["command"].startswith("python benchmarks/lle.py --chaos")
+    ]
+
+
+def _chaos_numbers(record: dict) -> tuple[str, ...]:
+    """An ``lle.py --chaos`` record's call at rtol 1e-6: the estimate and its error, the
+    variational exponent, their difference and its error, as the benchmark prints them."""
+    f = record["figures"]["1e-06"]
+    return (
+        f"{f['lle']:.2f}",
+        f"{f['stderr']:.2f}",
+        f"{f['lle_variational']:.2f}",
+        f"{f['difference']:+.3f}",
+        f"{f['stderr_difference']:.3f}",
+    )
+
+
+def scan_means(record: dict, d0: float) -> dict[str, float]:
+    """An ``lle.py --scan`` record's mean difference at separation ``d0``, per tolerance (the
+    key its scan has: "1e-06", or "1e-06, max_step 0.0001 s" with the step capped)."""
+    return {
+        key: scan["mean_difference"][[f"{d:.0e}" for d in scan["separations"]].index(f"{d0:.0e}")]
+        for key, scan in record["figures"].items()
+    }
 
 
 def test_the_chaos_case_before_and_now_are_the_lle_records():
     """docs/analysis.md, "Contracting orbits": the default call on the chaos case before the
     copies were renormalised on shrinkage (the record it names) and now (the newest)."""
     page = _page("analysis.md")
-    chaos = [e for e in _entries("lle.py") if "`python benchmarks/lle.py --chaos" in e]
-    (before,) = [e for e in chaos if _commit(e) == BEFORE_SHRINK_CHAOS]
+    chaos = chaos_records()
+    (before,) = [r for r in chaos if r["commit"] == BEFORE_SHRINK_CHAOS]
     b, n = _chaos_numbers(before), _chaos_numbers(chaos[-1])
     assert (
         f"before (the `benchmarks/lle.py --chaos` record at {BEFORE_SHRINK_CHAOS} in "
         f"`benchmarks/RESULTS.md`), {b[0]} +/- {b[1]} 1/s at rtol 1e-6 and the variational "
         f"exponent on the same trajectories {b[2]} (difference {b[3]} +/- {b[4]}), now (the "
-        f"newest record, at {_commit(chaos[-1])}) {n[0]} +/- {n[1]} and {n[2]} ({n[3]} +/- {n[4]})"
+        f"newest record, at {chaos[-1]['commit']}) {n[0]} +/- {n[1]} and {n[2]} ({n[3]} +/- "
+        f"{n[4]})"
     ) in page
 
 
@@ -258,23 +284,15 @@ def test_the_noise_floor_before_and_now_are_the_scans():
     lo, hi = min(at[1e-9]), max(at[1e-9])
     assert f"at 1e-9 what is left of it is +{lo:.1f}-{hi:.1f} 1/s" in page
 
-    runs = []  # (command, rtol, {d0: mean})
-    for entry in _entries("lle.py"):
-        if _commit(entry) not in BEFORE_SHRINK_SCANS or "--scan" not in entry:
-            continue
-        command = re.search(r"command: `([^`]*)`", entry).group(1)
-        for rtol, block in re.findall(
-            r"rtol (\S+), mean over 4 starts .*?:\n((?:  d0 .*\n)+)", entry
-        ):
-            means = dict(re.findall(r"d0 (\S+): ([+-][\d.]+)", block))
-            runs.append((command, rtol, {d0: float(v) for d0, v in means.items()}))
-    assert len(runs) == 4  # rtol 1e-6 with the step free and capped, 1e-8, 1e-10
+    before = [r for r in records("lle.py") if r["commit"] in BEFORE_SHRINK_SCANS]
+    before = [r for r in before if "--scan" in r["command"]]
+    floor = {d0: [m for r in before for m in scan_means(r, d0).values()] for d0 in (1e-10, 1e-9)}
+    assert len(floor[1e-10]) == 4  # rtol 1e-6 with the step free and capped, 1e-8, 1e-10
     assert f"the `--scan` records at {_and(BEFORE_SHRINK_SCANS)} in `benchmarks/RESULTS.md`" in page
-    floor = {d0: [means[d0] for _, _, means in runs] for d0 in ("1e-10", "1e-09")}
-    (free,) = [m["1e-08"] for c, r, m in runs if r == "1e-06" and "--max-step" not in c]
+    (free,) = [scan_means(r, 1e-8)["1e-06"] for r in before if "1e-06" in r["figures"]]
     assert (
-        f"(+{min(floor['1e-10']):.1f}-{max(floor['1e-10']):.1f} 1/s at 1e-10 and "
-        f"+{min(floor['1e-09']):.1f}-{max(floor['1e-09']):.1f} at 1e-9 in every run, "
+        f"(+{min(floor[1e-10]):.1f}-{max(floor[1e-10]):.1f} 1/s at 1e-10 and "
+        f"+{min(floor[1e-9]):.1f}-{max(floor[1e-9]):.1f} at 1e-9 in every run, "
         f"+{free:.1f} at 1e-8 at rtol 1e-6 with the step free)"
     ) in page
 
@@ -295,8 +313,8 @@ def test_the_interrupt_figures_are_the_code_s_and_its_test_s():
 
 def test_the_models_page_quotes_the_lugre_damping_record():
     """docs/models.md: the paper's constant bristle damping takes |F_t|/F_n to the peak that the
-    hand-written ``lugre_damping.py`` section of benchmarks/RESULTS.md records."""
-    record = " ".join(RESULTS.read_text().split())
+    hand-written ``lugre_damping.py`` section of benchmarks/NOTES.md records."""
+    record = " ".join(NOTES.read_text().split())
     peak = re.search(r"constant damping \(316\.2 s/m\) reaches ([\d.]+),", record).group(1)
     assert f"|F_t|/F_n to tens ({peak} on the paper's Sec. 4.2 case" in _page("models.md")
     assert 10 <= float(peak) < 100  # "tens"

@@ -195,56 +195,53 @@ def test_key_figures_are_the_reports():
     assert committed <= set(hooks.KEY_FIGURES)
 
 
-def _newest_continuation_record(marker: str) -> tuple[str, str, str]:
-    """The newest ``continuation.py`` entry of benchmarks/RESULTS.md that contains ``marker``,
+def _newest_continuation_record(figure: str) -> tuple[dict, str, str]:
+    """The newest ``continuation.py`` record (benchmarks/records/continuation/) with ``figure``,
     its commit as the page names it ("plus uncommitted changes" where the record's tree was
     dirty), and docs/continuation.md with its whitespace collapsed."""
-    records = (ROOT / "benchmarks" / "RESULTS.md").read_text().split("\n## ")
-    newest = [r for r in records if r.startswith("continuation.py") and marker in r][-1]
-    found = re.search(r"commit (\w+)(-dirty)?", newest)
-    commit = found.group(1) + (" plus uncommitted changes" if found.group(2) else "")
-    return newest, commit, " ".join((DOCS / "continuation.md").read_text().split())
+    from test_doc_records import records
+
+    newest = [r for r in records("continuation.py") if figure in r["figures"]][-1]
+    sha = newest["commit"].removesuffix("-dirty")
+    commit = sha + (" plus uncommitted changes" if newest["commit"] != sha else "")
+    return newest["figures"], commit, " ".join((DOCS / "continuation.md").read_text().split())
 
 
 def test_fig32_cost_is_the_newest_benchmark_record():
-    """docs/continuation.md quotes the newest ``continuation.py --parts fig32`` entry of
-    benchmarks/RESULTS.md (the cost of the paper's Fig. 32 continued): each number it gives is
-    that record's."""
-    newest, commit, page = _newest_continuation_record("continued sweep (up)")
-    sweep = re.search(
-        r"workers' CPU ([\d.]+) min, longest segment ([\d.]+) min; wall ([\d.]+) min on 2 "
-        r"workers \(load ([\d.]+) -> ([\d.]+)\)",
-        newest,
+    """docs/continuation.md quotes the newest ``continuation.py --parts fig32`` record (the
+    cost of the paper's Fig. 32 continued): each number it gives is that record's, as the
+    benchmark prints it."""
+    figures, commit, page = _newest_continuation_record("continued_sweep")
+    sweep, brute = figures["continued_sweep"], figures["brute_force"]
+    cpu, longest, wall, load0, load1 = (
+        f"{sweep[k]:.1f}"
+        for k in ("workers_cpu_min", "longest_segment_min", "wall_min", "load_before", "load_after")
     )
-    brute = re.search(
-        r"-> ([\d.]+) min for all, ([\d.]+) min on 2 workers; continuation "
-        r"([\d.]+)x less CPU",
-        newest,
-    )
-    cpu, longest, wall, load0, load1 = sweep.groups()
+    assert sweep["workers"] == 2 and sweep["points"] == 300
     assert f"at {commit}): the 300 values" in page
     assert f"took {wall} min wall on 2 workers ({cpu} min of the workers' CPU" in page
     assert f"longest segment {longest} min" in page and f"from {load0} to {load1}" in page
-    assert f"costs {brute.group(1)} min of CPU for all 300, {brute.group(2)} min" in page
-    assert f"takes {brute.group(3)}x less CPU" in page
-    assert float(wall) <= 10.0  # the issue's target (issue 25 item 6)
+    assert (
+        f"costs {brute['cpu_min_all']:.1f} min of CPU for all 300, "
+        f"{brute['min_on_workers']:.1f} min"
+    ) in page
+    assert f"takes {brute['cpu_ratio']:.1f}x less CPU" in page
+    assert sweep["wall_min"] <= 10.0  # the issue's target (issue 25 item 6)
 
 
 def test_the_newton_step_cost_is_the_newest_benchmark_record():
-    """docs/continuation.md quotes the newest ``continuation.py --parts newton`` entry of
-    benchmarks/RESULTS.md: the CPU time of one Newton step on the nine-bar's branch (map and
-    Jacobian, parameter derivative) at each omega it measured, and that record's commit."""
-    newest, commit, page = _newest_continuation_record("Newton step at")
-    steps = re.findall(
-        r"Newton step at omega = ([\d.]+) pi \(copies\): map and Jacobian ([\d.]+) s CPU .*?"
-        r"parameter derivative ([\d.]+) s",
-        newest,
-    )
-    omegas, maps, derivatives = (" / ".join(col) for col in zip(*steps, strict=True))
+    """docs/continuation.md quotes the newest ``continuation.py --parts newton`` record: the CPU
+    time of one Newton step on the nine-bar's branch (map and Jacobian, parameter derivative)
+    at each omega it measured, and that record's commit."""
+    figures, commit, page = _newest_continuation_record("newton")
+    steps = figures["newton"]
+    omegas = " / ".join(steps)
+    maps = " / ".join(f"{s['map_jacobian_cpu_s']:.2f}" for s in steps.values())
+    derivatives = " / ".join(f"{s['derivative_cpu_s']:.2f}" for s in steps.values())
     assert f"newton`, at {commit}):" in page
     assert f"costs {maps} s of CPU at omega = {omegas} pi" in page
     assert f"its derivative in omega {derivatives} s more" in page
-    assert max(float(m) + float(d) for _, m, d in steps) < 10.0  # seconds (issue 25 item 6)
+    assert max(s["map_jacobian_cpu_s"] + s["derivative_cpu_s"] for s in steps.values()) < 10.0
 
 
 def test_the_templates_page_names_every_tag():

@@ -3,7 +3,8 @@ docstrings included, quote only what the code produces now, and a test checks ea
 Each test reads the docstring (or the comment above a constant) and the benchmark record or the
 test it names and asserts that they agree: a current figure is the newest record of its
 benchmark, a "before" figure the record the docstring names, a tested figure the value its test
-asserts. The helpers that parse benchmarks/RESULTS.md are tests/test_doc_records.py's."""
+asserts. The helpers that read the benchmarks' records (benchmarks/records/) and the
+measurements made by hand (benchmarks/NOTES.md) are tests/test_doc_records.py's."""
 
 import importlib
 import inspect
@@ -13,16 +14,17 @@ from types import SimpleNamespace
 
 from test_doc_records import (
     BEFORE_SHRINK_SCANS,
-    RESULTS,
+    NOTES,
     ROOT,
     _chaos_numbers,
-    _commit,
     _e,
-    _entries,
     _n,
     _newest,
     _tangent_records,
+    chaos_records,
     defect_record,
+    records,
+    scan_means,
 )
 
 from workbench.analysis import _benettin, _embedding, _lyapunov, _surrogate
@@ -62,9 +64,9 @@ def _test_source(path: str, name: str) -> str:
     return re.split(r"\n(?:@|def )", source.split(f"def {name}(")[1])[0]
 
 
-def _chaos_record() -> str:
-    """The newest ``benchmarks/lle.py --chaos`` entry of benchmarks/RESULTS.md."""
-    return [e for e in _entries("lle.py") if "`python benchmarks/lle.py --chaos" in e][-1]
+def _chaos_record() -> dict:
+    """The newest ``benchmarks/lle.py --chaos`` record."""
+    return chaos_records()[-1]
 
 
 def _contracting_orbit_test() -> tuple[str, str]:
@@ -87,7 +89,7 @@ def test_the_compile_notice_quotes_the_compile_records(monkeypatch, capsys):
     (28 s at a load of 5, 74-95 s on a busier machine), the other models' from Duffing's 15 s
     there and its kernel alone in the benchmarks/cache.py record (the process that recompiled
     it less one that loaded it), as the comment above the figures says."""
-    text = _flat(RESULTS.read_text())
+    text = _flat(NOTES.read_text())
     section = text.split("### Compile times and the kernel cache")[1].split("## ")[0]
     duffing, mechanisms, busy_lo, busy_hi = re.search(
         r"Duffing (\d+) s, nine-bar and slider-crank (\d+) s; (\d+)-(\d+) s on a busier machine",
@@ -154,7 +156,7 @@ def test_lle_from_equations_quotes_the_lle_records_and_its_test():
     decorrelation = f"{math.log(1e9) / float(lle):.1f}"
     assert (
         f"(ln(1/1e-9) / λ, {decorrelation} s on the chaos case at its λ = {lle} 1/s: the newest "
-        f"``benchmarks/lle.py --chaos`` record, at {_commit(chaos)}, rtol 1e-6)"
+        f"``benchmarks/lle.py --chaos`` record, at {chaos['commit']}, rtol 1e-6)"
     ) in doc
 
     copies, variational = _contracting_orbit_test()
@@ -163,14 +165,14 @@ def test_lle_from_equations_quotes_the_lle_records_and_its_test():
         "exponent on the same trajectory (tests/test_lyapunov.py)"
     ) in doc
 
-    before, newest = [], {}  # the means at d0 = 1e-10; the newest entry of each scan command
-    for entry in _entries("lle.py"):
-        if "--scan" not in entry:
+    before, newest = [], {}  # the means at d0 = 1e-10; the newest record of each scan command
+    for record in records("lle.py"):
+        if "--scan" not in record["command"]:
             continue
-        means = [float(m) for m in re.findall(r"d0 1e-10: ([+-][\d.]+)", entry)]
-        if _commit(entry) in BEFORE_SHRINK_SCANS:
+        means = list(scan_means(record, 1e-10).values())
+        if record["commit"] in BEFORE_SHRINK_SCANS:
             before += means
-        newest[re.search(r"command: `([^`]*)`", entry).group(1)] = (_commit(entry), means)
+        newest[record["command"]] = (record["commit"], means)
     assert len(before) == 4 and len(newest) == 3  # rtol 1e-6 free and capped, 1e-8, 1e-10
     (commit,) = {c for c, _ in newest.values()}
     now = [m for _, means in newest.values() for m in means]
@@ -182,13 +184,11 @@ def test_lle_from_equations_quotes_the_lle_records_and_its_test():
         f"{min(now):.0f}-{max(now):.0f} 1/s, the newest, at {commit};"
     ) in doc
 
-    line = re.search(r"^rtol 1e-06: .*$", chaos, re.M).group(0)
-    total, shrunk = re.search(
-        r"renormalisations \[(\d+),.*?of them on shrinkage \[(\d+),", line
-    ).groups()
+    call = chaos["figures"]["1e-06"]
+    total, shrunk = call["renormalisations"][0], call["shrink_renormalisations"][0]
     assert (
         f"at rtol 1e-6, {shrunk} of {total} renormalisations were shrinkages, the ``--chaos`` "
-        f"record at {_commit(chaos)};"
+        f"record at {chaos['commit']};"
     ) in doc
 
 
@@ -198,11 +198,12 @@ def test_the_chaos_case_exponent_in_the_docstrings_is_the_newest_lle_record():
     3-cycle window's, the value tests/test_lyapunov.py asserts."""
     chaos = _chaos_record()
     lle, err = _chaos_numbers(chaos)[:2]
-    record = f"the newest ``benchmarks/lle.py --chaos`` record, at {_commit(chaos)}"
+    record = f"the newest ``benchmarks/lle.py --chaos`` record, at {chaos['commit']}"
     assert f"(largest Lyapunov exponent {lle} 1/s on the nine-bar's chaos case: {record})" in (
         _doc(_ensemble)
     )
-    assert "over 4 x 20 cycles, converged True" in re.search(r"^rtol 1e-06: .*$", chaos, re.M)[0]
+    call = chaos["figures"]["1e-06"]
+    assert (call["starts"], call["cycles_per_start"], call["converged"]) == (4, 20, True)
 
     study = _doc(_study)
     assert f"separate at tens of 1/s or more (the nine-bar's chaos case: {lle} 1/s, {record})" in (
@@ -219,7 +220,7 @@ def test_the_chaos_case_exponent_in_the_docstrings_is_the_newest_lle_record():
     assert (
         f"over 3 cycles the chaos case read {short} +/- {short_err} 1/s, tests/test_lyapunov.py; "
         f"over 4 x 20 cycles {lle} +/- {err} at rtol 1e-6, the newest benchmarks/lle.py --chaos "
-        f"record, at {_commit(chaos)};"
+        f"record, at {chaos['commit']};"
     ) in _comment(_numbers, "EXPONENT_CYCLES")
 
 
@@ -232,15 +233,15 @@ def test_the_point_exponent_docstring_quotes_its_record_and_tests():
     doc = _doc(_exponent)
     # the "before" figure: the oldest chaos_maps record (two-trajectory copies on that orbit;
     # later records give its Floquet bound)
-    entry = next(e for e in _entries("continuation.py") if "--parts chaos_maps" in e)
-    rate, err = re.search(
-        r"omega_clearance at omega=1\.571, clearance=2e-05: .*?lle ([\d.e+]+) \+- (\d+) s-1", entry
-    ).groups()
-    mantissa, exponent = rate.split("e")
+    oldest = next(r for r in records("continuation.py") if "--parts chaos_maps" in r["command"])
+    corner = oldest["figures"]["chaos_map_corners"][
+        "omega_clearance at omega=1.571, clearance=2e-05"
+    ]
+    mantissa, exponent = f"{corner['lle']:.3g}".split("e")
     assert (
-        f"the nine-bar's omega = 0.5 pi, c = 20 um read {mantissa}e{int(exponent)} +- {err} 1/s, "
-        "the noise's rate: the ``benchmarks/continuation.py --parts chaos_maps`` record at "
-        f"{_commit(entry)})"
+        f"the nine-bar's omega = 0.5 pi, c = 20 um read {mantissa}e{int(exponent)} +- "
+        f"{corner['lle_stderr']:.2g} 1/s, the noise's rate: the ``benchmarks/continuation.py "
+        f"--parts chaos_maps`` record at {oldest['commit']})"
     ) in doc
     copies, variational = _contracting_orbit_test()
     assert (
@@ -341,8 +342,9 @@ def test_the_defect_comment_quotes_the_tangent_speed_records():
 # -- workbench/models/_reduced.py -----------------------------------------------------------------
 def test_the_block_solve_quotes_the_evaluation_cost_record():
     """``spd4_solve``: the unrolled Cholesky factorisation's cost from the hand-written "Cost of
-    an evaluation" of benchmarks/RESULTS.md's "Before 0.2.0" section, which it names."""
-    text = _flat(RESULTS.read_text())
+    an evaluation" of the "Before 0.2.0" section it names (benchmarks/NOTES.md, which
+    benchmarks/RESULTS.md shows)."""
+    text = _flat(NOTES.read_text())
     before = text.split("## Before 0.2.0: the measurements the README carried")[1]
     cost = before.split("**Cost of an evaluation.**")[1].split("**")[0]
     us = re.search(

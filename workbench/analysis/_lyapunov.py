@@ -47,7 +47,7 @@ __all__ = ["lyapunov_spectrum"]
 #: against 13 186 at D = 10 (at 56c825a-dirty); with all of them the volume rate is the trace
 #: on the whole state space and closes at rtol 1e-6 (2.9e-4 over 2 cycles, at 877b731). The
 #: commits name the newest benchmarks/tangent_speed.py records of each window (in
-#: benchmarks/RESULTS.md and benchmarks/results/tangent_speed.md), as docs/analysis.md does.
+#: benchmarks/records/tangent_speed/), as docs/analysis.md does.
 DEFECT = 10.0
 #: records of the accumulated growths (running estimate, batch means)
 RECORDS = 400
