@@ -59,7 +59,7 @@ def run_campaign(
     workers: int | None = None,
     chunk: int | None = None,
     restart: bool = False,
-    progress: bool = False,
+    progress: bool | str = False,
     max_memory: float | str | None = None,
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None,
     max_points: int | None = MAX_POINTS,
@@ -94,8 +94,9 @@ def run_campaign(
     restart : bool
         Discard whatever the store holds (archive, blocks, manifest) and start afresh. Without
         it, a store of a different scene or chunk size is refused with the differences named.
-    progress : bool
-        Show a progress bar over points with an ETA (and the dashboard link of a client).
+    progress : bool or str
+        Show a progress bar over points with an ETA (and the dashboard link of a client); a
+        string names what runs on the bar (``"campaign NAME"``, e.g. a study's case).
     max_memory : float or str, optional
         Refuse, before anything runs, a campaign whose assembled archive (or one point's
         records) would take more memory than this (bytes, or text such as ``"16 GiB"``;
@@ -226,7 +227,7 @@ def _run_locked(
     workers: int | None,
     chunk: int | None,
     restart: bool,
-    progress: bool,
+    progress: bool | str,
     wall0: float,
     max_memory: float | str | None = None,
     per_point: Callable | None = None,
@@ -290,7 +291,8 @@ def _run_locked(
     compute0 = time.perf_counter()
     results: list[dict] = []
     if tasks:
-        bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
+        initial = sum(len(blocks[i]) for i in done)
+        bar = _bar(grid.size, initial, progress) if progress else None
 
         def commit(result: dict) -> None:
             st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
@@ -428,10 +430,12 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
     )
 
 
-def _bar(total: int, initial: int):
+def _bar(total: int, initial: int, label: bool | str = True):
+    """The progress bar over a campaign's points; ``label`` (a string) names what runs."""
     from workbench._progress import Progress
 
-    return Progress(total, initial=initial, unit="pt", desc="campaign")
+    desc = f"campaign {label}" if isinstance(label, str) else "campaign"
+    return Progress(total, initial=initial, unit="pt", desc=desc)
 
 
 def store_paths(store: str | os.PathLike) -> dict[str, Path]:

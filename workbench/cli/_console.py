@@ -1,5 +1,5 @@
 """What the ``workbench`` command shows a person, shared by its subcommands: argument types that
-refuse bad values in one line, warnings as one line each, the notice before a first compile, a
+refuse bad values in one line, warnings as one line per kind, the notice before a first compile, a
 result written with its figure beside it, and the one line that says how many parts failed.
 """
 
@@ -81,15 +81,20 @@ def float_list(text: str) -> list[float]:
 
 @contextlib.contextmanager
 def one_line_warnings(command: str) -> Iterator[None]:
-    """Show each warning raised inside as one line ``workbench COMMAND: warning: ...`` on
-    stderr (not Python's file:line form with the source line), and each distinct one once."""
+    """Show the warnings raised inside, when it ends, one line per kind
+    (:func:`workbench._warnings.warnings_by_kind`: alike but for their numbers, e.g. one per
+    point of a campaign, with the count) as ``workbench COMMAND: warning: ...`` on stderr (not
+    Python's file:line form with the source line)."""
+    from workbench._warnings import warnings_by_kind
 
     def show(message, category, filename, lineno, file=None, line=None) -> None:
-        print(f"workbench {command}: warning: {message}", file=sys.stderr)
+        text = " ".join(part.strip() for part in str(message).splitlines() if part.strip())
+        print(f"workbench {command}: warning: {text}", file=sys.stderr)
 
     with warnings.catch_warnings():
         warnings.showwarning = show
-        yield
+        with warnings_by_kind():
+            yield
 
 
 def compile_kernel(scene, *, quiet: bool = False) -> float | None:
