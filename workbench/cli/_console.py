@@ -18,6 +18,7 @@ __all__ = [
     "add_quiet",
     "check_store_output",
     "compile_kernel",
+    "compile_notice",
     "float_list",
     "max_memory_option",
     "memory_size",
@@ -29,17 +30,6 @@ __all__ = [
     "save_or_keep",
     "save_with_figure",
 ]
-
-# What the first compile of a model's kernel took on the shared 2-core machine, wall time:
-# with an empty cache, Duffing 15 s and the mechanisms 28 s at a load of 5, the mechanisms
-# 74-95 s when more processes than cores were running (benchmarks/RESULTS.md, "Compile times
-# and the kernel cache"); Duffing's kernel alone 40 s at a load of 15 (the benchmarks/cache.py
-# record at e59ae2d, benchmarks/results/cache-duffing.md: the process that recompiled it took
-# 46.5 s, one that loaded it 6.6 s). It is CPU-bound: it scales with the share of a core the
-# process gets. tests/test_docstring_records.py holds the figures to those records.
-_COMPILE_SECONDS = {"ninebar": "28-95 s", "slider_crank": "28-95 s"}
-#: the other models, measured on Duffing
-_COMPILE_SECONDS_OTHERS = "15-40 s"
 
 
 def positive_int(text: str) -> int:
@@ -99,26 +89,44 @@ def one_line_warnings(command: str) -> Iterator[None]:
 
 def compile_kernel(scene, *, quiet: bool = False) -> float | None:
     """Compile the kernel of the scene's model before anything runs, when numba's cache does
-    not hold it: say so on stderr first ("compiling the <model> kernel ..."), with what it
-    depends on, and after it how long it took. Returns the compile's wall time (s), or None
-    when the kernel was cached (or cannot be told: e.g. a scipy method). ``quiet``: no
-    messages."""
+    not hold it: say so on stderr first (:func:`compile_notice`: what a first run took where it
+    was measured), and after it how long it took (wall and CPU time). Returns the compile's
+    wall time (s), or None when the kernel was cached (or cannot be told: e.g. a scipy
+    method). ``quiet``: no messages."""
     from workbench.campaign._warm import kernel_cached, load_kernel
 
     if kernel_cached(scene) is not False:
         return None
-    seconds = _COMPILE_SECONDS.get(scene.model, _COMPILE_SECONDS_OTHERS)
     say = (lambda s: None) if quiet else (lambda s: print(s, file=sys.stderr, flush=True))
-    say(
-        f"compiling the {scene.model} kernel (first run only: measured {seconds} on a 2-core "
-        "machine, longer when other processes share the CPU; later runs load it from the cache)"
-    )
-    t0 = time.perf_counter()
+    say(compile_notice(scene.model))
+    t0, cpu0 = time.perf_counter(), time.process_time()
     single = scene.replace(sweep={}) if scene.sweep else scene
     load_kernel(single.to_toml())
-    wall = time.perf_counter() - t0
-    say(f"compiled the {scene.model} kernel in {wall:.0f} s")
+    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    say(f"compiled the {scene.model} kernel in {wall:.0f} s ({cpu:.0f} s of CPU)")
     return wall
+
+
+def compile_notice(model: str) -> str:
+    """The line before a first compile: what the first run of ``model`` took where it was
+    measured (:func:`workbench.campaign._warm.compile_record`: CPU and wall time, the machine's
+    cores and load; Duffing's for a model not measured, named), and that the wall time grows
+    with the load."""
+    from workbench.campaign._warm import compile_record
+
+    found = compile_record(model)
+    if found is None:
+        return f"compiling the {model} kernel (first run only; later runs load it from the cache)"
+    measured, record = found
+    low, high = sorted(round(x) for x in record["load"])
+    load = f"{low}" if low == high else f"{low}-{high}"
+    which = "" if measured == model else f" for the {measured} kernel"
+    return (
+        f"compiling the {model} kernel (first run only; measured{which} on a "
+        f"{record['cores']}-core machine at a load of {load}: {record['cpu_seconds']:.0f} s of "
+        f"CPU, {record['wall_seconds']:.0f} s wall, the wall time growing with the machine's "
+        "load; later runs load it from the cache)"
+    )
 
 
 def add_quiet(parser: argparse.ArgumentParser, what: str = "no progress and no notices") -> None:
