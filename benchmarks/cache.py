@@ -155,7 +155,8 @@ def main() -> None:
         ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
     ).stdout.strip()
     dirty = subprocess.run(
-        ["git", "-C", str(ROOT), "status", "--porcelain", "--", "workbench", f":!{RECORD}"],
+        ["git", "-C", str(ROOT), "status", "--porcelain", "--", "workbench"]
+        + [f":(exclude){RECORD.relative_to(ROOT)}"],
         capture_output=True,
         text=True,
     ).stdout.strip()

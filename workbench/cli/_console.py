@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import os
 import sys
 import time
 import warnings
@@ -111,7 +112,7 @@ def compile_notice(model: str) -> str:
     """The line before a first compile: what the first run of ``model`` took where it was
     measured (:func:`workbench.campaign._warm.compile_record`: CPU and wall time, the machine's
     cores and load; Duffing's for a model not measured, named), and that the wall time grows
-    with the load."""
+    with the load (this machine's now: its 1-minute load average)."""
     from workbench.campaign._warm import compile_record
 
     found = compile_record(model)
@@ -121,11 +122,15 @@ def compile_notice(model: str) -> str:
     low, high = sorted(round(x) for x in record["load"])
     load = f"{low}" if low == high else f"{low}-{high}"
     which = "" if measured == model else f" for the {measured} kernel"
+    try:
+        now = f", now {os.getloadavg()[0]:.0f}"
+    except (AttributeError, OSError):  # pragma: no cover - no load average (Windows)
+        now = ""
     return (
         f"compiling the {model} kernel (first run only; measured{which} on a "
         f"{record['cores']}-core machine at a load of {load}: {record['cpu_seconds']:.0f} s of "
         f"CPU, {record['wall_seconds']:.0f} s wall, the wall time growing with the machine's "
-        "load; later runs load it from the cache)"
+        f"load{now}; later runs load it from the cache)"
     )
 
 
