@@ -11,13 +11,18 @@ load-insensitive) and whether the kernel was compiled (numba's cache index of th
 ``advance`` was empty before the run). A process that only loads takes a few seconds of imports.
 
 Run: ``python benchmarks/cache.py [--model ninebar] [--baseline 37099d8]``; writes its table to
-``benchmarks/results/cache.md`` (with date, commit and machine) and prints it.
+``benchmarks/results/cache-MODEL.md`` (with date, commit and machine) and prints it.
+``--cold`` measures the first row alone (this tree, an empty cache: what a first run costs).
+Either way the cold row is the model's record in ``workbench/campaign/compile_times.json``, which
+the command line's notice before a first compile quotes (CPU and wall time, the machine's
+cores and load).
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import os
 import platform
 import resource
@@ -46,6 +51,8 @@ print("CACHED", cached)
 
 OTHER = {"ninebar": "models/lorenz.py", "duffing": "models/lorenz.py"}
 MODULE = {"ninebar": "models/ninebar/_dynamics.py", "duffing": "models/duffing.py"}
+COLD_ONLY = ("slider_crank",)  # models measured with --cold only (no edit steps defined)
+RECORD = ROOT / "workbench" / "campaign" / "compile_times.json"
 
 
 def _tree(rev: str | None, where: Path) -> Path:
@@ -64,6 +71,8 @@ def _tree(rev: str | None, where: Path) -> Path:
 
 
 def _run(where: Path, model: str) -> tuple[float, float, str]:
+    """One process of the probe in the copy at ``where``: wall and CPU seconds, and whether the
+    kernel was loaded or compiled."""
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env.update(WORKBENCH_CACHE_DIR=str(where / "cache"), PYTHONPATH=str(where))
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -95,8 +104,13 @@ def _edit(where: Path, relative: str, docstring: bool = False) -> None:
     path.write_text(text)
 
 
-def measure(rev: str | None, model: str, scratch: Path) -> list[tuple[str, float, float, str]]:
+def measure(
+    rev: str | None, model: str, scratch: Path, cold: bool = False
+) -> list[tuple[str, float, float, str]]:
+    """The rows of one tree (``cold``: the first alone)."""
     where = _tree(rev, scratch / (rev or "this"))
+    if cold:
+        return [("cold (empty cache)", *_run(where, model))]
     steps = [
         ("cold (empty cache)", None),
         ("warm (unchanged)", None),
@@ -113,16 +127,50 @@ def measure(rev: str | None, model: str, scratch: Path) -> list[tuple[str, float
     return rows
 
 
+def record_cold(model: str, wall: float, cpu: float, load: tuple, command: str, head: str) -> None:
+    """Write the cold row of ``model`` into workbench/campaign/compile_times.json (the other
+    models' records stay)."""
+    records = json.loads(RECORD.read_text()) if RECORD.exists() else {}
+    records[model] = {
+        "cpu_seconds": round(cpu, 1),
+        "wall_seconds": round(wall, 1),
+        "load": [round(load[0], 1), round(load[1], 1)],  # 1-min average before, after
+        "cores": os.cpu_count(),
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d"),
+        "commit": head,
+        "command": command,
+    }
+    RECORD.write_text(json.dumps(dict(sorted(records.items())), indent=1) + "\n")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--model", default="ninebar", choices=sorted(MODULE))
+    ap.add_argument("--model", default="ninebar", choices=sorted([*MODULE, *COLD_ONLY]))
     ap.add_argument("--baseline", default="37099d8", help="git revision of the baseline")
+    ap.add_argument("--cold", action="store_true", help="the cold row of this tree alone")
     args = ap.parse_args()
+    if args.model in COLD_ONLY and not args.cold:
+        ap.error(f"--model {args.model} is measured with --cold only")
     head = subprocess.run(
         ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
     ).stdout.strip()
+    dirty = subprocess.run(
+        ["git", "-C", str(ROOT), "status", "--porcelain", "--", "workbench"]
+        + [f":(exclude){RECORD.relative_to(ROOT)}"],
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
+    head += "-dirty" if dirty else ""
+    command = f"python benchmarks/cache.py --model {args.model}" + (
+        " --cold" if args.cold else f" --baseline {args.baseline}"
+    )
     with tempfile.TemporaryDirectory() as tmp:
-        ours = measure(None, args.model, Path(tmp))
+        load0 = os.getloadavg()
+        ours = measure(None, args.model, Path(tmp), cold=args.cold)
+        record_cold(args.model, *ours[0][1:3], (load0[0], os.getloadavg()[0]), command, head)
+        print(f"{ours[0][0]}: {ours[0][1]:.1f} s wall, {ours[0][2]:.1f} s CPU -> {RECORD}")
+        if args.cold:
+            return
         base = measure(args.baseline, args.model, Path(tmp))
     load = os.getloadavg()
     now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")

@@ -57,6 +57,40 @@ def test_only_workbench_functions_use_its_cache(tmp_path):
     assert theirs and all(name.startswith("other_lib.plus_one-") for name in theirs)
 
 
+def test_a_copy_of_the_package_elsewhere_loads_what_another_copy_compiled(tmp_path):
+    """The cache is keyed by the code's digest and the package's name, not by where its files
+    lie (numba's own folder name hashes that path): a second copy of the same code, elsewhere,
+    compiles nothing (issue 40: a copy's first nine-bar run spent 20 s of CPU compiling the
+    mechanism's records anew, with no notice)."""
+    package = Path(workbench.__file__).parent
+    for copy in ("a", "b"):
+        ignore = shutil.ignore_patterns("__pycache__")
+        shutil.copytree(package, tmp_path / copy / "workbench", ignore=ignore)
+    (tmp_path / "other_lib.py").write_text(textwrap.dedent(OTHER))
+
+    def saved(copy: str) -> list[str]:
+        """The cache files numba wrote for a process of ``copy`` (NUMBA_DEBUG_CACHE)."""
+        env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+        env.update(
+            WORKBENCH_CACHE_DIR=str(tmp_path / "cache"),
+            PYTHONPATH=f"{tmp_path / copy}{os.pathsep}{tmp_path}",
+            NUMBA_DEBUG_CACHE="1",
+        )
+        out = subprocess.run(
+            [sys.executable, "-c", SCRIPT],
+            cwd=tmp_path / copy,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        return [line for line in out.splitlines() if line.startswith("[cache] data saved")]
+
+    first = saved("a")
+    assert any("placeholder_hooks.rhs-" in line for line in first), first
+    assert saved("b") == []
+
+
 def test_a_digest_covers_code_not_docstrings_comments_or_layout(tmp_path):
     code = 'def f(x):\n    """Twice x (m)."""\n    return 2 * x  # doubled\n'
     same = '"""A module."""\n\n\ndef f(x):\n    """Twice x, in m."""\n\n    return 2*x\n'

@@ -32,6 +32,9 @@ _RUN_ATTRS = (
     "campaign_wall_time",
     "campaign_compute_wall_time",
     "campaign_workers",
+    "resume_workers",  # of a call that reused every block
+    "resume_compute_wall_time",
+    "resume_wall_time",
     "campaign_chunk",
     "campaign_blocks",
     "campaign_id",
@@ -171,6 +174,33 @@ def test_failing_points_are_data_and_a_changed_scene_is_refused(tmp_path):
     assert (again.status == 0).all() and np.isfinite(again.x).all()
     assert again.attrs["computed_blocks"] == again.attrs["campaign_blocks"] == 4
     assert again.attrs["reused_blocks"] == 0
+
+
+def test_a_rerun_that_reuses_every_block_keeps_the_figures_of_the_call_that_computed_them(
+    scene, tmp_path
+):
+    """A campaign run again on its finished store computes nothing: the archive keeps the
+    workers and wall times of the call that computed the blocks and adds the rerun's as
+    resume_* (issue 40: the rerun overwrote them, campaign_workers 0)."""
+    store = tmp_path / "c.nc"
+    first = workbench.run_campaign(scene, store, workers=2)
+    names = ("campaign_workers", "campaign_compute_wall_time", "campaign_wall_time")
+    original = {k: first.attrs[k] for k in names}
+    assert original["campaign_workers"] == 2 and original["campaign_compute_wall_time"] > 0
+    assert not any(k.startswith("resume_") for k in first.attrs)
+    again = workbench.run_campaign(scene, store, workers=1)
+    blocks = int(first.attrs["campaign_blocks"])
+    assert (again.attrs["computed_blocks"], again.attrs["reused_blocks"]) == (0, blocks)
+    for ds in (again, workbench.open_run(store)):
+        assert {k: ds.attrs[k] for k in names} == original
+        assert ds.attrs["resume_workers"] == 0
+        assert 0 <= ds.attrs["resume_compute_wall_time"] <= ds.attrs["resume_wall_time"]
+    text = summary(again)
+    assert f"(0 computed, {blocks} reused), " in text and " s wall (computed before in " in text
+    shutil.rmtree(store_paths(store)["blocks"])  # the archive alone, complete
+    third = workbench.run_campaign(scene, store)
+    assert {k: third.attrs[k] for k in names} == original and third.attrs["resume_workers"] == 0
+    xr.testing.assert_identical(numbers(third), numbers(first))
 
 
 def test_scene_without_sweep_and_bad_arguments_are_refused(scene, tmp_path):

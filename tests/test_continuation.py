@@ -285,6 +285,12 @@ def test_continued_sweep_numbers_do_not_depend_on_workers_and_resume(tmp_path):
     c = continued_sweep(scene, tmp_path / "b.nc", workers=2)
     assert c.attrs["computed_blocks"] == 0 and c.attrs["reused_blocks"] > 0
     assert c.x.equals(a.x)
+    # run again on its finished store: the figures of the call that computed it stay (issue 40)
+    again = continued_sweep(scene, tmp_path / "a.nc", workers=2)
+    assert again.attrs["computed_blocks"] == 0 and again.attrs["resume_workers"] == 0
+    for name in ("campaign_workers", "campaign_cpu_time", "campaign_wall_time"):
+        assert again.attrs[name] == a.attrs[name], name
+    assert again.attrs["campaign_workers"] == 1 and again.attrs["resume_cpu_time"] == 0
 
 
 def test_campaign_refuses_a_continued_sweep_and_the_cli_runs_it(tmp_path, capsys):

@@ -4,12 +4,13 @@ claims, figures and a dataset with units, and the report shows ensemble statisti
 import json
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from workbench import load_scene
+from workbench import ModelWarning, load_scene
 from workbench.cli import main
 from workbench.study import available_studies, load_study, run_study, write_report
 from workbench.study._claims import evaluate_claim
@@ -384,8 +385,21 @@ def test_friction_sweep_summary_report_and_figure(tmp_path):
 
 
 # -- a quick study end to end -------------------------------------------------------------------
-def test_quick_study_run_and_report(tmp_path):
-    ds = run_study("friction_models", out=tmp_path, quick=True, workers=2)
+def test_quick_study_run_and_report(tmp_path, capsys):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ds = run_study("friction_models", out=tmp_path, quick=True, workers=2, progress=True)
+    # each campaign's progress names its case (issue 40)
+    err = capsys.readouterr().err
+    for case in ("coulomb", "lugre", "lugre_paper_damping"):
+        assert f"campaign friction_models/{case}: 4/4 pt (100 %) in " in err, err
+    # the paper's constant LuGre damping leaves the law's range in every realisation (below):
+    # the workers' warnings come back, once per kind with their count (issue 40)
+    model = [w.message for w in caught if issubclass(w.category, ModelWarning)]
+    kinds = [m.workbench_kind for m in model]
+    assert len({k.key for k in kinds}) == len(kinds), [str(m) for m in model]
+    left = [k for k in kinds if "left its law's range" in k.message]
+    assert left and sum(k.count for k in left) >= 4, [str(m) for m in model]
     members = ["coulomb", "lugre", "lugre_paper_damping"]
     assert ds.sizes["realisation"] == 4 and list(ds.member.values) == members
     assert ds.attrs["runs"] == 12

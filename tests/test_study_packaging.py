@@ -67,6 +67,7 @@ def test_an_installed_wheel_lists_and_loads_the_studies(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     expected = {f"workbench/study/scenes/{f}" for f in _scene_files(ROOT / "studies")}
     assert expected <= set(names), sorted(expected - set(names))[:5]
+    assert "workbench/campaign/compile_times.json" in names  # the compile notice's record
     site = tmp_path / "site"
     zipfile.ZipFile(wheel).extractall(site)
     run = tmp_path / "elsewhere"

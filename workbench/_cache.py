@@ -9,7 +9,9 @@ every workbench module it imports, transitively, with the versions of Python, nu
 (:func:`workbench._sources.code_digest`); the same digest replaces numba's own freshness stamp
 (the file's modification time), so an edit of a docstring or comment recompiles nothing, an edit
 of ``analysis/`` or ``plot/`` recompiles nothing, and an edit of one model recompiles that
-model's code alone. A generated kernel module (:mod:`workbench.solver._compile`) carries the
+model's code alone. The directory is named after the package, not after where its files
+lie, so a copy of the same code elsewhere (another checkout, environment or node) loads what
+another copy compiled. A generated kernel module (:mod:`workbench.solver._compile`) carries the
 digest of its own source and of what it imports in its name.
 
 Only workbench's functions go there. :class:`WorkbenchCacheLocator` is a numba cache locator
@@ -356,8 +358,10 @@ _CLAIMED: set[str] = set()  # the cache paths of workbench's functions (Workbenc
 
 
 class WorkbenchCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
-    """Numba cache locator of workbench's own functions: ``cache_root()/numba/<digest>/``, with
-    the digest of the function's module (:func:`module_digest`) as numba's freshness stamp.
+    """Numba cache locator of workbench's own functions: ``cache_root()/numba/<digest>/<package>``
+    (the name of the function's package, wherever its files lie; a generated kernel's folder as
+    numba names it), with the digest of the function's module (:func:`module_digest`) as
+    numba's freshness stamp.
 
     ``from_function`` returns None (numba tries its next locator) for a function that is not
     defined in a workbench module or a generated kernel (module ``workbench_kernels.*``); it
@@ -367,8 +371,15 @@ class WorkbenchCacheLocator(caching._SourceFileBackedLocatorMixin, caching._Cach
     def __init__(self, py_func, py_file: str) -> None:
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        self._digest = module_digest(py_func.__module__)
-        subpath = self.get_suitable_cache_subpath(py_file)
+        module = py_func.__module__
+        self._digest = module_digest(module)
+        if module.startswith(KERNEL_PACKAGE + "."):  # its file lies in the cache: numba's way
+            subpath = self.get_suitable_cache_subpath(py_file)
+        else:
+            # the package's name, not numba's hash of the folder: the digest keys the code, so
+            # a copy of the package elsewhere (another checkout, environment or node) loads what
+            # another copy of the same code compiled
+            subpath = module.rpartition(".")[0] or module
         # the root unchecked: a function is decorated at import; loads and saves check it
         self._cache_path = str(_location().path / "numba" / self._digest / subpath)
         _CLAIMED.add(self._cache_path)

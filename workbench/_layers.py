@@ -21,6 +21,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "workbench._progress",
             "workbench._sources",
             "workbench._version",
+            "workbench._warnings",
         ),
     ),
     ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators

@@ -87,12 +87,16 @@ codes of :class:`workbench.Status`, 0 ok, 1 terminated, 2 max_steps, 3 step_unde
 which never stops the campaign), ``failure`` (the message), solver
 statistics (``solver_steps``, ``solver_rejected_steps``, ``solver_rhs_evaluations``,
 ``solver_events``, ``solver_wall_time``) and ``point_wall_time``; and in its attributes the scene
-TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks``. It
+TOML, the grid (``campaign_grid``), provenance, ``computed_blocks`` and ``reused_blocks`` (by
+the call that wrote it), and the workers and wall times of the call that computed the blocks
+(``campaign_workers``, ``campaign_*_wall_time``; a later call that finds every block done keeps
+them and adds its own as ``resume_*``). It
 stores only what the scene records: ``record.samples_per_period = 1`` keeps strobe samples only.
 
 The pieces another package runs its own tasks with (:mod:`workbench.continuation`'s continued
 sweeps): :class:`Store`, :func:`execute` (with its own ``runner``), :func:`block_dataset`
-(:func:`run_outcome`, :func:`invalid_outcome`), :func:`assemble_blocks`, and
+(:func:`run_outcome`, :func:`invalid_outcome`), :func:`assemble_blocks`,
+:func:`execution_attrs` (with :meth:`Store.assembled_attrs`), and
 :func:`model_source` / :func:`task_scene` (a task names the module of the user's model, which its
 worker imports before it reads the task's scene).
 
@@ -100,7 +104,7 @@ Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--sched
 [--chunk K] [--restart]`` and ``workbench bifurcation sweep.nc --var x [-o fig.png]``.
 """
 
-from workbench.campaign._assemble import assemble_blocks, summary
+from workbench.campaign._assemble import assemble_blocks, execution_attrs, summary
 from workbench.campaign._block import (
     block_dataset,
     block_summary,
@@ -137,6 +141,7 @@ __all__ = [
     "campaign_id",
     "code_of",
     "execute",
+    "execution_attrs",
     "expand_sweep",
     "failed",
     "invalid_outcome",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 
 import numpy as np
 import xarray as xr
@@ -30,7 +31,7 @@ from workbench.run import (
 )
 from workbench.scene import Scene
 
-__all__ = ["assemble", "assemble_blocks", "summary"]
+__all__ = ["assemble", "assemble_blocks", "execution_attrs", "summary"]
 
 _PER_POINT = ("status", "failure", *STATS, "point_wall_time")
 
@@ -81,6 +82,19 @@ def assemble(
     )
     ds.attrs.update(run_attrs)
     return ds
+
+
+def execution_attrs(this: Mapping, previous: Mapping | None) -> dict:
+    """The attributes that describe a call of a campaign (``this``: ``campaign_workers``,
+    ``campaign_compute_wall_time``, ``campaign_wall_time``, ...) as its archive keeps them
+    after a call that computed no block: the ``campaign_*`` values of the call that computed
+    them, from ``previous`` (the attributes of the archive assembled from the same blocks
+    before, :meth:`Store.assembled_attrs`), and this call's as ``resume_*`` (the latest such
+    call's). Without ``previous`` (none, or without those attributes), ``this`` as it is."""
+    if previous is None or not all(k in previous for k in this):
+        return dict(this)
+    kept = {k: previous[k] for k in this}
+    return kept | {f"resume_{k.removeprefix('campaign_')}": v for k, v in this.items()}
 
 
 def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> xr.Dataset:
@@ -271,7 +285,12 @@ def summary(ds: xr.Dataset, *, limit: int = 20) -> str:
         f"{a['campaign_points']} points in {a['campaign_blocks']} blocks "
         f"({a.get('computed_blocks', '?')} computed, {a.get('reused_blocks', '?')} reused)"
     )
-    if "campaign_wall_time" in a:
+    if "resume_wall_time" in a:  # nothing computed: this call's time, and the computation's
+        head += (
+            f", {a['resume_wall_time']:.3g} s wall (computed before in "
+            f"{a['campaign_wall_time']:.3g} s wall)"
+        )
+    elif "campaign_wall_time" in a:
         head += f", {a['campaign_wall_time']:.3g} s wall"
     lines = [head, "; ".join(f"{v} {k}" for k, v in counts.items() if v or k == "ok")]
     flags = status.transpose(*dims).values.reshape(-1)

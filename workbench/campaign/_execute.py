@@ -25,11 +25,13 @@ import contextlib
 import json
 import os
 import signal
+import socket
 import sys
 import threading
 import uuid
 from collections.abc import Callable, Iterator
 
+from workbench._warnings import WarningKind, reraise, warnings_by_kind
 from workbench.campaign._block import MODEL_ENV, PRELOAD_ENV, BlockTask, run_block, worker_start
 from workbench.campaign._lifeline import PARENT_ENV
 from workbench.campaign._warm import kernel_cached, load_kernel
@@ -96,6 +98,13 @@ def execute(
         A local worker process died (killed, out of memory); the finished blocks are kept.
     Exception
         The first error a task raised, after the tasks in flight were stopped.
+
+    Warns
+    -----
+    Warning
+        What the tasks warned about in their workers, and anything raised meanwhile here, once
+        per kind at the end, with the count (:func:`workbench._warnings.warnings_by_kind`;
+        except in a dask worker of several threads, where they go to the worker's log).
     """
     first = _first_point(tasks[0])
     # the module of a user's model, which each worker imports before it reads the scene
@@ -112,9 +121,10 @@ def execute(
 
         def submit(t: BlockTask):
             key = f"campaign-{cid}-block-{t.block:05d}-{token}"
-            return client.submit(runner, t, key=key, pure=False)
+            return client.submit(_run_task, runner, t, _process(), key=key, pure=False)
 
-        return _dispatch(submit, wait, tasks, workers * (1 + PREFETCH), on_done)
+        with warnings_by_kind():
+            return _dispatch(submit, wait, tasks, workers * (1 + PREFETCH), on_done)
     if kernel_cached(scene_from_toml(first)) is False:
         # Compiled here, where Ctrl-C stops it at once, not in the fork server's start.
         load_kernel(first)
@@ -122,10 +132,44 @@ def execute(
 
         def submit_local(t: BlockTask):
             with _uninterrupted_start():
-                return pool.submit(runner, t)
+                return pool.submit(_run_task, runner, t, _process())
 
         window = workers * (1 + PREFETCH)
-        return _dispatch(submit_local, concurrent.futures.wait, tasks, window, on_done)
+        with warnings_by_kind():
+            return _dispatch(submit_local, concurrent.futures.wait, tasks, window, on_done)
+
+
+def _process() -> str:
+    """This process: host name and process id."""
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def _run_task(runner: Callable[[BlockTask], dict], task: BlockTask, client: str) -> dict:
+    """``runner(task)`` in a worker, with the warnings it raised, by kind, in its summary
+    (``warnings``: a list of :class:`workbench._warnings.WarningKind`; the client raises them
+    again, so that a campaign says once per kind what its points warned about). Warnings are
+    caught for the whole process, not per thread: a task in the client's
+    process (``client``, :func:`_process`; a cluster of threads there) warns there directly,
+    and one in a worker of several threads into the worker's log, as any warning would."""
+    if _process() == client or not _one_task_at_a_time():
+        return runner(task)
+    kinds: list[WarningKind] = []
+    with warnings_by_kind(show=kinds.append):
+        summary = runner(task)
+    return {**summary, "warnings": kinds}
+
+
+def _one_task_at_a_time() -> bool:
+    """Whether this process runs one task at a time: a local pool's worker (its main thread),
+    or a dask worker of one thread."""
+    if threading.current_thread() is threading.main_thread():
+        return True
+    try:
+        from distributed import get_worker
+
+        return get_worker().state.nthreads == 1
+    except Exception:  # not a dask worker, or one without that field
+        return False
 
 
 @contextlib.contextmanager
@@ -179,6 +223,8 @@ def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, on_don
             done, running = wait(running, return_when="FIRST_COMPLETED")
             for fut in done:
                 results.append(fut.result())  # re-raises the task's error
+                for kind in results[-1].pop("warnings", ()):
+                    reraise(kind)  # counted by kind (execute's warnings_by_kind)
                 if on_done is not None:
                     on_done(results[-1])
     finally:

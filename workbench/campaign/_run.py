@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import DiskFull, WriteFailed, open_run, save_run
-from workbench.campaign._assemble import assemble
+from workbench.campaign._assemble import assemble, execution_attrs
 from workbench.campaign._block import BlockTask, failed, model_source
 from workbench.campaign._errors import CampaignError, CampaignWarning
 from workbench.campaign._execute import available_workers, execute
@@ -59,7 +59,7 @@ def run_campaign(
     workers: int | None = None,
     chunk: int | None = None,
     restart: bool = False,
-    progress: bool = False,
+    progress: bool | str = False,
     max_memory: float | str | None = None,
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None,
     max_points: int | None = MAX_POINTS,
@@ -94,8 +94,9 @@ def run_campaign(
     restart : bool
         Discard whatever the store holds (archive, blocks, manifest) and start afresh. Without
         it, a store of a different scene or chunk size is refused with the differences named.
-    progress : bool
-        Show a progress bar over points with an ETA (and the dashboard link of a client).
+    progress : bool or str
+        Show a progress bar over points with an ETA (and the dashboard link of a client); a
+        string names what runs on the bar (``"campaign NAME"``, e.g. a study's case).
     max_memory : float or str, optional
         Refuse, before anything runs, a campaign whose assembled archive (or one point's
         records) would take more memory than this (bytes, or text such as ``"16 GiB"``;
@@ -127,11 +128,14 @@ def run_campaign(
         forced model. When the record times differ between points (a sweep over the forcing
         frequency), ``time`` has no coordinate and ``record_time`` (s; parameter dims, time)
         holds each point's times. Attributes: provenance, the scene TOML, the grid
-        (``campaign_grid``, JSON), ``computed_blocks``, ``reused_blocks``, ``failed_points``,
-        ``campaign_workers``, ``campaign_compute_wall_time`` (s, the task phase),
-        ``campaign_wall_time`` (s, all of this call but the final write) and
+        (``campaign_grid``, JSON), ``computed_blocks`` and ``reused_blocks`` (by this call),
+        ``failed_points``, ``campaign_workers``, ``campaign_compute_wall_time`` (s, the task
+        phase), ``campaign_wall_time`` (s, all of the call but the final write) and
         ``campaign_block_sha256`` (the SHA-256 of every block file, in block order, space
-        separated). The same dataset is stored at ``store``.
+        separated). The ``campaign_*`` figures are those of the call that computed blocks: a
+        call that finds every block done keeps them and adds its own as ``resume_workers``
+        (0), ``resume_compute_wall_time`` and ``resume_wall_time``. The same dataset is
+        stored at ``store``.
 
     Raises
     ------
@@ -226,7 +230,7 @@ def _run_locked(
     workers: int | None,
     chunk: int | None,
     restart: bool,
-    progress: bool,
+    progress: bool | str,
     wall0: float,
     max_memory: float | str | None = None,
     per_point: Callable | None = None,
@@ -237,12 +241,13 @@ def _run_locked(
     manifest = st.read_manifest()
     if manifest is None:
         reused = _complete_archive(st, scene, chunk, per_point)
-        if reused is not None:
-            reused.attrs.update(
-                campaign_workers=0,
-                campaign_compute_wall_time=0.0,
-                campaign_wall_time=time.perf_counter() - wall0,
-            )
+        if reused is not None:  # computed before: that call's figures stay, this one's added
+            this = {
+                "campaign_workers": 0,
+                "campaign_compute_wall_time": 0.0,
+                "campaign_wall_time": time.perf_counter() - wall0,
+            }
+            reused.attrs.update(execution_attrs(this, reused.attrs))
             return reused
         if chunk is None:
             n = available_workers(client, workers)
@@ -290,7 +295,8 @@ def _run_locked(
     compute0 = time.perf_counter()
     results: list[dict] = []
     if tasks:
-        bar = _bar(grid.size, sum(len(blocks[i]) for i in done)) if progress else None
+        initial = sum(len(blocks[i]) for i in done)
+        bar = _bar(grid.size, initial, progress) if progress else None
 
         def commit(result: dict) -> None:
             st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
@@ -318,6 +324,14 @@ def _run_locked(
             raise RuntimeError(f"{len(tasks)} blocks were scheduled, {len(results)} came back")
     compute = time.perf_counter() - compute0
     in_memory = {r["block"]: r["dataset"] for r in results if r.get("dataset") is not None}
+    checksums = " ".join(manifest["checksums"][str(i)] for i in range(len(blocks)))
+    execution = {
+        "campaign_workers": n_workers if tasks else 0,
+        "campaign_compute_wall_time": compute,
+        "campaign_wall_time": time.perf_counter() - wall0,
+    }
+    if not tasks:  # every block reused: the figures of the call that computed them stay
+        execution = execution_attrs(execution, st.assembled_attrs(checksums))
     ds = assemble(
         scene,
         grid,
@@ -327,12 +341,8 @@ def _run_locked(
         {
             "computed_blocks": len(tasks),
             "reused_blocks": len(done),
-            "campaign_workers": n_workers if tasks else 0,
-            "campaign_compute_wall_time": compute,
-            "campaign_wall_time": time.perf_counter() - wall0,
-            "campaign_block_sha256": " ".join(
-                manifest["checksums"][str(i)] for i in range(len(blocks))
-            ),
+            **execution,
+            "campaign_block_sha256": checksums,
             # the measurement's name, only when there is one (None: the attribute is absent)
             **({"campaign_per_point": _name(per_point)} if per_point is not None else {}),
             "code_digests": " ".join(
@@ -428,10 +438,12 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
     )
 
 
-def _bar(total: int, initial: int):
+def _bar(total: int, initial: int, label: bool | str = True):
+    """The progress bar over a campaign's points; ``label`` (a string) names what runs."""
     from workbench._progress import Progress
 
-    return Progress(total, initial=initial, unit="pt", desc="campaign")
+    desc = f"campaign {label}" if isinstance(label, str) else "campaign"
+    return Progress(total, initial=initial, unit="pt", desc=desc)
 
 
 def store_paths(store: str | os.PathLike) -> dict[str, Path]:

@@ -40,6 +40,7 @@ from workbench.archive import (
     check_output_file,
     file_problem,
     mapping_diff,
+    open_run,
     read_manifest,
     store_lock,
     write_text_atomic,
@@ -72,6 +73,19 @@ class Store:
         self.blocks_dir = self.archive.with_name(self.archive.name + ".blocks")
         self.manifest_path = self.blocks_dir / "manifest.json"
         self._points: tuple[object, str] = (None, "")  # block_points and their JSON text
+
+    def assembled_attrs(self, checksums: str) -> dict | None:
+        """The attributes of the archive at the store's path when it was assembled from the
+        blocks whose SHA-256 are ``checksums`` (its ``campaign_block_sha256``); None when there
+        is no archive, an unreadable one, or one of other blocks."""
+        if not self.archive.is_file():
+            return None
+        try:
+            with open_run(self.archive) as ds:
+                attrs = dict(ds.attrs)
+        except Exception:  # the archive is rewritten anyway
+            return None
+        return attrs if attrs.get("campaign_block_sha256") == checksums else None
 
     def block_path(self, index: int) -> Path:
         """The file of block ``index`` in the store's blocks directory."""

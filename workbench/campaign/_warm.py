@@ -3,14 +3,37 @@
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
+from pathlib import Path
 
 from workbench.campaign._block import task_scene
 from workbench.run import derive, integrate, prepare, provenance, to_dataset
 from workbench.scene import Scene
 
-__all__ = ["kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
+__all__ = ["compile_record", "kernel_cached", "load_kernel", "warm_io", "warm_kernel"]
+
+#: What the first run of a model (import, prepare, one simulated cycle) took with an empty
+#: kernel cache where it was last measured, per model: ``cpu_seconds``, ``wall_seconds``,
+#: ``cores``, ``load`` (the 1-min load average before and after), ``date``, ``commit``,
+#: ``command``. Written by ``benchmarks/cache.py``, read by :func:`compile_record`.
+COMPILE_TIMES = Path(__file__).with_name("compile_times.json")
+_STAND_IN = "duffing"  # the measured model quoted for a model without its own record
+
+
+def compile_record(model: str) -> tuple[str, dict] | None:
+    """The measured first run with an empty kernel cache (:data:`COMPILE_TIMES`) of ``model``,
+    else of the model that stands in for it (Duffing's: the smallest kernel measured), as
+    (the model measured, its record); None when neither was measured."""
+    try:
+        records = json.loads(COMPILE_TIMES.read_text())
+    except (OSError, ValueError):  # pragma: no cover - a package installed without it
+        return None
+    for name in (model, _STAND_IN):
+        if name in records:
+            return name, records[name]
+    return None
 
 
 def kernel_cached(scene: Scene) -> bool | None:

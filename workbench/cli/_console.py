@@ -1,5 +1,5 @@
 """What the ``workbench`` command shows a person, shared by its subcommands: argument types that
-refuse bad values in one line, warnings as one line each, the notice before a first compile, a
+refuse bad values in one line, warnings as one line per kind, the notice before a first compile, a
 result written with its figure beside it, and the one line that says how many parts failed.
 """
 
@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import os
 import sys
 import time
 import warnings
@@ -18,6 +19,7 @@ __all__ = [
     "add_quiet",
     "check_store_output",
     "compile_kernel",
+    "compile_notice",
     "float_list",
     "max_memory_option",
     "memory_size",
@@ -29,17 +31,6 @@ __all__ = [
     "save_or_keep",
     "save_with_figure",
 ]
-
-# What the first compile of a model's kernel took on the shared 2-core machine, wall time:
-# with an empty cache, Duffing 15 s and the mechanisms 28 s at a load of 5, the mechanisms
-# 74-95 s when more processes than cores were running (benchmarks/RESULTS.md, "Compile times
-# and the kernel cache"); Duffing's kernel alone 40 s at a load of 15 (the benchmarks/cache.py
-# record at e59ae2d, benchmarks/results/cache-duffing.md: the process that recompiled it took
-# 46.5 s, one that loaded it 6.6 s). It is CPU-bound: it scales with the share of a core the
-# process gets. tests/test_docstring_records.py holds the figures to those records.
-_COMPILE_SECONDS = {"ninebar": "28-95 s", "slider_crank": "28-95 s"}
-#: the other models, measured on Duffing
-_COMPILE_SECONDS_OTHERS = "15-40 s"
 
 
 def positive_int(text: str) -> int:
@@ -81,39 +72,66 @@ def float_list(text: str) -> list[float]:
 
 @contextlib.contextmanager
 def one_line_warnings(command: str) -> Iterator[None]:
-    """Show each warning raised inside as one line ``workbench COMMAND: warning: ...`` on
-    stderr (not Python's file:line form with the source line), and each distinct one once."""
+    """Show the warnings raised inside, when it ends, one line per kind
+    (:func:`workbench._warnings.warnings_by_kind`: alike but for their numbers, e.g. one per
+    point of a campaign, with the count) as ``workbench COMMAND: warning: ...`` on stderr (not
+    Python's file:line form with the source line)."""
+    from workbench._warnings import warnings_by_kind
 
     def show(message, category, filename, lineno, file=None, line=None) -> None:
-        print(f"workbench {command}: warning: {message}", file=sys.stderr)
+        text = " ".join(part.strip() for part in str(message).splitlines() if part.strip())
+        print(f"workbench {command}: warning: {text}", file=sys.stderr)
 
     with warnings.catch_warnings():
         warnings.showwarning = show
-        yield
+        with warnings_by_kind():
+            yield
 
 
 def compile_kernel(scene, *, quiet: bool = False) -> float | None:
     """Compile the kernel of the scene's model before anything runs, when numba's cache does
-    not hold it: say so on stderr first ("compiling the <model> kernel ..."), with what it
-    depends on, and after it how long it took. Returns the compile's wall time (s), or None
-    when the kernel was cached (or cannot be told: e.g. a scipy method). ``quiet``: no
-    messages."""
+    not hold it: say so on stderr first (:func:`compile_notice`: what a first run took where it
+    was measured), and after it how long it took (wall and CPU time). Returns the compile's
+    wall time (s), or None when the kernel was cached (or cannot be told: e.g. a scipy
+    method). ``quiet``: no messages."""
     from workbench.campaign._warm import kernel_cached, load_kernel
 
     if kernel_cached(scene) is not False:
         return None
-    seconds = _COMPILE_SECONDS.get(scene.model, _COMPILE_SECONDS_OTHERS)
     say = (lambda s: None) if quiet else (lambda s: print(s, file=sys.stderr, flush=True))
-    say(
-        f"compiling the {scene.model} kernel (first run only: measured {seconds} on a 2-core "
-        "machine, longer when other processes share the CPU; later runs load it from the cache)"
-    )
-    t0 = time.perf_counter()
+    say(compile_notice(scene.model))
+    t0, cpu0 = time.perf_counter(), time.process_time()
     single = scene.replace(sweep={}) if scene.sweep else scene
     load_kernel(single.to_toml())
-    wall = time.perf_counter() - t0
-    say(f"compiled the {scene.model} kernel in {wall:.0f} s")
+    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    say(f"compiled the {scene.model} kernel in {wall:.0f} s ({cpu:.0f} s of CPU)")
     return wall
+
+
+def compile_notice(model: str) -> str:
+    """The line before a first compile: what the first run of ``model`` took where it was
+    measured (:func:`workbench.campaign._warm.compile_record`: CPU and wall time, the machine's
+    cores and load; Duffing's for a model not measured, named), and that the wall time grows
+    with the load (this machine's now: its 1-minute load average)."""
+    from workbench.campaign._warm import compile_record
+
+    found = compile_record(model)
+    if found is None:
+        return f"compiling the {model} kernel (first run only; later runs load it from the cache)"
+    measured, record = found
+    low, high = sorted(round(x) for x in record["load"])
+    load = f"{low}" if low == high else f"{low}-{high}"
+    which = "" if measured == model else f" for the {measured} kernel"
+    try:
+        now = f", now {os.getloadavg()[0]:.0f}"
+    except (AttributeError, OSError):  # pragma: no cover - no load average (Windows)
+        now = ""
+    return (
+        f"compiling the {model} kernel (first run only; measured{which} on a "
+        f"{record['cores']}-core machine at a load of {load}: {record['cpu_seconds']:.0f} s of "
+        f"CPU, {record['wall_seconds']:.0f} s wall, the wall time growing with the machine's "
+        f"load{now}; later runs load it from the cache)"
+    )
 
 
 def add_quiet(parser: argparse.ArgumentParser, what: str = "no progress and no notices") -> None:

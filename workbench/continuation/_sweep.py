@@ -17,6 +17,7 @@ from workbench.campaign import (
     available_workers,
     campaign_id,
     execute,
+    execution_attrs,
     expand_sweep,
     model_source,
 )
@@ -82,7 +83,8 @@ def continued_sweep(
         ``seam_chained`` (1 where the segment was run again from its predecessor's state).
         Attributes: those of a campaign, the settings (``continuation_*``), the rounds of
         chained segments (``continuation_rounds``) and the workers' CPU time of the blocks
-        computed by this call (``campaign_cpu_time``, s).
+        computed by the call that computed them (``campaign_cpu_time``, s; a rerun that
+        computes none adds its own as ``resume_cpu_time``, as the other ``resume_*``).
 
     Examples
     --------
@@ -173,20 +175,24 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
         if bar is not None:
             bar.close()
     ds = _assemble(scene, plan, final, seams, blocks)
+    checksums = " ".join(manifest["checksums"][str(b)] for b in sorted(final.values()))
+    execution = {
+        "campaign_workers": n_workers if stats["computed"] else 0,
+        "campaign_compute_wall_time": stats["compute"],
+        "campaign_cpu_time": stats["cpu"],
+        "campaign_wall_time": time.perf_counter() - wall0,
+    }
+    if not stats["computed"]:  # every block reused: the figures of the call that computed them
+        execution = execution_attrs(execution, st.assembled_attrs(checksums))
     ds.attrs.update(
         campaign_id=cid,
         campaign_chunk=plan.segments,
         campaign_blocks=len(final),
         computed_blocks=stats["computed"],
         reused_blocks=stats["reused"],
-        campaign_workers=n_workers if stats["computed"] else 0,
-        campaign_compute_wall_time=stats["compute"],
-        campaign_cpu_time=stats["cpu"],
         continuation_rounds=stats["rounds"],
-        campaign_wall_time=time.perf_counter() - wall0,
-        campaign_block_sha256=" ".join(
-            manifest["checksums"][str(b)] for b in sorted(final.values())
-        ),
+        **execution,
+        campaign_block_sha256=checksums,
         code_digests=" ".join(sorted({manifest["code_digests"][str(b)] for b in final.values()})),
     )
     save_run(ds, st.archive)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench._warnings import warnings_by_kind
 from workbench.archive import save_run, write_text_atomic
 from workbench.scene import Scene
 from workbench.study._claims import evaluate_claim
@@ -34,6 +35,7 @@ def ensemble_scene(scene: Scene, realisations: int, perturbation: float) -> Scen
     return scene.replace(run=dict(scene.run, perturbation=perturbation), sweep=sweep)
 
 
+@warnings_by_kind()  # one warning per kind (e.g. per friction law), with its count
 def run_study(
     name: str | Study,
     *,
@@ -60,7 +62,7 @@ def run_study(
     workers : int, optional
         Processes for the campaigns (default: all CPUs).
     progress : bool
-        Progress bars.
+        Progress bars (a campaign's names its case).
 
     Returns
     -------
@@ -74,6 +76,12 @@ def run_study(
         ``driver_work_per_cycle`` and ``dissipated_energy_per_cycle`` (J); per claim its
         ``verdict``, ``evidence``, ``reason`` and ``p_value``. Units on every variable; the
         study's metadata and the summary's path in the attributes.
+
+    Warns
+    -----
+    Warning
+        What its runs warned about (e.g. a :class:`workbench.ModelWarning` where a friction law
+        left its range), once per kind at the end, with the count.
     """
     from workbench.campaign import run_campaign
     from workbench.study._figures import study_figures
@@ -90,7 +98,8 @@ def run_study(
         store = directory / f"{case}.nc"
         wall0 = _time.perf_counter()
         escene = ensemble_scene(scene, study.realisations, study.perturbation)
-        ds = run_campaign(escene, store, workers=workers, restart=True, progress=progress)
+        label = f"{study.name}/{case}" if progress else False  # names the case on its lines
+        ds = run_campaign(escene, store, workers=workers, restart=True, progress=label)
         runs[case] = ds.load()
         cases[case] = {
             "archive": str(store),
