@@ -1,5 +1,5 @@
 """What a person meets first on the command line (issue 40, item 10): a help that starts at
-once."""
+once, refusals that name the wrong value first."""
 
 import subprocess
 import sys
@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 import workbench
+from workbench.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 HEAVY = ("numba", "xarray", "dask", "matplotlib", "scipy", "pandas", "distributed", "netCDF4")
@@ -51,3 +52,21 @@ def test_import_workbench_loads_its_names_on_first_use():
     assert sorted(set(workbench.__all__) - set(dir(workbench))) == []
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         workbench.nope  # noqa: B018
+
+
+def _scene(tmp_path: Path) -> str:
+    path = tmp_path / "duffing.toml"
+    path.write_text('[model]\nname = "duffing"\n[parameters]\ngamma = 0.25\n')
+    return str(path)
+
+
+def test_orbit_names_an_unknown_parameter_before_anything_else(tmp_path, capsys):
+    """``--param nope`` without --stop: the refusal names the parameter and the allowed ones
+    (not the missing --stop of a parameter that does not exist)."""
+    code = main(["orbit", _scene(tmp_path), "-o", str(tmp_path / "b.nc"), "--param", "nope"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err == (
+        "workbench orbit: error: --param 'nope': not a parameter of model 'duffing'; allowed: "
+        "alpha, beta, delta, gamma, omega, v0, x0\n"
+    )

@@ -13,6 +13,19 @@ from workbench.cli._exit_codes import UsageError
 __all__ = ["register_cli"]
 
 
+def _check_parameter(scene, option: str, name: str, other: str | None = None) -> None:
+    """Refuse ``name`` in one line unless it is a parameter of the scene's model (other than
+    ``other``, the parameter of the branch when ``name`` is the curve's second one)."""
+    from workbench.models import get_model
+
+    names = [par.name for par in get_model(scene.model).parameters]
+    if name not in names:
+        raise UsageError(
+            f"{option} {name!r}: not a parameter of model {scene.model!r}; allowed: "
+            f"{', '.join(sorted(n for n in names if n != other))}"
+        )
+
+
 def _range(scene, param: str, start: float | None, stop: float | None) -> tuple[float, float]:
     """The branch's range: ``--start``/``--stop``, else the scene's sweep of ``param`` (its
     first and last values), else the scene's value."""
@@ -51,14 +64,7 @@ def _diagram(args):
 def _curve_range(scene, args) -> tuple[float, float]:
     """The second parameter's range (``--curve-start``/``--curve-stop``, else the scene's sweep
     of it), checked to hold the scene's value, where the curve starts."""
-    from workbench.models import get_model
-
-    names = [par.name for par in get_model(scene.model).parameters]
-    if args.curve not in names:
-        raise UsageError(
-            f"--curve {args.curve!r}: not a parameter of model {scene.model!r}; allowed: "
-            f"{', '.join(sorted(n for n in names if n != args.param))}"
-        )
+    _check_parameter(scene, "--curve", args.curve, other=args.param)
     if args.curve == args.param:
         raise UsageError(f"--curve {args.curve!r}: the same as --param; name a second parameter")
     if args.curve_kind is not None and args.curve_kind not in CURVE_KINDS:
@@ -89,6 +95,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
+    _check_parameter(scene, "--param", args.param)  # before anything that names it
     check_output_file(args.output, "-o/--output", overwrite=args.overwrite)
     for name, given in (
         ("--curve-start", args.curve_start is not None),
