@@ -1,5 +1,5 @@
 """What a person meets first on the command line (issue 40, item 10): a help that starts at
-once, refusals that name the wrong value first."""
+once, refusals that name the wrong value first, and figures whose place is said."""
 
 import subprocess
 import sys
@@ -70,3 +70,19 @@ def test_orbit_names_an_unknown_parameter_before_anything_else(tmp_path, capsys)
         "workbench orbit: error: --param 'nope': not a parameter of model 'duffing'; allowed: "
         "alpha, beta, delta, gamma, omega, v0, x0\n"
     )
+
+
+def test_analyse_without_output_says_where_its_figures_went(tmp_path, monkeypatch, capsys):
+    run = tmp_path / "run.nc"
+    scene = {"model": {"name": "lorenz"}, "run": {"duration": 20.0, "transient": 5.0}}
+    workbench.save_run(workbench.simulate(scene), run)
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    assert main(["analyse", str(run), "--var", "x", "--surrogates", "0"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    written = sorted(p.name for p in here.iterdir())
+    assert written and all(name.endswith(".png") for name in written)
+    assert out[-1] == (f"figures written to the current directory, {here} (-o DIR for another)")
+    assert main(["analyse", str(run), "--var", "x", "--surrogates", "0", "-o", str(tmp_path)]) == 0
+    assert "current directory" not in capsys.readouterr().out
