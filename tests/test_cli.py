@@ -1,5 +1,6 @@
 """What a person meets first on the command line (issue 40, item 10): a help that starts at
-once, refusals that name the wrong value first, and figures whose place is said."""
+once, a reference page written from the parsers, refusals that name the wrong value first, and
+figures whose place is said."""
 
 import subprocess
 import sys
@@ -9,6 +10,7 @@ import pytest
 
 import workbench
 from workbench.cli import main
+from workbench.cli._reference import PAGE, reference_page
 
 ROOT = Path(__file__).resolve().parents[1]
 HEAVY = ("numba", "xarray", "dask", "matplotlib", "scipy", "pandas", "distributed", "netCDF4")
@@ -52,6 +54,27 @@ def test_import_workbench_loads_its_names_on_first_use():
     assert sorted(set(workbench.__all__) - set(dir(workbench))) == []
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         workbench.nope  # noqa: B018
+
+
+def test_the_reference_page_is_what_the_parsers_say_now():
+    page = ROOT / PAGE
+    assert page.read_text() == reference_page(), (
+        f"{PAGE} differs from the parsers: run `python -m workbench.cli._reference`"
+    )
+    assert "cli.md" in (ROOT / "mkdocs.yml").read_text()
+
+
+def test_the_reference_page_lists_every_command_and_option():
+    from workbench.cli import build_parser
+
+    text = reference_page()
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        assert f"\n## {name}\n" in text and f"usage: workbench {name}" in text
+        for action in parser._actions:
+            for option in action.option_strings:
+                if option not in ("-h", "--help") and action.help != "==SUPPRESS==":
+                    assert f"`{option}" in text, (name, option)
 
 
 def _scene(tmp_path: Path) -> str:
