@@ -46,11 +46,19 @@ def test_import_workbench_loads_its_names_on_first_use():
         "before = 'numba' in sys.modules\n"
         "from workbench import simulate, Status\n"
         "print(before, 'numba' in sys.modules, simulate.__module__, Status.OK.label)\n"
+        "print(workbench.campaign.summary.__module__, workbench.continuation.__name__)\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
     )
-    assert out.stdout.split() == ["False", "True", "workbench.run._simulate", "ok"]
+    assert out.stdout.split() == [
+        "False",
+        "True",
+        "workbench.run._simulate",
+        "ok",
+        "workbench.campaign._assemble",
+        "workbench.continuation",
+    ]
     assert sorted(set(workbench.__all__) - set(dir(workbench))) == []
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         workbench.nope  # noqa: B018

@@ -76,7 +76,22 @@ _HOMES = {
     "Status": "workbench.solver",
     "verify": "workbench.verification",
 }
-_LAZY_MODULES = ("analysis", "plot", "models", "verification")
+#: the subpackages, imported on first use too (``workbench.campaign.summary`` after ``import
+#: workbench``)
+_LAZY_MODULES = (
+    "analysis",
+    "archive",
+    "campaign",
+    "continuation",
+    "models",
+    "plot",
+    "precision",
+    "run",
+    "scene",
+    "solver",
+    "study",
+    "verification",
+)
 
 
 def __getattr__(name: str):
