@@ -137,6 +137,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
             tolerance=args.tolerance,
             max_points=args.max_points,
             rtol=args.rtol,
+            progress=not args.quiet,
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -204,6 +205,7 @@ def _curve(args, branch, start, stop, curve_range, maps) -> int:
             stop=curve_range[1],
             bifurcation=hits[0],
             max_points=args.max_points,
+            progress=not args.quiet,
         )
     except NewtonFailure as exc:
         raise UsageError(
