@@ -95,7 +95,8 @@ def one_line_warnings(command: str) -> Iterator[None]:
 def compile_kernel(scene, *, quiet: bool = False) -> float | None:
     """Compile the kernel of the scene's model before anything runs, when numba's cache does
     not hold it: say so on stderr first ("compiling the <model> kernel ..."), with what it
-    depends on, and after it how long it took. Returns the compile's wall time (s), or None
+    depends on, while it runs how long it has lasted (:func:`workbench._progress.elapsed`), and
+    after it how long it took. Returns the compile's wall time (s), or None
     when the kernel was cached (or cannot be told: e.g. a scipy method). ``quiet``: no
     messages."""
     from workbench.campaign._warm import kernel_cached, load_kernel
@@ -110,7 +111,10 @@ def compile_kernel(scene, *, quiet: bool = False) -> float | None:
     )
     t0 = time.perf_counter()
     single = scene.replace(sweep={}) if scene.sweep else scene
-    load_kernel(single.to_toml())
+    from workbench._progress import elapsed
+
+    with contextlib.nullcontext() if quiet else elapsed(f"compiling the {scene.model} kernel"):
+        load_kernel(single.to_toml())
     wall = time.perf_counter() - t0
     say(f"compiled the {scene.model} kernel in {wall:.0f} s")
     return wall
