@@ -59,6 +59,12 @@ def test_orbit_writes_the_branch_and_names_its_period_doubling(tmp_path, capsys)
         (["--param", "gamma", "--stop", "0.26", "--figure", "f.png"], "--figure needs --state"),
         (["--param", "gamma", "--stop", "0.26", "--diagram", "s.nc"], "--diagram needs"),
         (["--param", "nope", "--stop", "0.26"], "nope"),
+        # Newton cannot reach the tolerance at the branch's start: one line, no traceback
+        (
+            ["--param", "gamma", "--stop", "0.26", "--tolerance", "1e-20", "-q"],
+            "no first orbit for the branch in 'gamma': Newton's method did not converge at "
+            "p = 0.25",
+        ),
     ],
 )
 def test_orbit_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, message):

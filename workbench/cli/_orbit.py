@@ -92,6 +92,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file, open_run, save_figure
     from workbench.cli._console import compile_kernel, save_or_keep
     from workbench.continuation import branch_bifurcations, continue_orbit
+    from workbench.continuation._newton import NewtonFailure
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -141,6 +142,8 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    except NewtonFailure as exc:  # the first orbit not found: one line with what to try
+        raise UsageError(f"no first orbit for the branch in {args.param!r}: {exc}") from None
     if args.curve:
         p0 = float(single.resolved_parameters[args.param]) if start is None else start
         return _curve(args, branch, p0, stop, curve_range, maps)
