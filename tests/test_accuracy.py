@@ -276,3 +276,80 @@ def test_solver_warnings_go_to_the_record_not_the_terminal(monkeypatch, capsys):
     assert "overflow" not in err
     # the count of runs (in a log: a line at the start, one per setting, one at the end)
     assert err.splitlines()[-1].startswith("accuracy: 8/8 run (100 %) in ")
+
+
+# -- the time left of a study (issue 40, item 5) -----------------------------------------------
+
+# The seconds per setting that `workbench accuracy studies/duffing.toml` printed on the shared
+# 2-core machine (load ~3, 2026-11-28): every rtol 1e-3..1e-11 of the default methods, in the
+# order they ran (compiled settings printed 0.0 s: 0.005 s here).
+_RTOLS = [10.0**-k for k in range(3, 12)]
+_DUFFING_STUDY = {
+    "dop853": [0.005] * 9,
+    "dopri5": [0.005] * 9,
+    "scipy:DOP853": [0.3, 0.2, 0.1, 0.2, 0.2, 0.2, 0.3, 0.3, 0.3],
+    "scipy:Radau": [0.3, 0.4, 0.5, 0.8, 2.1, 2.8, 4.3, 7.5, 12.6],
+    "scipy:LSODA": [0.1] * 8 + [0.2],
+}
+
+
+def _estimates(cost) -> list[tuple[str, float, float]]:
+    """(method, estimated, actual seconds left) after each setting of the measured study, the
+    estimate from ``cost(method, rtol)``."""
+    from workbench._progress import TimeLeft
+
+    jobs = [
+        (m, r, s) for m, times in _DUFFING_STUDY.items() for r, s in zip(_RTOLS, times, strict=True)
+    ]
+    left = TimeLeft({(m, r): (m, cost(m, r)) for m, r, _ in jobs})
+    out = []
+    for i, (m, r, s) in enumerate(jobs):
+        left.finished((m, r), s)
+        out.append((m, left.seconds(), sum(t for _, _, t in jobs[i + 1 :])))
+    return out
+
+
+def test_the_time_left_of_a_study_follows_each_methods_cost():
+    """The issue's case: after scipy:DOP853 the uniform estimate (every setting alike) said
+    ~1.5 s left where scipy:Radau then took 31 s; weighted by expected_cost the estimate stays
+    within 3.5x of what was left at every setting (while more than 1 s was), and within 1.5x
+    once scipy:DOP853 has run."""
+    from workbench.precision._study import expected_cost
+
+    weighted = _estimates(expected_cost)
+    uniform = _estimates(lambda m, r: 1.0)
+    last_dop853 = 26  # the 27th setting: scipy:DOP853 at 1e-11
+    assert weighted[last_dop853][0] == "scipy:DOP853"
+    est, actual = weighted[last_dop853][1:]
+    assert actual > 30 and 1 / 1.5 < est / actual < 1.5
+    assert uniform[last_dop853][1] < actual / 10
+    ratios = [e / a for _, e, a in weighted if a > 1.0]
+    assert max(max(ratios), 1 / min(ratios)) < 3.5
+    assert max(a / e for _, e, a in uniform if a > 1.0) > 20
+
+
+def test_expected_cost_grows_with_order_and_backend():
+    from workbench.precision._study import expected_cost
+
+    # a method of order q: the cost grows as (1/rtol)^(1/(q+1))
+    assert expected_cost("dop853", 1e-11) / expected_cost("dop853", 1e-3) == pytest.approx(10.0)
+    assert expected_cost("dopri5", 1e-11) / expected_cost("dopri5", 1e-1) == pytest.approx(100.0)
+    assert expected_cost("scipy:DOP853", 1e-6) == 50 * expected_cost("dop853", 1e-6)
+    assert expected_cost("scipy:Radau", 1e-6) > expected_cost("scipy:DOP853", 1e-6)
+    assert expected_cost("no_such_method", 1e-6) == expected_cost("dop853", 1e-6)
+
+
+def test_a_study_names_each_setting_it_finishes_to_its_time_left(monkeypatch):
+    import workbench.precision._study as study_module
+
+    bars, make = [], study_module._bar
+
+    def capture(*args):
+        bars.append(make(*args))
+        return bars[-1]
+
+    monkeypatch.setattr(study_module, "_bar", capture)
+    accuracy(DUFFING, methods=["dop853", "scipy:DOP853"], tolerances=[1e-4, 1e-6], progress=True)
+    (bar,) = bars
+    assert bar.time_left.left == {}  # every setting finished, by name
+    assert set(bar.time_left._cost) == {"dop853", "scipy:DOP853"}

@@ -223,3 +223,25 @@ def test_every_command_takes_quiet():
     sub = next(a for a in build_parser()._actions if a.dest == "command")
     for name, parser in sub.choices.items():
         assert "-q" in parser._option_string_actions, name
+
+
+def test_a_long_compile_says_how_long_it_has_lasted(capsys, monkeypatch):
+    """Issue 40 item 5: between the notice and the time it took, a line per interval (set to
+    0.05 s here, 30 s in use) while the compile lasts; nothing more with -q."""
+    import time
+
+    import workbench._progress as progress_module
+    import workbench.campaign._warm as warm
+    from workbench.cli._console import compile_kernel
+
+    scene = workbench.load_scene({"model": {"name": "duffing"}, "run": {"cycles": 1}})
+    monkeypatch.setattr(warm, "kernel_cached", lambda scene: False)
+    monkeypatch.setattr(warm, "load_kernel", lambda toml: time.sleep(0.4))
+    monkeypatch.setattr(progress_module, "INTERVAL", 0.05)
+    assert compile_kernel(scene) >= 0.4
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith("compiling the duffing kernel (")
+    assert lines[-1].startswith("compiled the duffing kernel in ")
+    assert len(lines) >= 4 and set(lines[1:-1]) == {"compiling the duffing kernel: 0 s so far"}
+    assert compile_kernel(scene, quiet=True) >= 0.4
+    assert capsys.readouterr().err == ""

@@ -2,6 +2,8 @@
 print, and their one-line errors (the continued sweep's ``workbench campaign`` is in
 ``tests/test_continuation.py``)."""
 
+import re
+
 import pytest
 
 import workbench
@@ -57,6 +59,12 @@ def test_orbit_writes_the_branch_and_names_its_period_doubling(tmp_path, capsys)
         (["--param", "gamma", "--stop", "0.26", "--figure", "f.png"], "--figure needs --state"),
         (["--param", "gamma", "--stop", "0.26", "--diagram", "s.nc"], "--diagram needs"),
         (["--param", "nope", "--stop", "0.26"], "nope"),
+        # Newton cannot reach the tolerance at the branch's start: one line, no traceback
+        (
+            ["--param", "gamma", "--stop", "0.26", "--tolerance", "1e-20", "-q"],
+            "no first orbit for the branch in 'gamma': Newton's method did not converge at "
+            "p = 0.25",
+        ),
     ],
 )
 def test_orbit_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, message):
@@ -146,8 +154,9 @@ def test_orbit_curve_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, m
     monkeypatch.chdir(tmp_path)
     path = _scene_file(tmp_path, DUFFING)
     assert main(["orbit", path, "-o", "c.nc", "--param", "gamma", *extra]) == 2
-    err = capsys.readouterr().err
-    assert message in err and len(err.strip().splitlines()) == 1, err
+    # an error found on the branch follows the branch's progress lines (issue 40 item 5)
+    err = [line for line in capsys.readouterr().err.splitlines() if "branch over" not in line]
+    assert len(err) == 1 and message in err[0], err
     assert not (tmp_path / "c.nc").exists()
 
 
@@ -188,3 +197,23 @@ def test_the_nine_bar_chaos_map_scenes_are_valid():
         assert scene.model == "ninebar" and len(scene.sweep) == 2, path
         assert scene.record["samples_per_period"] == 1 and scene.run["cycles"] >= 100, path
         assert not scene.continuation, path
+
+
+def test_orbit_shows_its_progress_while_it_runs(tmp_path, capsys, monkeypatch):
+    """Issue 40 item 5: a line at the start, where the branch is while it runs (a line per
+    point here, the interval set to 0), and the end; none with -q."""
+    import workbench._progress as progress_module
+
+    path = _scene_file(tmp_path, DUFFING)
+    args = ["orbit", path, "-o", str(tmp_path / "b.nc"), "--param", "gamma", "--stop", "0.27"]
+    assert main([*args, "-q"]) == 0
+    assert "branch over" not in capsys.readouterr().err
+    monkeypatch.setattr(progress_module, "INTERVAL", 0.0)
+    assert main([*args, "--overwrite"]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "branch over gamma: 0/0.02 ..."
+    during = [line for line in lines[1:-1] if line.startswith("branch over gamma: ")]
+    assert len(during) >= 10 and all(" s elapsed" in line for line in during)
+    assert "points" in during[-1].split("; gamma = ")[1]
+    assert lines[-1].startswith("branch over gamma: 0.02/0.02 (100 %) in ")
+    assert re.search(r"; gamma = 0\.27, \d+ points$", lines[-1]), lines[-1]

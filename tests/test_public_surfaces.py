@@ -54,6 +54,12 @@ def test_accuracy_help_names_the_default_methods_and_tolerances():
     assert (float(first), float(last)) == (DEFAULT_TOLERANCES[0], DEFAULT_TOLERANCES[-1])
 
 
+def test_campaign_help_names_the_default_limit_of_points():
+    from workbench.campaign._grid import MAX_POINTS
+
+    assert f"(default {MAX_POINTS};" in _option("campaign", "--max-points").help
+
+
 def test_every_numeric_default_in_a_help_text_is_the_options_default():
     """An option whose help says ``(default X)`` with X a number (or numbers, comma-separated)
     and that has a default in code: the two agree."""

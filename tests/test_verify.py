@@ -110,3 +110,21 @@ def test_refusals_name_the_problem(tmp_path):
     from workbench.cli import main
 
     assert main(["verify", str(path), "-o", str(tmp_path / "v.nc")]) == 2
+
+
+def test_verify_shows_its_runs_as_they_end(tmp_path, capsys):
+    """Issue 40 item 5: a line at the start, one per run as it ends, and the end (exudyn's
+    runs weighted by their steps in the time left); none with -q."""
+    from workbench.cli import main
+
+    args = ["verify", SLIDER_CRANK, "--horizon", "1e-3", "--steps", "1e-5,5e-6"]
+    args += ["--record-dt", "1e-5"]
+    assert main([*args, "-o", str(tmp_path / "q.nc"), "-q"]) == 0
+    assert "verify:" not in capsys.readouterr().err
+    assert main([*args, "-o", str(tmp_path / "v.nc")]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "so far" not in line]
+    assert lines[0] == "verify: 0/3 run ..."
+    assert lines[1].startswith("workbench (dop853, rtol 1e-10): ")
+    assert lines[2].startswith("exudyn h=1e-05 (100 steps): ")
+    assert lines[3].startswith("exudyn h=5e-06 (200 steps): ")
+    assert lines[4].startswith("verify: 3/3 run (100 %) in ")

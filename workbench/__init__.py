@@ -12,22 +12,24 @@ True
 Layers, lowest first (each imports only those before it; :data:`workbench._layers.LAYERS`,
 checked by ``tests/test_layers.py``): solver -> models -> scene -> run -> archive -> precision
 (``accuracy``) -> analysis -> plot -> campaign -> continuation -> verification (``verify``) ->
-study -> cli. ``workbench.analysis``, ``workbench.plot`` and ``verify`` (which needs the
-optional extra exudyn when called) load on first use.
+study -> cli. Every public name loads on first use (``verify`` needs the optional extra exudyn
+when called): ``import workbench`` alone imports none of numba, xarray, dask or matplotlib.
 """
 
-from workbench._cache import register_cache_locator
+from typing import TYPE_CHECKING
 
-register_cache_locator()  # before any workbench module defines a cached compiled function
+from workbench._version import FORMAT_VERSION, __version__
 
-from workbench._errors import ModelWarning  # noqa: E402
-from workbench._version import FORMAT_VERSION, __version__  # noqa: E402
-from workbench.archive import open_run, save_run  # noqa: E402
-from workbench.campaign import CampaignError, run_campaign  # noqa: E402
-from workbench.precision import Recommendation, accuracy, recommend  # noqa: E402
-from workbench.run import prepare, simulate  # noqa: E402
-from workbench.scene import Scene, SceneError, load_scene, scene_from_toml  # noqa: E402
-from workbench.solver import SolverError, Status  # noqa: E402
+if TYPE_CHECKING:  # the public names, imported on first use (``__getattr__`` below)
+    from workbench import analysis, plot
+    from workbench._errors import ModelWarning
+    from workbench.archive import open_run, save_run
+    from workbench.campaign import CampaignError, run_campaign
+    from workbench.precision import Recommendation, accuracy, recommend
+    from workbench.run import prepare, simulate
+    from workbench.scene import Scene, SceneError, load_scene, scene_from_toml
+    from workbench.solver import SolverError, Status
+    from workbench.verification import verify
 
 __all__ = [
     "FORMAT_VERSION",
@@ -53,15 +55,57 @@ __all__ = [
     "__version__",
 ]
 
-_LAZY_MODULES = ("analysis", "plot", "models", "verification")
+# Where each public name lives: ``import workbench`` imports none of them (numba, xarray, dask,
+# matplotlib load with the first name used), so that the command line starts at once.
+_HOMES = {
+    "ModelWarning": "workbench._errors",
+    "open_run": "workbench.archive",
+    "save_run": "workbench.archive",
+    "CampaignError": "workbench.campaign",
+    "run_campaign": "workbench.campaign",
+    "Recommendation": "workbench.precision",
+    "accuracy": "workbench.precision",
+    "recommend": "workbench.precision",
+    "prepare": "workbench.run",
+    "simulate": "workbench.run",
+    "Scene": "workbench.scene",
+    "SceneError": "workbench.scene",
+    "load_scene": "workbench.scene",
+    "scene_from_toml": "workbench.scene",
+    "SolverError": "workbench.solver",
+    "Status": "workbench.solver",
+    "verify": "workbench.verification",
+}
+#: the subpackages, imported on first use too (``workbench.campaign.summary`` after ``import
+#: workbench``)
+_LAZY_MODULES = (
+    "analysis",
+    "archive",
+    "campaign",
+    "continuation",
+    "models",
+    "plot",
+    "precision",
+    "run",
+    "scene",
+    "solver",
+    "study",
+    "verification",
+)
 
 
 def __getattr__(name: str):
-    """The lazy names: subpackages that cost an import (matplotlib, nolds) and ``verify``."""
+    """The public names, imported on first use (subpackages and functions alike)."""
     import importlib
 
     if name in _LAZY_MODULES:
         return importlib.import_module(f"workbench.{name}")
-    if name == "verify":
-        return importlib.import_module("workbench.verification").verify
+    if name in _HOMES:
+        value = getattr(importlib.import_module(_HOMES[name]), name)
+        globals()[name] = value  # later look-ups skip this function
+        return value
     raise AttributeError(f"module 'workbench' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -471,7 +471,8 @@ class CheckedIndexDataCacheFile(caching.IndexDataCacheFile):
 def register_cache_locator() -> None:
     """Put :class:`WorkbenchCacheLocator` first among numba's locators, and numba's index and
     data files of workbench's functions under :class:`CheckedIndexDataCacheFile` (once). It must
-    run before a workbench module defines a cached function: ``workbench/__init__`` calls it."""
+    run before a workbench module defines a cached function: ``workbench/solver/__init__``
+    calls it (models import the solver first)."""
     classes = caching.CacheImpl._locator_classes
     if WorkbenchCacheLocator not in classes:
         classes.insert(0, WorkbenchCacheLocator)

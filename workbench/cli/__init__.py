@@ -3,7 +3,10 @@
 The command line is one layer, the top one: this package holds the entry point (:func:`main`),
 the console helpers (``_console``), the exit codes (``_exit_codes``) and one module per command
 (``_run``, ``_plot``, ``_accuracy``, ``_campaign``, ``_bifurcation``, ``_orbit``, ``_chaos_map``,
-``_study``, ``_analyse``, ``_verify``, ``_kernel``); nothing else in workbench imports it.
+``_study``, ``_analyse``, ``_verify``, ``_kernel``), and the writer of its reference page
+``docs/cli.md`` (``_reference``); nothing else in workbench imports it. The command modules
+import the numerical libraries (numba, xarray, dask, matplotlib) when a command runs, not when
+the parser is built: ``workbench --help`` starts at once.
 
 Exit codes: :mod:`workbench.cli._exit_codes` (0 ok, 2 invalid input, 3 max_steps, 4 step_underflow
 or non_finite, 5 model_failure, 130 interrupted, 143 terminated by SIGTERM).

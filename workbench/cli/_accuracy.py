@@ -15,12 +15,11 @@ from workbench.cli._console import (
     save_with_figure,
 )
 from workbench.cli._exit_codes import worst_exit_code
-from workbench.precision import DEFAULT_METHODS
 
 
 def _cmd_accuracy(args: argparse.Namespace) -> int:
     from workbench.plot import work_precision_figure
-    from workbench.precision import DEFAULT_TOLERANCES, accuracy, recommend
+    from workbench.precision import DEFAULT_METHODS, DEFAULT_TOLERANCES, accuracy, recommend
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
@@ -89,7 +88,10 @@ def register_cli(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="netCDF file (the figure goes beside it)")
     p.add_argument(
         "--methods",
-        help=f"comma-separated methods (default: {','.join(DEFAULT_METHODS)})",
+        # workbench.precision's DEFAULT_METHODS (tests/test_public_surfaces.py), not imported
+        # here: `workbench --help` loads no numerical library
+        help="comma-separated methods (default: dop853,dopri5,scipy:DOP853,scipy:Radau,"
+        "scipy:LSODA)",
     )
     p.add_argument(
         "--tolerances",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import warnings
+from pathlib import Path
 
 from workbench.cli._console import add_quiet, positive_int
 from workbench.cli._exit_codes import UsageError
@@ -138,7 +139,10 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
     stem = label.replace("[", "-").replace("]", "").replace("=", "")
     names = ["embedding", "lle"] + (["zero_one"] if strobe is not None else [])
     out = check_output_directory(
-        args.output, "-o/--output", [f"{stem}-{n}.png" for n in names], overwrite=args.overwrite
+        "." if args.output is None else args.output,
+        "-o/--output",
+        [f"{stem}-{n}.png" for n in names],
+        overwrite=args.overwrite,
     )
     flow = {"auto": None, "flow": True, "map": False}[args.kind]
     try:  # the API's automatic choices, unless overridden
@@ -208,6 +212,8 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
     for name, fig in figures.items():
         path = save_figure(fig, out / f"{stem}-{name}.png", dpi=120)
         print(f"figure: {path}")
+    if args.output is None:  # said, since no option named the place
+        print(f"figures written to the current directory, {Path.cwd()} (-o DIR for another)")
     return 0
 
 
@@ -259,7 +265,9 @@ def register_cli(sub) -> None:
         help="with --equations: let the stored scene import its [model] module NAME (it runs "
         "that module's code; from the import path or the working directory); repeatable",
     )
-    p.add_argument("-o", "--output", default=".", metavar="DIR", help="directory for the PNGs")
+    p.add_argument(
+        "-o", "--output", metavar="DIR", help="directory for the PNGs (default: the current one)"
+    )
     p.add_argument("--overwrite", action="store_true", help="replace existing figures")
     add_quiet(p, "accepted by every command; this one prints only its results")
     p.set_defaults(func=_cmd_analyse)

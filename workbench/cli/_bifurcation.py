@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import xarray as xr
-
-from workbench.campaign._block import failed
 from workbench.cli._console import add_quiet
 from workbench.cli._exit_codes import UsageError
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["register_cli"]
 
@@ -50,6 +51,7 @@ def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple
 
 def _cmd_bifurcation(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file, open_run, save_figure, status_flags
+    from workbench.campaign._block import failed
 
     out = Path(
         args.output

@@ -6,10 +6,6 @@ import argparse
 import warnings
 from pathlib import Path
 
-import numpy as np
-
-from workbench.campaign._block import INVALID, RAISED, STATUS, failed
-from workbench.campaign._grid import MAX_POINTS, check_points
 from workbench.cli._console import (
     add_quiet,
     max_memory_option,
@@ -42,7 +38,11 @@ def _client(address: str, timeout: float):
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from workbench.campaign import CampaignError, Store, expand_sweep, run_campaign, summary
+    from workbench.campaign._block import STATUS, failed
+    from workbench.campaign._grid import MAX_POINTS, check_points
     from workbench.cli._console import check_store_output, compile_kernel
     from workbench.scene import load_scene
 
@@ -147,6 +147,8 @@ def _continued(scene, args: argparse.Namespace, client):
 def campaign_exit_code(flags) -> int:
     """The largest exit code among a campaign's point flags (a run's Status;
     invalid_parameters: invalid input; error: the point raised an exception)."""
+    from workbench.campaign._block import INVALID, RAISED
+
     return worst_exit_code(flags, INVALID, RAISED)
 
 
@@ -186,7 +188,9 @@ def register_cli(sub) -> None:
         "--max-points",
         type=positive_int,
         metavar="N",
-        help=f"refuse a [sweep] grid of more than N points, before any work (default "
-        f"{MAX_POINTS}; not with [sweep] continuation)",
+        # the default is workbench.campaign's MAX_POINTS (tests/test_public_surfaces.py), not
+        # imported here: `workbench --help` loads no numerical library
+        help="refuse a [sweep] grid of more than N points, before any work (default 1000000; "
+        "not with [sweep] continuation)",
     )
     p.set_defaults(func=_cmd_campaign)

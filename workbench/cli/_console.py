@@ -91,9 +91,10 @@ def one_line_warnings(command: str) -> Iterator[None]:
 def compile_kernel(scene, *, quiet: bool = False) -> float | None:
     """Compile the kernel of the scene's model before anything runs, when numba's cache does
     not hold it: say so on stderr first (:func:`compile_notice`: what a first run took where it
-    was measured), and after it how long it took (wall and CPU time). Returns the compile's
-    wall time (s), or None when the kernel was cached (or cannot be told: e.g. a scipy
-    method). ``quiet``: no messages."""
+    was measured), while it runs how long it has lasted (:func:`workbench._progress.elapsed`),
+    and after it how long it took (wall and CPU time). Returns the compile's wall time (s), or
+    None when the kernel was cached (or cannot be told: e.g. a scipy method). ``quiet``: no
+    messages."""
     from workbench.campaign._warm import kernel_cached, load_kernel
 
     if kernel_cached(scene) is not False:
@@ -102,7 +103,10 @@ def compile_kernel(scene, *, quiet: bool = False) -> float | None:
     say(compile_notice(scene.model))
     t0, cpu0 = time.perf_counter(), time.process_time()
     single = scene.replace(sweep={}) if scene.sweep else scene
-    load_kernel(single.to_toml())
+    from workbench._progress import elapsed
+
+    with contextlib.nullcontext() if quiet else elapsed(f"compiling the {scene.model} kernel"):
+        load_kernel(single.to_toml())
     wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     say(f"compiled the {scene.model} kernel in {wall:.0f} s ({cpu:.0f} s of CPU)")
     return wall

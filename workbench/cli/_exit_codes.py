@@ -29,11 +29,10 @@ runs or settings, and says how many failed.
 
 from __future__ import annotations
 
-from workbench._cache import CacheError
-from workbench.archive import ArchiveError
-from workbench.campaign import CampaignError
-from workbench.scene import SceneError
-from workbench.solver import SolverError, Status
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from workbench.solver import Status
 
 __all__ = ["EXIT_INVALID", "UsageError", "exit_code", "worst_exit_code"]
 
@@ -44,22 +43,30 @@ class UsageError(ValueError):
 
 
 EXIT_INVALID = 2
+#: by :class:`workbench.Status` label (the classes load with the first command that runs)
 _BY_STATUS = {
-    Status.OK: 0,
-    Status.TERMINATED: 0,
-    Status.MAX_STEPS: 3,
-    Status.STEP_UNDERFLOW: 4,
-    Status.NON_FINITE: 4,
-    Status.MODEL_FAILURE: 5,
+    "ok": 0,
+    "terminated": 0,
+    "max_steps": 3,
+    "step_underflow": 4,
+    "non_finite": 4,
+    "model_failure": 5,
 }
 
 
 def exit_code(outcome: Status | BaseException) -> int:
-    """The exit code of a run's :class:`Status` or of an exception (table in the module doc)."""
+    """The exit code of a run's :class:`~workbench.Status` or of an exception (table in the
+    module doc)."""
+    from workbench._cache import CacheError
+    from workbench.archive import ArchiveError
+    from workbench.campaign import CampaignError
+    from workbench.scene import SceneError
+    from workbench.solver import SolverError, Status
+
     if isinstance(outcome, Status):
-        return _BY_STATUS[outcome]
+        return _BY_STATUS[outcome.label]
     if isinstance(outcome, SolverError):
-        return _BY_STATUS[outcome.status]
+        return _BY_STATUS[outcome.status.label]
     if isinstance(outcome, KeyboardInterrupt):  # Ctrl-C, or a Terminated signal
         return 128 + getattr(outcome, "signum", 2)
     if isinstance(outcome, SceneError | CampaignError | ArchiveError | CacheError | UsageError):
@@ -73,6 +80,8 @@ def worst_exit_code(flags, invalid: int | None = None, raised: int | None = None
     """The largest exit code among int status flags (a run's :class:`Status`; ``invalid``, the
     flag of a point that did not run: invalid input; ``raised``, the flag of a point that
     raised an exception: 1, an unexpected error)."""
+    from workbench.solver import Status
+
     extra = {invalid: EXIT_INVALID, raised: 1}
     codes = [
         extra[f] if f in extra else exit_code(Status(f))

@@ -13,6 +13,19 @@ from workbench.cli._exit_codes import UsageError
 __all__ = ["register_cli"]
 
 
+def _check_parameter(scene, option: str, name: str, other: str | None = None) -> None:
+    """Refuse ``name`` in one line unless it is a parameter of the scene's model (other than
+    ``other``, the parameter of the branch when ``name`` is the curve's second one)."""
+    from workbench.models import get_model
+
+    names = [par.name for par in get_model(scene.model).parameters]
+    if name not in names:
+        raise UsageError(
+            f"{option} {name!r}: not a parameter of model {scene.model!r}; allowed: "
+            f"{', '.join(sorted(n for n in names if n != other))}"
+        )
+
+
 def _range(scene, param: str, start: float | None, stop: float | None) -> tuple[float, float]:
     """The branch's range: ``--start``/``--stop``, else the scene's sweep of ``param`` (its
     first and last values), else the scene's value."""
@@ -51,14 +64,7 @@ def _diagram(args):
 def _curve_range(scene, args) -> tuple[float, float]:
     """The second parameter's range (``--curve-start``/``--curve-stop``, else the scene's sweep
     of it), checked to hold the scene's value, where the curve starts."""
-    from workbench.models import get_model
-
-    names = [par.name for par in get_model(scene.model).parameters]
-    if args.curve not in names:
-        raise UsageError(
-            f"--curve {args.curve!r}: not a parameter of model {scene.model!r}; allowed: "
-            f"{', '.join(sorted(n for n in names if n != args.param))}"
-        )
+    _check_parameter(scene, "--curve", args.curve, other=args.param)
     if args.curve == args.param:
         raise UsageError(f"--curve {args.curve!r}: the same as --param; name a second parameter")
     if args.curve_kind is not None and args.curve_kind not in CURVE_KINDS:
@@ -86,9 +92,11 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
     from workbench.archive import check_output_file, open_run, save_figure
     from workbench.cli._console import compile_kernel, save_or_keep
     from workbench.continuation import branch_bifurcations, continue_orbit
+    from workbench.continuation._newton import NewtonFailure
     from workbench.scene import load_scene
 
     scene = load_scene(args.scene)
+    _check_parameter(scene, "--param", args.param)  # before anything that names it
     check_output_file(args.output, "-o/--output", overwrite=args.overwrite)
     for name, given in (
         ("--curve-start", args.curve_start is not None),
@@ -130,9 +138,12 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
             tolerance=args.tolerance,
             max_points=args.max_points,
             rtol=args.rtol,
+            progress=not args.quiet,
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    except NewtonFailure as exc:  # the first orbit not found: one line with what to try
+        raise UsageError(f"no first orbit for the branch in {args.param!r}: {exc}") from None
     if args.curve:
         p0 = float(single.resolved_parameters[args.param]) if start is None else start
         return _curve(args, branch, p0, stop, curve_range, maps)
@@ -197,6 +208,7 @@ def _curve(args, branch, start, stop, curve_range, maps) -> int:
             stop=curve_range[1],
             bifurcation=hits[0],
             max_points=args.max_points,
+            progress=not args.quiet,
         )
     except NewtonFailure as exc:
         raise UsageError(

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+from functools import partial
 
 from workbench.cli._console import (
     add_quiet,
+    compile_kernel,
     float_list,
     output_and_figure,
     positive_float,
@@ -69,6 +71,22 @@ def _print_tables(ds) -> None:
         print(table.to_string(float_format="{:.6g}".format))
 
 
+def _progress(steps: list[float]):
+    """Progress over the runs of :func:`workbench.verification.verify` (the workbench's, then
+    exudyn's at each step), its time left from exudyn's runs weighted by their steps (1/h;
+    the workbench's run, first, is not counted)."""
+    from workbench._progress import Progress, TimeLeft
+
+    left = TimeLeft({h: ("exudyn", 1.0 / h) for h in steps})
+    return Progress(1 + len(steps), desc="verify", unit="run", time_left=left)
+
+
+def _ended(bar, step: float | None, label: str, wall_time: float) -> None:
+    """A run of verify ended: the progress moves on and says so in a line."""
+    bar.update(1, job=step)
+    bar.write(f"{label}: {wall_time:.3g} s")
+
+
 def _cmd_verify(args: argparse.Namespace) -> int:
     from workbench.plot import verification_figure
     from workbench.scene import load_scene
@@ -76,10 +94,21 @@ def _cmd_verify(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     out, figure = output_and_figure(args.output, args.overwrite)
+    compile_kernel(scene, quiet=args.quiet)  # the workbench's run, announced
+    bar = None if args.quiet else _progress(args.steps)
     try:
-        ds = verify(scene, horizon=args.horizon, steps=args.steps, record_dt=args.record_dt)
+        ds = verify(
+            scene,
+            horizon=args.horizon,
+            steps=args.steps,
+            record_dt=args.record_dt,
+            on_run=None if bar is None else partial(_ended, bar),
+        )
     except (ValueError, RuntimeError, ImportError) as exc:
         raise UsageError(str(exc)) from None
+    finally:
+        if bar is not None:
+            bar.close()
     save_with_figure(ds, out, figure, "verification", verification_figure, overwrite=args.overwrite)
     _print_tables(ds)
     print(
@@ -116,5 +145,5 @@ def register_cli(sub) -> None:
         "for a scene with clearance joints, else 1e-3)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    add_quiet(p, "accepted by every command; this one prints only its results")
+    add_quiet(p)
     p.set_defaults(func=_cmd_verify)

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -682,11 +683,17 @@ def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: Settings) -> Orbi
 
 
 def trace(
-    smap: StrobeMap, first: OrbitPoint, direction: np.ndarray, cfg: Settings, label="start"
+    smap: StrobeMap,
+    first: OrbitPoint,
+    direction: np.ndarray,
+    cfg: Settings,
+    label="start",
+    report: Callable[[float, int], None] | None = None,
 ) -> Traced:
     """Continue a branch from the converged point ``first`` along ``direction`` (scaled
     unknowns) until the parameter reaches a bound of ``cfg.bounds``, the step falls below
-    ``cfg.min_step`` or ``cfg.max_points`` points are found."""
+    ``cfg.min_step`` or ``cfg.max_points`` points are found; ``report(parameter, points)``
+    after each point (progress)."""
     wall0 = time.perf_counter()
     out = Traced(smap)
     if first.Pp is None:
@@ -765,6 +772,8 @@ def trace(
         out.labels.append("regular")
         out.critical.append(complex(np.nan, np.nan))
         A = B
+        if report is not None:
+            report(B.p, len(out.points))
         short = short + 1 if h < STALL_STEP * cfg.step else 0
         if short >= STALL_POINTS:
             out.ended = (
@@ -781,6 +790,8 @@ def trace(
         out.ended = f"{cfg.max_points} points reached"
     if len(out.points) > 1 and out.labels[-1] == "regular":
         out.labels[-1] = "end"
+    if report is not None:
+        report(out.points[-1].p, len(out.points))
     out.wall_time = time.perf_counter() - wall0
     return out
 

@@ -75,6 +75,7 @@ import xarray as xr
 
 from workbench.continuation._newton import NewtonFailure, orbit_at
 from workbench.continuation._orbits import _attrs, _guess
+from workbench.continuation._report import RangeProgress
 from workbench.continuation._strobe import MapValue, StrobeMap, _event_values
 from workbench.models import get_model
 from workbench.run import provenance
@@ -691,11 +692,11 @@ class _Curve:
         pt.tests = self.tests(pt)
         return pt
 
-    def trace(self, first: _Point, tau: np.ndarray, q_range, p_range) -> _Traced:
+    def trace(self, first: _Point, tau: np.ndarray, q_range, p_range, report=None) -> _Traced:
         """Continue from ``first`` along ``tau`` until the second parameter leaves
         ``q_range`` (the last point on its edge), the first leaves ``p_range`` or its valid
         range, the curve closes, the step falls below its least or ``max_points`` points
-        are found."""
+        are found; ``report(second parameter, points)`` after each point (progress)."""
         cfg = self.cfg
         first.tau = tau
         first.tests = self.tests(first)
@@ -759,6 +760,8 @@ class _Curve:
                 break
             out.points.append(B)
             out.labels.append("regular")
+            if report is not None:
+                report(B.ev.q, len(out.points))
             if len(out.points) > 3 and np.linalg.norm(B.u - first.u) < 0.5 * h:
                 out.ended = "the curve closed"
                 break
@@ -771,6 +774,8 @@ class _Curve:
             out.ended = f"{cfg.max_points} points reached"
         if out.labels[-1] == "regular":
             out.labels[-1] = "end"
+        if report is not None:
+            report(out.points[-1].ev.q, len(out.points))
         return out
 
 
@@ -1107,11 +1112,14 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
     return ds
 
 
-def _run(fam, system, y, aux, p0: float, q0: float, extra, ends, pscale: float, cfg, p_range):
+def _run(
+    fam, system, y, aux, p0: float, q0: float, extra, ends, pscale: float, cfg, p_range, progress
+):
     """The curve through the orbit (y, aux) near (p0, q0) (a point of the defining system,
     Newton's method with the second parameter held at ``q0``), followed toward each of
     ``ends`` (values of the second parameter) other than ``q0``: ``(curve, points, labels,
-    halves)``, the points from the first end to the second."""
+    halves)``, the points from the first end to the second; ``progress``: each way's on
+    stderr."""
     value = fam(y, aux, p0, q0)
     q_lo, q_hi = min(ends), max(ends)
     qs = q_hi - q_lo
@@ -1143,7 +1151,11 @@ def _run(fam, system, y, aux, p0: float, q0: float, extra, ends, pscale: float, 
             dict(first.info),
         )
         system.update(first.ev)
-        halves.append(curve.trace(copy, tau, (q_lo, q_hi), p_range))
+        report = RangeProgress(progress, fam.q_name, q0, end, "curve")
+        try:
+            halves.append(curve.trace(copy, tau, (q_lo, q_hi), p_range, report))
+        finally:
+            report.close()
     # stored from the first end to the second: the way toward the first end reversed, its
     # tangents (and the turning tests, their components) turned to point along the curve
     backward = halves[0] if ends[0] != q0 else None
@@ -1185,6 +1197,7 @@ def continue_curve(
     step: float = 0.02,
     max_step: float = 0.1,
     max_points: int = 200,
+    progress: bool = False,
 ) -> xr.Dataset:
     """Continue a fold, period doubling, Neimark-Sacker or grazing point of periodic orbits in
     a second parameter: the curve of that bifurcation in the plane of two parameters, with its
@@ -1239,6 +1252,9 @@ def continue_curve(
         times that).
     max_points : int
         Points at most each way from the start.
+    progress : bool
+        Show on stderr how much of its range each way of the curve has covered, and where it
+        is (:class:`workbench._progress.Progress`).
 
     Returns
     -------
@@ -1353,7 +1369,7 @@ def continue_curve(
         extra = [theta]
     p_range = None if parameter_range is None else tuple(sorted(parameter_range))
     curve, points, labels, halves = _run(
-        fam, system, y, aux, st.p, q0, extra, (lo_end, stop), st.pscale, cfg, p_range
+        fam, system, y, aux, st.p, q0, extra, (lo_end, stop), st.pscale, cfg, p_range, progress
     )
     meta = {
         "tolerance": tolerance,

@@ -24,6 +24,7 @@ from workbench.continuation._branch import (
     trace,
 )
 from workbench.continuation._newton import NewtonFailure
+from workbench.continuation._report import RangeProgress
 from workbench.continuation._strobe import StrobeMap
 from workbench.models import get_model
 from workbench.run import provenance
@@ -160,6 +161,7 @@ def continue_orbit(
     max_points: int = 300,
     rtol: float | None = None,
     monodromy: str = "auto",
+    progress: bool = False,
 ) -> xr.Dataset:
     """Continue a branch of period-``k`` orbits over ``parameter`` by pseudo-arclength (so it
     passes folds), with Floquet multipliers at every point and its bifurcations detected,
@@ -198,6 +200,9 @@ def continue_orbit(
         Integration tolerance (default ``min(scene rtol, 1e-9)``).
     monodromy : str
         ``"tangent"``, ``"copies"`` or ``"auto"`` (see :func:`periodic_orbit`).
+    progress : bool
+        Show on stderr how much of the range each branch has covered, and where it is
+        (:class:`workbench._progress.Progress`: a bar on a terminal, a few lines in a log).
 
     Returns
     -------
@@ -242,13 +247,17 @@ def continue_orbit(
         max_step=max_step,
         max_points=max_points,
     )
-    y, aux = _guess(smap, p0, state, discrete_state, None)
-    t0 = time.perf_counter()
-    first = start_point(smap, y, aux, p0, cfg)
-    smap, first, cfg.tolerance, noise = settle_noise(smap, first, cfg)
-    direction = np.zeros(first.value.M.shape[0] + 1)
-    direction[-1] = math.copysign(1.0, stop - p0)
-    branches = [trace(smap, first, direction, cfg)]
+    report = RangeProgress(progress, parameter, p0, stop, "branch")
+    try:  # the first orbit (after the transient) is part of the first branch's progress
+        y, aux = _guess(smap, p0, state, discrete_state, None)
+        t0 = time.perf_counter()
+        first = start_point(smap, y, aux, p0, cfg)
+        smap, first, cfg.tolerance, noise = settle_noise(smap, first, cfg)
+        direction = np.zeros(first.value.M.shape[0] + 1)
+        direction[-1] = math.copysign(1.0, stop - p0)
+        branches = [trace(smap, first, direction, cfg, report=report)]
+    finally:
+        report.close()
     for _ in range(doublings):
         last = branches[-1]
         pd = [
@@ -261,7 +270,11 @@ def continue_orbit(
         except NewtonFailure as exc:
             last.ended += f"; switching at the period doubling failed ({exc})"
             break
-        branches.append(trace(double, pt, away, cfg, label="start"))
+        report = RangeProgress(progress, parameter, pt.p, stop, f"branch {len(branches) + 1}")
+        try:
+            branches.append(trace(double, pt, away, cfg, label="start", report=report))
+        finally:
+            report.close()
     ds = _dataset(branches, parameter, cfg.tolerance, max_points=max_points)
     ds.attrs["wall_time"] = time.perf_counter() - t0
     ds.attrs["tolerance_requested"] = tolerance

@@ -358,9 +358,10 @@ def _with_seams(ds: xr.Dataset, plan: Plan, seams: dict, d: int) -> xr.Dataset:
 
 
 def _bar(plan: Plan, progress: bool):
+    """Progress over the sweep's points (:class:`workbench._progress.Progress`), or None."""
     if not progress:
         return None
-    from tqdm.auto import tqdm
+    from workbench._progress import Progress
 
     total = sum(len(s.flat) for s in plan.all_segments())
-    return tqdm(total=total, unit="pt", desc="continued sweep", smoothing=0.05)
+    return Progress(total, unit="pt", desc="continued sweep")

@@ -39,6 +39,7 @@ from functools import partial
 import numpy as np
 import xarray as xr
 
+from workbench._progress import TimeLeft
 from workbench.precision._measures import (
     ERRORS,
     LIMIT_BITS,
@@ -108,13 +109,57 @@ def _summarise(log: list[str]) -> str:
     return "; ".join(f"{m} (x{n})" if n > 1 else m for m, n in counts.items())
 
 
-def _bar(total: int, initial: int, enabled: bool):
-    """A progress bar over runs with an ETA (stderr), or None."""
+# What a setting's runs cost, relative to one another, for the progress' time left: per method
+# (scipy's by their solve_ivp name) the order q of the error estimate that sets its steps and
+# its right-hand-side evaluations at rtol 1e-6 relative to DOP853's. Evaluation ratios: a
+# Duffing study (studies/duffing.toml, rtol 1e-3..1e-11: Radau 3.0x, LSODA 0.7x DOP853's) and
+# the nine-bar with Coulomb friction (benchmarks/RESULTS.md: Radau 1.4x, BDF 0.7x).
+_STEP_COST = {
+    "dop853": (7, 1.0),
+    "auto": (7, 1.0),
+    "dopri5": (4, 1.0),
+    "ark548": (4, 1.0),
+    "radau": (3, 2.0),
+    "DOP853": (7, 1.0),
+    "RK45": (4, 1.0),
+    "RK23": (2, 2.0),
+    "Radau": (3, 2.0),
+    "BDF": (4, 0.7),
+    "LSODA": (10, 0.7),  # variable order (Adams up to 12): its steps grow as rtol^(-0.09)
+}
+# An evaluation through scipy's Python against one inside the compiled loop: ~10-40 us against
+# 0.1-0.5 us (the same Duffing study; benchmarks/RESULTS.md on the nine-bar); twice for scipy's
+# implicit codes, which factor and solve in Python at every step.
+_SCIPY_EVALUATION = {"Radau": 100.0, "BDF": 100.0}
+_SCIPY_EVALUATION_EXPLICIT = 50.0
+
+
+def expected_cost(method: str, rtol: float) -> float:
+    """The expected cost of a setting's runs relative to the others' (dimensionless), which
+    weights the study's estimate of its time left (:class:`workbench._progress.TimeLeft`).
+
+    A method of error order q takes steps ~ rtol^(-1/(q+1)) (its step-size control: the local
+    error ~ h^(q+1) held at rtol); times its right-hand-side evaluations per step, relative to
+    DOP853's (at rtol 1e-6), times the cost of one evaluation: 1 in the compiled loop, 50-100
+    through scipy's Python. So a scipy:Radau setting at rtol 1e-11 weighs ~8000 times a compiled
+    DOP853 one at 1e-3, a scipy:DOP853 one at 1e-3 50 times. The measured rate of each method
+    corrects these weights once one of its settings has run; an unknown method weighs as
+    DOP853."""
+    backend, _, name = method.rpartition(":")
+    order, evaluations = _STEP_COST.get(name, (7, 1.0))
+    per_evaluation = (
+        _SCIPY_EVALUATION.get(name, _SCIPY_EVALUATION_EXPLICIT) if backend == "scipy" else 1.0
+    )
+    return evaluations * per_evaluation * (rtol / 1e-6) ** (-1.0 / (order + 1))
+
+
+def _bar(total: int, initial: int, enabled: bool, time_left=None):
+    """A progress bar over runs with an ETA (stderr) weighted by ``time_left``, or None."""
     if not enabled:
         return None
     from workbench._progress import Progress
 
-    return Progress(total, initial=initial, unit="run", desc="accuracy")
+    return Progress(total, initial=initial, unit="run", desc="accuracy", time_left=time_left)
 
 
 def accuracy(
@@ -218,7 +263,11 @@ def accuracy(
         study = _Study(scene, ref_method, ref_tol, twin_tol, runs)
         names = study.run_names(methods, tolerances, horizon is None)
         stored = sum(runs.committed(n) for n in names)
-        bar = _bar(len(names), stored, progress)
+        costs = {
+            _Study.setting_name(m, t): (m, expected_cost(m, t)) for m in methods for t in tolerances
+        }
+        left = TimeLeft({k: v for k, v in costs.items() if not runs.committed(f"{k}.json")})
+        bar = _bar(len(names), stored, progress, left)
         try:
             ds = study.run(methods, tolerances, horizon, bar)
         finally:
@@ -250,9 +299,9 @@ class _Study:
         settings = [f"{self.setting_name(m, t)}.json" for m in methods for t in tolerances]
         return names + [n for n in settings for _ in range(2)]
 
-    def _step(self, n: int) -> None:
+    def _step(self, n: int, job: str | None = None) -> None:
         if self.bar is not None:
-            self.bar.update(n)
+            self.bar.update(n, job=job)
 
     def _reference(self, name: str, rtol: float, short: bool = True) -> xr.Dataset:
         make = short_scene if short else with_solver
@@ -290,10 +339,9 @@ class _Study:
         for i, method in enumerate(methods):
             for j, tol in enumerate(tolerances):
                 t0 = _time.perf_counter()
-                rec, reused = self.runs.record(
-                    self.setting_name(method, tol), partial(self.measure, method, tol)
-                )
-                self._step(0 if reused else 2)
+                name = self.setting_name(method, tol)
+                rec, reused = self.runs.record(name, partial(self.measure, method, tol))
+                self._step(0 if reused else 2, name)
                 status[i, j], failures[i, j] = rec["status"], rec["failure"]
                 solver_warnings[i, j] = rec["warnings"]
                 for k in out:

@@ -10,12 +10,18 @@ sequence (:func:`copies_problem`); :func:`jacobian_for` gives a model's compiled
 :func:`generated_source` the code generated for a model from the templates.
 """
 
-from workbench.solver._compile import TEMPLATE_MODULES, generated_source, jacobian_for
-from workbench.solver._copies import copies_problem, shrink_counts, split_copies
-from workbench.solver._integrate import COMPILED_METHODS, METHODS, PAUSE_SECONDS, integrate
-from workbench.solver._problem import EVENT_INSIDE_STEP, Problem
-from workbench.solver._result import RunResult, SolverError, Status
-from workbench.solver._tangent import (
+from workbench._cache import register_cache_locator
+
+# Before any module of the solver or of a model (which imports the solver first) defines a
+# cached compiled function.
+register_cache_locator()
+
+from workbench.solver._compile import TEMPLATE_MODULES, generated_source, jacobian_for  # noqa: E402
+from workbench.solver._copies import copies_problem, shrink_counts, split_copies  # noqa: E402
+from workbench.solver._integrate import COMPILED_METHODS, METHODS, PAUSE_SECONDS, integrate  # noqa: E402
+from workbench.solver._problem import EVENT_INSIDE_STEP, Problem  # noqa: E402
+from workbench.solver._result import RunResult, SolverError, Status  # noqa: E402
+from workbench.solver._tangent import (  # noqa: E402
     state_scale,
     tangent_columns,
     tangent_growths,

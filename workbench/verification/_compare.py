@@ -16,7 +16,7 @@ which the workbench's difference is judged.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import xarray as xr
@@ -88,6 +88,7 @@ def verify(
     record_dt: float | None = None,
     rtol: float = 1e-10,
     spectral_radius: float = 0.6,
+    on_run: Callable[[float | None, str, float], None] | None = None,
 ) -> xr.Dataset:
     """Compare a mechanism scene between the workbench and exudyn.
 
@@ -107,6 +108,9 @@ def verify(
         The workbench's tolerance (rtol = atol, scaled as in the scene).
     spectral_radius : float
         Numerical damping of exudyn's generalised-alpha (see :func:`run_exudyn`).
+    on_run : callable, optional
+        Called as each run ends, ``on_run(step, label, wall_time)``: exudyn's step (s; None
+        for the workbench's run), the run's label and its wall time (s); e.g. progress.
 
     Returns
     -------
@@ -152,6 +156,8 @@ def verify(
     )
     ours = simulate(ours_scene)
     runs = [ours[variables].assign_attrs(wall_time=ours.attrs["solver_wall_time"])]
+    if on_run is not None:
+        on_run(None, f"workbench (dop853, rtol {rtol:g})", ours.attrs["solver_wall_time"])
     for h in steps:
         ex = run_exudyn(
             scene, t_end=horizon, step=h, record_dt=record_dt, spectral_radius=spectral_radius
@@ -161,6 +167,8 @@ def verify(
             raise RuntimeError("exudyn's records do not fall on the workbench's record times")
         ex = ex.isel(time=slice(0, n)).assign_coords(time=ours.time[:n])
         runs.append(ex[variables].assign_attrs(wall_time=ex.attrs["wall_time"]))
+        if on_run is not None:
+            on_run(h, f"exudyn h={h:g} ({horizon / h:.0f} steps)", ex.attrs["wall_time"])
     labels = ["workbench"] + [f"exudyn h={h:g}" for h in steps]
     ds = xr.concat(runs, dim="run", join="inner", combine_attrs="drop")
     ds = ds.assign_coords(
