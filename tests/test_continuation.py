@@ -584,8 +584,8 @@ def test_the_copies_alone_agree_on_the_chaotic_nine_bar_once_shallow_contacts_ar
     """At omega = 2.2 pi (Fig. 32's scene, c = 0.1 mm, c_f = 0.01) the two-trajectory copies
     integrated alone read 30.4 +- 5.0 1/s with separation and growth variants spread by more
     than 20 % after 4 x 40 cycles while the kernel saw a contact only where a step ended
-    inside it (0.5.x). With every event function monitored inside the steps they agree with the estimate of
-    copies and tangent vector together (what a map point and a route exponent run:
+    inside it (0.5.x). With every event function monitored inside the steps they agree with
+    the estimate of copies and tangent vector together (what a map point and a route exponent run:
     point_exponent, converged within 4 x 10 cycles), their variants within 20 %, and with the
     copies alone at rtol 1e-8. docs/continuation.md quotes the three (~3 min of CPU)."""
     from workbench.analysis import lle_from_equations

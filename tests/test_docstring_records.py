@@ -206,8 +206,7 @@ def test_the_chaos_case_exponent_in_the_docstrings_is_the_newest_lle_record():
 def test_the_point_exponent_docstring_quotes_its_record_and_tests():
     """The module docstring of continuation/_exponent.py: the noise's rate before, from the
     ``benchmarks/continuation.py --parts chaos_maps`` record it names; the stable orbit's
-    exponents from tests/test_lyapunov.py; its Floquet bound and the copies-alone and
-    tangent-vector exponents at omega = 2.2 pi from tests/test_continuation.py."""
+    exponents from tests/test_lyapunov.py; its Floquet bound from tests/test_continuation.py."""
     doc = _doc(_exponent)
     # the "before" figure: the oldest chaos_maps record (two-trajectory copies on that orbit;
     # later records give its Floquet bound)
@@ -235,31 +234,9 @@ def test_the_point_exponent_docstring_quotes_its_record_and_tests():
     bound = re.search(r"assert abs\(float\(ind\.lle\) - (-[\d.]+)\) <", bound_test)[1]
     assert f"the bound is {bound} 1/s (tests/test_continuation.py)" in doc
 
-    test = _test_source(
-        "test_continuation.py",
-        "test_the_copies_alone_go_wrong_on_the_chaotic_nine_bar_and_the_tangent_vector_catches_it",
-    )
-    assert "with_parameters(omega=2.2 * math.pi)" in test
-    cycles, budget = map(int, re.search(r"point, cycles=(\d+), budget=(\d+),", test).groups())
-    spread = float(re.search(r"assert float\(alone\.spread\) > ([\d.]+)", test)[1])
-    alone = re.search(
-        r"agrees\(float\(alone\.lle\), float\(alone\.stderr\), ([\d.]+), ([\d.]+)\)", test
-    ).groups()
-    tangent = re.search(r"agrees\(e\.value, e\.error, ([\d.]+), ([\d.]+)\)", test)
-    assert "e.converged" in test
-    tight = re.search(
-        r"agrees\(float\(tight\.lle\), float\(tight\.stderr\), ([\d.]+), ([\d.]+)\)", test
-    )
-    assert "variational=False, rtol=1e-8" in test
-    starts = _benettin.STARTS
-    assert (
-        f"at omega = 2.2 pi, c = 0.1 mm they read {alone[0]} +- {alone[1]} 1/s within a budget of "
-        f"{starts} x {budget // starts} cycles, their variants spread by more than "
-        f"{spread * 100:.0f} %, against {tangent[1]} +- {tangent[2]} 1/s, converged, with the "
-        f"tangent vector, and {tight[1]} +- {tight[2]} 1/s alone at rtol 1e-8 "
-        "(tests/test_continuation.py)"
-    ) in doc
-    assert cycles == 40 and budget == 160
+    # the copies' and the tangent vector's readings on the chaotic nine-bar: on the page
+    # (docs/continuation.md, checked by tests/test_continuation.py), not in the docstring
+    assert "docs/continuation.md" in doc and "36.1" not in doc
 
 
 def test_the_exponent_docstrings_name_what_exists():

@@ -32,13 +32,10 @@ Elsewhere (no period up to 16: chaotic, quasi-periodic or a long period) the exp
 variational one for a model with an analytic Jacobian
 (:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms,
 :func:`workbench.analysis.lle_from_equations`) with the variational exponent carried by the
-same trajectories as its check, with its batch-means standard error. The copies alone are not
-enough on the nine-bar: at omega = 2.2 pi, c = 0.1 mm they read 30.4 +- 5.0 1/s within a
-budget of 4 x 40 cycles, their variants spread by more than 20 %, against 36.7 +- 1.0 1/s,
-converged, with the tangent vector, and 36.1 +- 0.8 1/s alone at rtol 1e-8
-(tests/test_continuation.py): the step control holds the copies' differences only to rtol of
-the states' size, not of the separation; the tangent vector in the error norm holds them to
-rtol of themselves, at the price of more steps.
+same trajectories as its check, with its batch-means standard error: the step control holds
+the copies' differences only to rtol of the states' size, not of the separation; the tangent
+vector in the error norm holds them to rtol of themselves, at the price of more steps
+(docs/continuation.md, "Chaos maps", gives what both read on the chaotic nine-bar).
 Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve with the
 model's Jacobian, not the derived system's. A point's budget leaves out one check of each
 estimator (:data:`NOT_RUN`: the run at rtol / 100); the estimate is ``converged`` where every
