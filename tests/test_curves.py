@@ -211,6 +211,7 @@ class Companion:
 
     periods, rtol, evaluations = 1, 1e-12, 0
     s0 = np.ones(2)
+    q_name = "q"  # the second parameter's name (a curve's progress line names it)
 
     def __init__(self, trace, det):
         self.trace, self.det = trace, det

@@ -1113,7 +1113,18 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
 
 
 def _run(
-    fam, system, y, aux, p0: float, q0: float, extra, ends, pscale: float, cfg, p_range, progress
+    fam,
+    system,
+    y,
+    aux,
+    p0: float,
+    q0: float,
+    extra,
+    ends,
+    pscale: float,
+    cfg,
+    p_range,
+    progress=False,
 ):
     """The curve through the orbit (y, aux) near (p0, q0) (a point of the defining system,
     Newton's method with the second parameter held at ``q0``), followed toward each of
