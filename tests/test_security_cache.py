@@ -327,7 +327,7 @@ def test_bytecode_planted_for_a_kernel_module_is_not_imported(tmp_path):
 
 FOLDER = """
 import workbench
-from workbench._errors import CacheError
+from workbench._cache import CacheError
 from workbench.solver._compile import jacobian_for
 
 try:

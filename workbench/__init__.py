@@ -22,7 +22,7 @@ from workbench._version import FORMAT_VERSION, __version__
 
 if TYPE_CHECKING:  # the public names, imported on first use (``__getattr__`` below)
     from workbench import analysis, plot
-    from workbench._errors import ModelWarning
+    from workbench._errors import ModelWarning, WorkbenchError
     from workbench.archive import open_run, save_run
     from workbench.campaign import CampaignError, run_campaign
     from workbench.precision import Recommendation, accuracy, recommend
@@ -40,6 +40,7 @@ __all__ = [
     "SceneError",
     "SolverError",
     "Status",
+    "WorkbenchError",
     "accuracy",
     "analysis",
     "load_scene",
@@ -59,6 +60,7 @@ __all__ = [
 # matplotlib load with the first name used), so that the command line starts at once.
 _HOMES = {
     "ModelWarning": "workbench._errors",
+    "WorkbenchError": "workbench._errors",
     "open_run": "workbench.archive",
     "save_run": "workbench.archive",
     "CampaignError": "workbench.campaign",

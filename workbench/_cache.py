@@ -56,6 +56,8 @@ from pathlib import Path
 
 from numba.core import caching
 
+from workbench._errors import WorkbenchError
+
 __all__ = [
     "CACHE_ENV",
     "KERNEL_PACKAGE",
@@ -78,7 +80,7 @@ RECORDS = "digests"  # the folder of the digests of what workbench wrote, inside
 TEMPORARY_PREFIX = "workbench-cache-"  # + uid + "-": the fallback folders in the temp directory
 
 
-class CacheError(ValueError):
+class CacheError(WorkbenchError, ValueError):
     """The kernel cache (``$WORKBENCH_CACHE_DIR``, ``~/.cache/workbench``) is refused before
     anything runs: it is not the user's, or others can write it, so compiled code found there
     could be someone else's. One line that names the folder, its owner and mode, and the fix

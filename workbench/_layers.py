@@ -16,6 +16,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "base",
         (
             "workbench._cache",
+            "workbench._errors",
             "workbench._layers",
             "workbench._processor",
             "workbench._progress",
@@ -25,7 +26,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         ),
     ),
     ("solver", ("workbench.solver",)),  # its protocol (Problem, RunResult, Status), integrators
-    ("models", ("workbench.models", "workbench._errors")),  # build Problems
+    ("models", ("workbench.models",)),  # build Problems
     ("scene", ("workbench.scene",)),  # validated against the models
     ("run", ("workbench.run",)),  # scene -> problem -> result -> dataset
     ("archive", ("workbench.archive",)),

@@ -38,7 +38,7 @@ def _in_notebook() -> bool:
         return False
     try:
         ip = shell.get_ipython()
-    except Exception:  # pragma: no cover - a broken IPython
+    except Exception:  # pragma: no cover - any error: a broken IPython; no display stops work
         return False
     return ip is not None and type(ip).__name__ == "ZMQInteractiveShell"
 

@@ -83,7 +83,7 @@ def reraise(kind: WarningKind) -> None:
     category = kind.category
     try:
         message = category(kind.text())
-    except Exception:  # a category that takes other arguments
+    except TypeError:  # a category that takes other arguments
         category = UserWarning
         message = UserWarning(f"{kind.name}: {kind.text()}")
     message.workbench_kind = kind  # an enclosing warnings_by_kind adds the count to its own
@@ -108,7 +108,8 @@ def warnings_by_kind(show: Callable[[WarningKind], None] = reraise) -> Iterator[
             warnings.simplefilter("always")  # count them all; the filters apply to what is shown
             yield
     except BaseException:
-        with contextlib.suppress(Exception):  # an error filter must not hide what is raised
+        # any error: an error filter (or ``show``) must not hide what is raised
+        with contextlib.suppress(Exception):
             _show(caught, show)
         raise
     _show(caught, show)

@@ -113,7 +113,8 @@ def broadcast(
         try:
             series = _series(template, sdim, values, t, period)
             return estimator(series, *args, **kwargs)
-        except Exception as exc:  # a failed point (all NaN) or one the estimator refuses
+        except Exception as exc:  # any error is this point's data (its analysis_error), as a
+            # campaign point's is: a failed point (all NaN), one the estimator refuses, ...
             return f"{type(exc).__name__}: {exc}"
 
     def point(index: tuple[int, ...]) -> xr.Dataset | str:

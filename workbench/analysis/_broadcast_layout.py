@@ -22,7 +22,7 @@ def _same(a: Any, b: Any) -> bool:
         return np.array_equal(np.asarray(a), np.asarray(b))
     try:
         return bool(a == b)
-    except Exception:  # pragma: no cover - exotic attribute values
+    except (TypeError, ValueError):  # pragma: no cover - values without a truth value
         return repr(a) == repr(b)
 
 

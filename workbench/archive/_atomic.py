@@ -374,7 +374,7 @@ def atomic_path(
     try:
         try:
             yield tmp
-        except Exception as exc:
+        except Exception as exc:  # re-raised as it is unless the write failed
             if _lack_of_space(exc, path.parent) or _a_write_failure(exc):
                 raise _write_failed(path, tmp, size, exc) from None
             raise

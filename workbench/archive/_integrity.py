@@ -20,6 +20,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from workbench._errors import WorkbenchError
 from workbench.archive._filesystem import LockScope, lock_scope
 
 __all__ = [
@@ -36,7 +37,7 @@ __all__ = [
 LOCK_NAME = "lock"
 
 
-class ArchiveError(ValueError):
+class ArchiveError(WorkbenchError, ValueError):
     """A file or store cannot be used as asked: not a readable netCDF file, or a store that
     another process is writing. The message names the path and what to do."""
 

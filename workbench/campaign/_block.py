@@ -189,7 +189,7 @@ def _point(scene: Scene, params: dict[str, float], max_memory=None, per_point=No
             measured = per_point(point, ds)
     except SceneError as exc:
         return invalid_outcome(exc, time.perf_counter() - t0)
-    except Exception as exc:
+    except Exception as exc:  # any error is this point's data (flag error, the docstring)
         return raised_outcome(exc, time.perf_counter() - t0)
     return run_outcome(ds, time.perf_counter() - t0) | {"measured": measured}
 

@@ -48,7 +48,8 @@ def _ready(scene_toml: str, model_module: str = "", model_directory: str = "") -
                 load_kernel(scene_toml, model_module, model_directory)
         else:
             load_kernel(scene_toml, model_module, model_directory)
-    except Exception:  # pragma: no cover - best effort, like the fork server's preload
+    except Exception:  # pragma: no cover - any error: preloading only saves time, and the
+        # first block loads the kernel itself and reports a real error as its points' outcome
         _log.warning("workbench: preloading the campaign's kernel failed", exc_info=True)
 
 
@@ -101,7 +102,8 @@ def plugin_name(scene_toml: str) -> str:
     scene = scene_from_toml(scene_toml)
     try:
         hooks = prepare(scene).problem.hooks
-    except Exception:  # an invalid point: a name of its own, the task reports the error
+    except Exception:  # any error (the model's own code runs here): a name of its own; the
+        # task reports the error as its points' outcome, and one point never stops a campaign
         hooks = hashlib.sha256(scene_toml.encode()).hexdigest()[:12]
     return f"workbench-kernel-{hooks}-{scene.solver['method']}-{code_of(scene)[:16]}"
 

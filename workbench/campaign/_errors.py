@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from workbench._errors import WorkbenchError
 from workbench.archive import StoreWarning
 
 __all__ = ["CampaignError", "CampaignWarning"]
 
 
-class CampaignError(ValueError):
+class CampaignError(WorkbenchError, ValueError):
     """A campaign cannot run as asked (e.g. its store holds a different campaign); the message
     says what differs and how to proceed."""
 

@@ -168,7 +168,8 @@ def _one_task_at_a_time() -> bool:
         from distributed import get_worker
 
         return get_worker().state.nthreads == 1
-    except Exception:  # not a dask worker, or one without that field
+    except (ImportError, ValueError, AttributeError):  # no distributed, not a dask worker
+        # (get_worker's ValueError), or a worker without that field
         return False
 
 

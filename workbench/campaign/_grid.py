@@ -215,7 +215,8 @@ def _period(scene: Scene, params: Mapping, point: dict, none: bool = False) -> f
     number (or None, if ``none``)."""
     try:
         period = get_model(scene.model).forcing_period(params)
-    except Exception as exc:  # the model's code: any error, named with the point
+    except Exception as exc:  # any error: the model's own code; refused below in one line
+        # naming the point and the error (never costed)
         bad = f"{type(exc).__name__}: {exc}"
     else:
         if period is None:

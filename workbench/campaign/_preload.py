@@ -28,5 +28,6 @@ if os.environ.get(PRELOAD_ENV):
     try:
         warm_io()
         load_kernel(os.environ[PRELOAD_ENV], *json.loads(os.environ.get(MODEL_ENV, '["", ""]')))
-    except Exception:  # pragma: no cover - best effort only
+    except Exception:  # pragma: no cover - any error: the fork server must start (its workers
+        # fork from it); the first block loads the kernel itself and reports a real error
         pass

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench.archive import DiskFull, WriteFailed, open_run, save_run
+from workbench.archive import ArchiveError, DiskFull, WriteFailed, open_run, save_run
 from workbench.campaign._assemble import assemble, execution_attrs
 from workbench.campaign._block import BlockTask, failed, model_source
 from workbench.campaign._errors import CampaignError, CampaignWarning
@@ -403,7 +403,7 @@ def _complete_archive(
         return None
     try:
         ds = open_run(st.archive)
-    except Exception as exc:
+    except (OSError, ArchiveError) as exc:
         raise CampaignError(
             f"{str(st.archive)!r} exists but is not a readable netCDF file ({exc}); pass "
             "restart=True (CLI --restart) to overwrite it, or choose another output path"

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from workbench.archive import (
+    ArchiveError,
     check_output_file,
     file_problem,
     mapping_diff,
@@ -83,7 +84,7 @@ class Store:
         try:
             with open_run(self.archive) as ds:
                 attrs = dict(ds.attrs)
-        except Exception:  # the archive is rewritten anyway
+        except (OSError, ArchiveError):  # unreadable: the archive is rewritten anyway
             return None
         return attrs if attrs.get("campaign_block_sha256") == checksums else None
 

@@ -45,7 +45,8 @@ def kernel_cached(scene: Scene) -> bool | None:
         return None
     try:
         problem = prepare(scene.replace(sweep={}) if scene.sweep else scene).problem
-    except Exception:  # the run itself will report it
+    except Exception:  # any error (the model's own code runs here): cannot tell; the run
+        # reports it, as its points' outcome in a campaign (one point never stops a campaign)
         return None
     if problem.y0.size == 0:
         return None
@@ -57,7 +58,8 @@ def kernel_cached(scene: Scene) -> bool | None:
         index = kernel_for(problem.hooks).advance._cache._cache_file._load_index()
     except CacheError:  # a refused cache: said before anything runs
         raise
-    except Exception:  # pragma: no cover - numba internals changed
+    except Exception:  # pragma: no cover - any error: numba's private attributes and index
+        # format change between its versions; the answer is a hint only (None: cannot tell)
         return None
     return bool(index)
 

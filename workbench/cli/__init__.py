@@ -18,9 +18,10 @@ import argparse
 import importlib
 import sys
 
+from workbench._errors import WorkbenchError
 from workbench._version import FORMAT_VERSION, __version__
 from workbench.cli._console import one_line_warnings
-from workbench.cli._exit_codes import UsageError, exit_code
+from workbench.cli._exit_codes import exit_code
 from workbench.cli._signals import Terminated, signals_as_interrupts
 
 
@@ -71,20 +72,15 @@ _COMMAND_MODULES: tuple[str, ...] = (
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``workbench`` console script; returns the exit code
     (:func:`workbench.cli._exit_codes.exit_code`: 0 ok, 2 invalid input, 3-5 failed runs, 130
-    interrupted, 143 SIGTERM). Expected errors (a scene, an argument, a file, a store) are one
-    line on stderr that names what is wrong; warnings are one line each."""
+    interrupted, 143 SIGTERM). Expected errors (every :class:`workbench.WorkbenchError`: a
+    scene, an argument, a file, a store, a failed run) are one line on stderr that names what is
+    wrong; warnings are one line each."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    from workbench._cache import CacheError
-    from workbench.archive import ArchiveError
-    from workbench.campaign import CampaignError
-    from workbench.scene import SceneError
-    from workbench.solver import SolverError
-
     try:
         with signals_as_interrupts(), one_line_warnings(args.command):
             return args.func(args)
-    except (SceneError, SolverError, CampaignError, ArchiveError, CacheError, UsageError) as exc:
+    except WorkbenchError as exc:  # refused input (exit code 2), a failed run (3-5), other: 1
         print(f"workbench {args.command}: error: {exc}", file=sys.stderr)
         return exit_code(exc)
     except FileNotFoundError as exc:

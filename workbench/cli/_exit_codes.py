@@ -31,13 +31,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from workbench._errors import WorkbenchError
+
 if TYPE_CHECKING:
     from workbench.solver import Status
 
 __all__ = ["EXIT_INVALID", "UsageError", "exit_code", "worst_exit_code"]
 
 
-class UsageError(ValueError):
+class UsageError(WorkbenchError, ValueError):
     """A command-line argument that the command refuses before any work: the message names the
     argument, the value and what is allowed."""
 

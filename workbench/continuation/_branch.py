@@ -549,14 +549,14 @@ def _beyond_grazing(
                 text += f", unstable (|multiplier| {mu:.3g})"
                 try:
                     text += f"; {motion(p)}"
-                except Exception as exc:  # noqa: BLE001 - the reason is reported
+                except (SceneError, SolverError) as exc:  # the map failed: reported
                     text += f"; the motion there failed ({exc})"
             return kind, pt, text
     p = G.p + ahead * past
     if lo <= p <= hi:
         try:
             what = motion(p)
-        except Exception as exc:  # noqa: BLE001 - the reason is reported
+        except (SceneError, SolverError) as exc:  # the map failed: reported
             return "not_typed", None, f"the motion past it failed ({exc})"
         return "border_collision", None, f"no period-{smap.periods} orbit found past it; {what}"
     return "not_typed", None, "its other side lies outside the parameter's range"
@@ -806,7 +806,7 @@ def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: Settings, out: Trac
     beyond = _predict(smap, A, u, cfg.pscale)
     try:
         v = smap(beyond.y, beyond.aux, beyond.p, tangent=False)
-    except Exception:  # noqa: BLE001 - the reason is reported as it is
+    except (SceneError, SolverError):  # the map fails beyond: the reason stays as it is
         return
     if smap.prepared(A.p).problem.event_direction.size:
         seq = sequence_of(smap, A)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from workbench._errors import WorkbenchError
 from workbench.continuation._contacts import ContactSequence
 from workbench.continuation._strobe import MapValue, StrobeMap
 from workbench.scene import SceneError
@@ -23,7 +24,7 @@ from workbench.solver import SolverError
 __all__ = ["NewtonFailure", "OrbitPoint", "correct", "orbit_at", "tangent"]
 
 
-class NewtonFailure(RuntimeError):
+class NewtonFailure(WorkbenchError, RuntimeError):
     """Newton's method did not converge (or an integration failed on the way)."""
 
 

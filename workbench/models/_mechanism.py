@@ -14,7 +14,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from workbench._errors import SolverError
 from workbench.models._base import Model, Parameter, Problem, Quantity
 from workbench.models._clearance import (
     ENERGY_STATES,
@@ -36,6 +35,7 @@ from workbench.models._friction_report import (
 )
 from workbench.models._layout import Layout
 from workbench.models._mechanism_layouts import JOINT_RECORD
+from workbench.solver import SolverError
 
 __all__ = [
     "Mechanism",

@@ -6,7 +6,7 @@ import dataclasses
 import datetime
 import platform
 from functools import cache, lru_cache
-from importlib.metadata import version
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 import xarray as xr
@@ -194,7 +194,7 @@ def _versions() -> tuple[str, str]:
             continue
         try:
             found.append(f"{pkg}={version(pkg)}")
-        except Exception:
+        except PackageNotFoundError:
             found.append(f"{pkg}=unknown")
     # the package's own version from its code: an editable install's metadata keeps the
     # version it was installed with

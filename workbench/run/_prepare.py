@@ -11,7 +11,7 @@ import numpy as np
 from workbench.models import Model, get_model
 from workbench.run._ensemble import perturb_initial_state, scene_perturbation
 from workbench.run._memory import check_memory, record_count, values_per_record, what_to_lower
-from workbench.scene import Scene, SceneSource, load_scene
+from workbench.scene import Scene, SceneError, SceneSource, load_scene
 from workbench.solver import Problem
 
 __all__ = ["Prepared", "prepare", "record_times"]
@@ -85,10 +85,9 @@ def prepare(
 
     Raises
     ------
-    ValueError
-        For a scene with a ``[sweep]``.
     SceneError
-        When the model rejects the scene's values.
+        For a scene with a ``[sweep]`` (key ``sweep``), or when the model rejects the scene's
+        values.
     MemoryLimitError
         (a SceneError) When the records would exceed the memory limit; estimated before
         anything is allocated, the message says what to lower.
@@ -103,9 +102,10 @@ def prepare(
     """
     scene = load_scene(scene)
     if scene.sweep:
-        raise ValueError(
-            f"scene has a [sweep] over {list(scene.sweep)!r}; run it with workbench.run_campaign "
-            "or drop the sweep (scene.replace(sweep={}))"
+        raise SceneError(
+            "sweep",
+            f"the scene sweeps {list(scene.sweep)!r}; a run is one scene: run the sweep with "
+            "workbench.run_campaign, or drop it (scene.replace(sweep={}))",
         )
     model = get_model(scene.model)
     params = scene.resolved_parameters

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from workbench._errors import WorkbenchError
+
 __all__ = ["RunResult", "SolverError", "Status", "solver_stats"]
 
 
@@ -67,7 +69,7 @@ class Status(enum.IntEnum):
             ) from None
 
 
-class SolverError(RuntimeError):
+class SolverError(WorkbenchError, RuntimeError):
     """A run failed: the message names the time, the state and the likely cause.
 
     Parameters

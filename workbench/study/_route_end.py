@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from workbench._errors import WorkbenchError
 from workbench.study._route_parts import branch_summary, indicators, settled
 
 __all__ = ["HELD_FACTORS", "end_bracket", "periodic_end"]
@@ -122,7 +123,7 @@ def periodic_end(
             out["branch"] = branch_summary(
                 point, param, start, hi, end_spec, directory / f"{case}-end-branch.nc", y, aux
             )
-        except Exception as exc:  # noqa: BLE001 - a failed start is a finding, not a crash
+        except WorkbenchError as exc:  # a failed start is a finding, not a crash
             tried.append(f"from {start:.6g}: {type(exc).__name__}: {str(exc)[:160]}")
             continue
         out["failed_starts"] = tried
@@ -142,7 +143,7 @@ def _orbit_at(scene, ds, param: str, value: float) -> dict:
     y, aux = settled(ds.sel(direction="up"), point, param, value)
     try:
         orbit = periodic_orbit(point, state=y, discrete_state=aux, rtol=1e-8, tolerance=1e-6)
-    except Exception as exc:  # noqa: BLE001 - a failed Newton is a finding, not a crash
+    except WorkbenchError as exc:  # a failed Newton is a finding, not a crash
         return {"value": value, "error": f"{type(exc).__name__}: {str(exc)[:200]}"}
     lowest = float(orbit.event_min.values.min()) if "event_min" in orbit else math.nan
     return {

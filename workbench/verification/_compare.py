@@ -22,7 +22,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.run import simulate
-from workbench.scene import SceneSource, load_scene
+from workbench.scene import SceneError, SceneSource, load_scene
 from workbench.verification._exudyn import run_exudyn
 from workbench.verification._mechanisms import check_scene
 
@@ -131,7 +131,11 @@ def verify(
     """
     scene = load_scene(scene)
     if scene.sweep:
-        raise ValueError("verify runs one scene; drop its [sweep] (scene.replace(sweep={}))")
+        raise SceneError(
+            "sweep",
+            f"the scene sweeps {list(scene.sweep)!r}; verify runs one scene: drop the sweep "
+            "(scene.replace(sweep={}))",
+        )
     check_scene(scene)  # before the workbench's own (possibly long) run
     steps = sorted((float(h) for h in steps), reverse=True)
     if not steps or min(steps) <= 0:

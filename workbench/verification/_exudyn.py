@@ -363,8 +363,9 @@ def run_exudyn(
 
     Raises
     ------
-    ValueError
-        For a model without a :class:`Mechanism` description or with LuGre friction.
+    SceneError
+        For a model without a :class:`Mechanism` description or with LuGre friction (the
+        message names the key).
     RuntimeError
         Where exudyn's Newton iteration fails at this step.
     """

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.models import get_model, joint_stiffness
-from workbench.scene import Scene
+from workbench.scene import Scene, SceneError
 
 __all__ = ["MECHANISMS", "Body", "Mechanism", "Point", "check_scene"]
 
@@ -143,13 +143,16 @@ MECHANISMS: dict[str, Callable[[Scene], Mechanism]] = {
 
 
 def check_scene(scene: Scene) -> None:
-    """Raise ValueError unless exudyn can rebuild this scene (model and friction law)."""
+    """Raise SceneError (naming the key) unless exudyn can rebuild this scene (model and
+    friction law)."""
     if scene.model not in MECHANISMS:
-        raise ValueError(
-            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}"
+        raise SceneError(
+            "model.name",
+            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}",
         )
     if scene.effects["friction"] == "lugre":
-        raise ValueError(
-            "effects.friction = 'lugre' has no counterpart in exudyn's contact; verify a scene "
-            "with friction 'none' or 'coulomb'"
+        raise SceneError(
+            "effects.friction",
+            "'lugre' has no counterpart in exudyn's contact; verify a scene with friction "
+            "'none' or 'coulomb'",
         )
