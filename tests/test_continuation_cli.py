@@ -94,7 +94,7 @@ def test_orbit_curve_holds_both_parameters_along_the_curve(tmp_path, capsys):
     assert "period_doubling curve from the period_doubling at gamma = 0.26558" in printed
     curve = open_run(out)
     assert curve.gamma.dims == ("curve_point",) and curve.omega.dims == ("curve_point",)
-    assert curve.gamma.attrs["units"] == "m s-2" and curve.omega.attrs["units"] == "rad s-1"
+    assert curve.gamma.attrs["units"] == "1" and curve.omega.attrs["units"] == "rad s-1"
     assert (float(curve.omega[0]), float(curve.omega[-1])) == (1.15, 1.25)
     assert (
         curve.attrs["curve_kind"] == "period_doubling" and "omega" in curve.attrs["curve_parameter"]
@@ -106,7 +106,7 @@ def test_orbit_curve_holds_both_parameters_along_the_curve(tmp_path, capsys):
     maps = xr.Dataset(
         {"strobe_period": (("gamma", "omega"), np.ones((3, 3), np.int8), {"units": "1"})},
         coords={
-            "gamma": ("gamma", [0.25, 0.26, 0.27], {"units": "m s-2", "long_name": "gamma"}),
+            "gamma": ("gamma", [0.25, 0.26, 0.27], {"units": "1", "long_name": "gamma"}),
             "omega": ("omega", [1.15, 1.2, 1.25], {"units": "rad s-1", "long_name": "omega"}),
         },
         attrs={"campaign_dims": "gamma omega"},

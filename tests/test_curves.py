@@ -117,7 +117,7 @@ def test_the_curve_dataset_is_netcdf_ready_and_self_described(pd_curve, pd_branc
     c = pd_curve
     for name, da in {**c.data_vars, **c.coords}.items():
         assert da.attrs.get("units") and da.attrs.get("long_name"), name
-    assert c.gamma.attrs["units"] == "m s-2" and c.omega.attrs["units"] == "rad s-1"
+    assert c.gamma.attrs["units"] == "1" and c.omega.attrs["units"] == "rad s-1"
     assert c.kind.attrs["flag_meanings"].split() == list(CURVE_KINDS)
     assert (c.kind == CURVE_KINDS["period_doubling"]).all()
     assert c.attrs["continuation_parameter"] == "gamma" and c.attrs["curve_parameter"] == "omega"
@@ -350,13 +350,13 @@ def test_a_scene_needs_the_first_parameter_and_the_kind():
 
 # -- figures ---------------------------------------------------------------------------------
 def test_curves_are_drawn_over_a_chaos_map_within_its_extent(pd_curve):
-    from workbench.plot import chaos_map_figure, curve_figure, display_scale
+    from workbench.plot import chaos_map_figure, curve_figure
 
     gamma, omega = np.linspace(0.2, 0.3, 5), np.linspace(1.1, 1.3, 4)
     maps = xr.Dataset(
         {"strobe_period": (("gamma", "omega"), np.ones((5, 4), np.int8), {"units": "1"})},
         coords={
-            "gamma": ("gamma", gamma, {"units": "m s-2", "long_name": "forcing amplitude"}),
+            "gamma": ("gamma", gamma, {"units": "1", "long_name": "forcing amplitude"}),
             "omega": ("omega", omega, {"units": "rad s-1", "long_name": "forcing frequency"}),
         },
         attrs={"campaign_dims": "gamma omega"},
@@ -364,10 +364,9 @@ def test_curves_are_drawn_over_a_chaos_map_within_its_extent(pd_curve):
     fig = chaos_map_figure(maps, indicators=("strobe_period",), curves=[pd_curve])
     ax = fig.axes[0]
     line = next(l for l in ax.lines if l.get_label() == "PD curve")
-    # in the map's display units (gamma, m s-2, shown in mm s-2)
-    scale = display_scale(gamma, "m s-2")[0]
-    assert scale == 1000.0
-    assert np.allclose(line.get_xdata(), scale * pd_curve.gamma.values, rtol=1e-15)
+    # in the map's display units (gamma a pure number, as the curve's)
+    assert ax.get_xlabel() == "forcing amplitude"
+    assert np.array_equal(line.get_xdata(), pd_curve.gamma.values)
     assert np.array_equal(line.get_ydata(), pd_curve.omega.values)
     # the map's extent is kept (the curve runs beyond it, omega 1.0 .. 1.4)
     assert ax.get_ylim()[0] > 1.0 and ax.get_ylim()[1] < 1.4
@@ -376,7 +375,7 @@ def test_curves_are_drawn_over_a_chaos_map_within_its_extent(pd_curve):
     fig = chaos_map_figure(swapped, indicators=("strobe_period",), curves=[pd_curve])
     line = next(l for l in fig.axes[0].lines if l.get_label() == "PD curve")
     assert np.array_equal(line.get_xdata(), pd_curve.omega.values)
-    assert np.allclose(line.get_ydata(), scale * pd_curve.gamma.values, rtol=1e-15)
+    assert np.array_equal(line.get_ydata(), pd_curve.gamma.values)
     other = maps.rename(omega="delta").assign_attrs(campaign_dims="gamma delta")
     with pytest.raises(ValueError, match="cannot be drawn on a map over"):
         chaos_map_figure(other, indicators=("strobe_period",), curves=[pd_curve])

@@ -1,8 +1,9 @@
-"""What the figures show (issue 26 item 6, issue 23 item 7): titles that wrap between words,
-values in readable units without offsets, no "[1]", legends beside the traces, empty panels
-that say why, phase portraits and Poincaré sections of a run, a warning where records are too
-coarse for the impacts they draw, work-precision diagrams without empty legend entries, failed
-campaign points marked and counted, a failed run's status in its titles."""
+"""What the figures show (issue 26 item 6, issue 23 item 7, issue 40 item 7): titles that wrap
+between words, values in their display units (lengths in mm) without offsets, no "[1]",
+legends beside the traces, empty panels that say why, phase portraits and Poincaré sections of
+a run, a warning where records are too coarse for the impacts they draw, work-precision
+diagrams without empty legend entries, failed campaign points marked and counted, a failed
+run's status in its titles."""
 
 import re
 import warnings
@@ -62,13 +63,13 @@ def test_titles_never_break_inside_a_reference_or_a_quantity(width):
         assert not line.startswith(("4.2", "2019", "mm", "pi", "=")), (width, line)
 
 
-def test_small_values_are_shown_in_micrometres_without_an_offset():
+def test_small_lengths_are_shown_in_millimetres_without_an_offset():
     ds = _run({"penetration": PENETRATION, "ratio": RATIO})
     fig = timeseries_figure(ds)
     fig.canvas.draw()
     pen, ratio = fig.axes[0], fig.axes[1]
-    assert pen.get_ylabel() == "penetration [µm]"
-    assert max(max(line.get_ydata()) for line in pen.get_lines()) == pytest.approx(16.0, rel=0.01)
+    assert pen.get_ylabel() == "penetration [mm]"
+    assert max(max(line.get_ydata()) for line in pen.get_lines()) == pytest.approx(0.016, rel=0.01)
     assert pen.yaxis.get_offset_text().get_text() == ""
     assert ratio.get_ylabel() == "ratio"  # dimensionless: no "[1]"
     # the legend lies beside the panel, where it covers no trace
@@ -79,7 +80,7 @@ def test_small_values_are_shown_in_micrometres_without_an_offset():
     plt.close(fig)
 
 
-def test_a_chaos_map_shows_the_clearance_in_micrometres_and_keeps_a_given_scale():
+def test_a_chaos_map_shows_the_clearance_in_millimetres_and_keeps_a_given_scale():
     c = np.array([2e-5, 6e-5, 1e-4])
     omega = np.pi * np.array([0.5, 1.0])
     maps = xr.Dataset(
@@ -94,8 +95,8 @@ def test_a_chaos_map_shows_the_clearance_in_micrometres_and_keeps_a_given_scale(
     fig.canvas.draw()
     ax = fig.axes[0]
     assert ax.get_xlabel() == "omega / pi"
-    assert ax.get_ylabel() == "radial clearance [µm]"
-    assert ax.get_ylim() == pytest.approx((0.0, 120.0))  # cells around 20, 60, 100 µm
+    assert ax.get_ylabel() == "radial clearance [mm]"
+    assert ax.get_ylim() == pytest.approx((0.0, 0.12))  # cells around 0.02, 0.06, 0.1 mm
     assert ax.get_xlim() == pytest.approx((0.25, 1.25))
     assert ax.yaxis.get_offset_text().get_text() == ""
     plt.close(fig)

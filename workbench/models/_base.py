@@ -58,7 +58,8 @@ class Parameter:
         if lo_bad or hi_bad:
             lo = "(" if self.lower_open else "["
             hi = ")" if self.upper_open else "]"
-            return f"must lie in {lo}{self.lower:g}, {self.upper:g}{hi} {self.units}".rstrip()
+            unit = "" if self.units == "1" else f" {self.units}"  # a pure number: no unit
+            return f"must lie in {lo}{self.lower:g}, {self.upper:g}{hi}{unit}".rstrip()
         return None
 
 

@@ -1,7 +1,12 @@
 """Forced Duffing oscillator, a reference system for the solver and the analysis.
 
 x'' + delta x' + alpha x + beta x^3 = gamma cos(omega t)   (Duffing 1918; Guckenheimer & Holmes
-1983, Sec. 2.2). Non-dimensional: "s" stands for the model's time unit and "m" for its length.
+1983, Sec. 2.2), in the non-dimensional form of that reference: the displacement x, the velocity
+v = x', the coefficients delta, alpha, beta and the forcing amplitude gamma are pure numbers
+(units "1"), and so is every quantity derived from them. The independent variable t is the
+non-dimensional time; the solver, the archives and the analysis label every time axis "s" (a
+forcing period, a record time, an exponent per unit time "s-1"), and so does this model: read
+"s" as the model's unit of time and omega's "rad s-1" as radians per unit of it.
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ def rhs(t, y, p, ip, aux, work, dydt):
 
 @njit(cache=True)
 def jacobian(t, y, p, ip, aux, work, J):
-    """Analytic Jacobian d(x', v')/d(x, v); its trace is -delta (s-1)."""
+    """Analytic Jacobian d(x', v')/d(x, v); its trace is -delta (per unit of time)."""
     J[0, 0] = 0.0
     J[0, 1] = 1.0
     J[1, 0] = -p[1] - 3.0 * p[2] * y[0] * y[0]
@@ -37,7 +42,8 @@ def jacobian(t, y, p, ip, aux, work, J):
 
 @register
 class Duffing(Model):
-    """Forced Duffing oscillator; forcing period 2 pi / omega."""
+    """Forced Duffing oscillator, non-dimensional (units "1"; time in the model's unit, labelled
+    "s"); forcing period 2 pi / omega."""
 
     name = "duffing"
     description = (
@@ -45,17 +51,17 @@ class Duffing(Model):
     )
     reference = "Duffing (1918); Guckenheimer & Holmes (1983), Sec. 2.2"
     parameters = (
-        Parameter("delta", 0.3, "s-1", "damping coefficient", lower=0.0),
-        Parameter("alpha", -1.0, "s-2", "linear stiffness"),
-        Parameter("beta", 1.0, "m-2 s-2", "cubic stiffness"),
-        Parameter("gamma", 0.5, "m s-2", "forcing amplitude"),
+        Parameter("delta", 0.3, "1", "damping coefficient", lower=0.0),
+        Parameter("alpha", -1.0, "1", "linear stiffness"),
+        Parameter("beta", 1.0, "1", "cubic stiffness"),
+        Parameter("gamma", 0.5, "1", "forcing amplitude"),
         Parameter("omega", 1.2, "rad s-1", "forcing angular frequency", lower=0.0, lower_open=True),
-        Parameter("x0", 1.0, "m", "initial displacement"),
-        Parameter("v0", 0.0, "m s-1", "initial velocity"),
+        Parameter("x0", 1.0, "1", "initial displacement"),
+        Parameter("v0", 0.0, "1", "initial velocity"),
     )
     fixed_states = (
-        Quantity("x", "m", "displacement", rate="v"),
-        Quantity("v", "m s-1", "velocity"),
+        Quantity("x", "1", "displacement", rate="v"),
+        Quantity("v", "1", "velocity"),
     )
 
     def forcing_period(self, params):

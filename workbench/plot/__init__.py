@@ -2,7 +2,8 @@
 
 Every ``*_figure`` function returns a :class:`matplotlib.figure.Figure`, and :func:`run_figures`
 writes PNG files and returns their paths; nothing is shown on screen. The helpers beside them
-return no figure: :func:`display_scale` (the factor and SI-prefixed unit to show values with),
+return no figure: :func:`display_unit` (the factor and the unit every figure shows a quantity
+stored in given units with: lengths in mm, others as stored, the same in every figure),
 :func:`coarse_sampling` (the largest jump between records, and when), :func:`wrap_title` (a
 title broken into lines), :func:`failure_note` and :func:`run_status_note` (text on failed
 points or a failed run), :func:`mark_failed` (marks failed parameter values on given axes and
@@ -20,7 +21,7 @@ from workbench.plot._analysis import (
     poincare_figure,
     zero_one_figure,
 )
-from workbench.plot._base import display_scale, register_overview, wrap_title
+from workbench.plot._base import display_unit, register_overview, wrap_title
 from workbench.plot._continuation import (
     CURVE_COLOURS,
     CURVE_MARKS,
@@ -54,7 +55,7 @@ __all__ = [
     "PANELS_PER_FIGURE",
     "CoarseSamplingWarning",
     "coarse_sampling",
-    "display_scale",
+    "display_unit",
     "failure_note",
     "mark_failed",
     "run_phase_figure",

@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, display_scale, plain_ticks, plt
+from workbench.plot._base import axis_label, display_unit, display_values, plain_ticks, plt
 from workbench.plot._failures import mark_failed
 from workbench.plot._phase import COARSE_JUMP, CoarseSamplingWarning, coarse_sampling
 
@@ -28,14 +28,14 @@ def phase_figure(portrait: xr.Dataset, section: xr.Dataset | None = None) -> plt
     too coarse for its fast changes (impacts drawn as straight edges) is said in the title and
     warned about (:class:`workbench.plot.CoarseSamplingWarning`)."""
     fig, ax = plt.subplots(figsize=(5.5, 4.5))
-    fx, ux = display_scale(portrait.value.values, portrait.value.attrs.get("units"))
-    fy, uy = display_scale(portrait.rate.values, portrait.rate.attrs.get("units"))
+    fx, _ = display_unit(portrait.value.attrs.get("units"))
+    fy, _ = display_unit(portrait.rate.attrs.get("units"))
     ax.plot(portrait.value * fx, portrait.rate * fy, lw=0.3, color="0.4", label="trajectory")
     if section is not None:
         ax.plot(section["value"] * fx, section["rate"] * fy, "r.", ms=3, label="Poincaré section")
         ax.legend(fontsize=8)
-    ax.set_xlabel(axis_label(portrait.value, ux))
-    ax.set_ylabel(axis_label(portrait.rate, uy))
+    ax.set_xlabel(axis_label(portrait.value))
+    ax.set_ylabel(axis_label(portrait.rate))
     title = f"phase portrait of {portrait.attrs.get('variable', '')}"
     worst, when = coarse_sampling(portrait.value, portrait.rate)
     if worst > COARSE_JUMP:
@@ -59,11 +59,9 @@ def phase_figure(portrait: xr.Dataset, section: xr.Dataset | None = None) -> plt
 def poincare_figure(value: xr.DataArray, rate: xr.DataArray) -> plt.Figure:
     """Stroboscopic Poincaré map: one point per forcing period."""
     fig, ax = plt.subplots(figsize=(5.5, 4.5))
-    fx, ux = display_scale(value.values, value.attrs.get("units"))
-    fy, uy = display_scale(rate.values, rate.attrs.get("units"))
-    ax.plot(value * fx, rate * fy, ".", ms=3)
-    ax.set_xlabel(axis_label(value, ux))
-    ax.set_ylabel(axis_label(rate, uy))
+    ax.plot(display_values(value), display_values(rate), ".", ms=3)
+    ax.set_xlabel(axis_label(value))
+    ax.set_ylabel(axis_label(rate))
     ax.set_title(
         f"stroboscopic Poincaré map ({value.sizes.get('strobe', value.size)} periods)", fontsize=9
     )
@@ -185,18 +183,23 @@ def zero_one_figure(result: xr.Dataset) -> plt.Figure:
     return fig
 
 
-def bifurcation_figure(diagram: xr.Dataset, *, scale: float = 1.0, xlabel: str | None = None):
+def bifurcation_figure(
+    diagram: xr.Dataset, *, scale: float | None = None, xlabel: str | None = None
+):
     """The familiar scatter of a bifurcation diagram (from
-    :func:`workbench.analysis.bifurcation_diagram`): strobe samples over the parameter. Failed
-    points (the diagram's ``status``) are marked by red crosses on the bottom edge at their
-    parameter values, counted in the legend and named in the title."""
+    :func:`workbench.analysis.bifurcation_diagram`): strobe samples over the parameter, both in
+    their display units (:func:`~workbench.plot.display_unit`) unless ``scale`` multiplies the
+    parameter (e.g. ``1 / pi``, with ``xlabel``). Failed points (the diagram's ``status``) are
+    marked by red crosses on the bottom edge at their parameter values, counted in the legend
+    and named in the title."""
     param = diagram.attrs["diagram_parameter"]
     samples = diagram[diagram.attrs["diagram_variable"]]
     other = [d for d in samples.dims if d != param]
     da = samples.transpose(param, *other)
+    if scale is None:
+        scale, _ = display_unit(da[param].attrs.get("units"))
     x = np.broadcast_to(da[param].values.reshape((-1,) + (1,) * len(other)), da.shape)
-    factor, units = display_scale(da.values, da.attrs.get("units"))
-    y = da.values * factor
+    y = display_values(da)
     keep = np.isfinite(y)
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ax.plot(x[keep] * scale, y[keep], ".", ms=1.5, color="k", alpha=0.6)
@@ -204,7 +207,7 @@ def bifurcation_figure(diagram: xr.Dataset, *, scale: float = 1.0, xlabel: str |
     if note:
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0, -0.14))
     ax.set_xlabel(xlabel or axis_label(da[param]))
-    ax.set_ylabel(axis_label(da, units))
+    ax.set_ylabel(axis_label(da))
     title = f"bifurcation diagram of {da.name} over {param}"
     ax.set_title(f"{title}\n{note}" if note else title, fontsize=9)
     ax.grid(alpha=0.3)

@@ -1,11 +1,11 @@
-"""What every figure module shares: matplotlib without a display, axis labels from ``long_name``
-and ``units`` (none for a dimensionless ``1``), values shown in a readable SI prefix (µm, not a
-"1e-5" offset), titles that wrap between words but never inside "Sec. 4.2" or "0.5 mm", and the
-registry of model-specific overview figures."""
+"""What every figure module shares: matplotlib without a display, the one display unit of each
+stored unit (:func:`display_unit`: lengths in mm, every other unit as stored), axis labels from
+``long_name`` and that unit (none for a dimensionless ``1``), tick labels without an offset,
+titles that wrap between words but never inside "Sec. 4.2" or "0.5 mm", and the registry of
+model-specific overview figures."""
 
 from __future__ import annotations
 
-import math
 import re
 import textwrap
 from collections.abc import Callable
@@ -18,8 +18,11 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 __all__ = [
+    "DISPLAY_UNITS",
     "axis_label",
-    "display_scale",
+    "display_text",
+    "display_unit",
+    "display_values",
     "overview",
     "plain_ticks",
     "plt",
@@ -87,53 +90,62 @@ def title_width(fig, fontsize: float = 9.0) -> int:
     return max(30, int(fig.get_figwidth() * 72 / (0.6 * fontsize)))
 
 
+#: stored unit -> (factor from the stored value to the shown one, shown unit): lengths in mm, the
+#: unit the field quotes clearances in (a journal's eccentricity, a clearance, a slider's
+#: position alike). A unit not listed is shown as stored (a velocity in m s-1, a force in N).
+DISPLAY_UNITS: dict[str, tuple[float, str]] = {"m": (1e3, "mm")}
+
+
+def display_unit(units: str | None) -> tuple[float, str | None]:
+    """The factor and the unit every figure shows a quantity stored in ``units`` with
+    (:data:`DISPLAY_UNITS`; else ``(1, units)``).
+
+    The choice depends on the units alone, never on the values drawn, so that a variable has
+    the same unit in every figure: a displacement in mm in the time series, the phase portrait
+    and the Poincaré section of a run, and a parameter in the same unit on every axis. A
+    dimensionless quantity (units ``"1"``) keeps ``"1"``, which a label shows as no unit at all
+    (:func:`units_label`).
+
+    >>> display_unit("m")
+    (1000.0, 'mm')
+    >>> display_unit("m s-1")
+    (1.0, 'm s-1')
+    >>> display_unit("1")
+    (1.0, '1')
+    """
+    if units in DISPLAY_UNITS:
+        return DISPLAY_UNITS[units]
+    return 1.0, units
+
+
+def display_values(da: xr.DataArray) -> np.ndarray:
+    """The values of ``da`` (float) in its display unit (:func:`display_unit`)."""
+    factor, _ = display_unit(da.attrs.get("units"))
+    return np.asarray(da.values, dtype=float) * factor
+
+
+def display_text(value: float, units: str | None) -> str:
+    """``value`` (in ``units``) as text in its display unit, for a title: ``"0.1 mm"``.
+
+    >>> display_text(1e-4, "m")
+    '0.1 mm'
+    """
+    factor, shown = display_unit(units)
+    return f"{value * factor:g}" + (f" {shown}" if shown and shown != "1" else "")
+
+
 def units_label(units: str | None) -> str:
-    """`` [units]`` for a label, or nothing for a dimensionless quantity (``"1"``)."""
+    """`` [units]`` for a label, or nothing for a dimensionless quantity (``"1"``): a figure
+    names a pure number by its name alone, never "[1]" or "[-]"."""
     return f" [{units}]" if units and units != "1" else ""
 
 
-def axis_label(da: xr.DataArray, units: str | None = None) -> str:
-    """``long_name [units]`` of a variable or coordinate (no brackets for units ``1``);
-    ``units`` replaces the variable's own (e.g. a prefixed unit of :func:`display_scale`)."""
+def axis_label(da: xr.DataArray) -> str:
+    """``long_name [unit]`` of a variable or coordinate in its display unit
+    (:func:`display_unit`; no brackets for units ``1``): the label of values drawn as
+    :func:`display_values` gives them."""
     name = da.attrs.get("long_name", da.name)
-    return f"{name}{units_label(units or da.attrs.get('units'))}"
-
-
-# units whose values are shown with an SI prefix, and the prefixes allowed for each
-_PREFIXES = {"m": ("", "m", "µ", "n"), "N": ("k", "", "m"), "J": ("k", "", "m", "µ")}
-_FACTORS = {"k": 1e-3, "": 1.0, "m": 1e3, "µ": 1e6, "n": 1e9}
-
-
-def display_scale(values, units: str | None) -> tuple[float, str | None]:
-    """The factor and the unit to show ``values`` (SI, in ``units``) with: an SI prefix on the
-    leading unit so that the largest magnitude lies in [1, 1000) where one allows it (m -> mm,
-    µm; N -> kN; "m s-1" -> "mm s-1"), else (1, units). Values are never shown as an offset.
-
-    >>> display_scale([2e-6, 4e-5], "m")
-    (1000000.0, 'µm')
-    >>> display_scale([1500.0], "N m")
-    (0.001, 'kN m')
-    >>> display_scale([0.3], "rad")
-    (1.0, 'rad')
-    """
-    if not units:
-        return 1.0, units
-    head, _, tail = units.partition(" ")
-    allowed = _PREFIXES.get(head)
-    finite = np.abs(np.asarray(values, dtype=float))
-    finite = finite[np.isfinite(finite) & (finite > 0)]
-    if allowed is None or finite.size == 0:
-        return 1.0, units
-    top = float(finite.max())
-    best = ""
-    for prefix in allowed:  # largest unit first: the first that keeps the values >= 1
-        best = prefix
-        if top * _FACTORS[prefix] >= 1.0:
-            break
-    factor = _FACTORS[best]
-    if best == "" or not math.isfinite(top * factor):
-        return 1.0, units
-    return factor, f"{best}{head}" + (f" {tail}" if tail else "")
+    return f"{name}{units_label(display_unit(da.attrs.get('units'))[1])}"
 
 
 def plain_ticks(ax) -> None:

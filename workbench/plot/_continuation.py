@@ -9,7 +9,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, display_scale, plt
+from workbench.plot._base import axis_label, display_unit, display_values, plt, units_label
 
 __all__ = [
     "CURVE_COLOURS",
@@ -79,7 +79,8 @@ def _diagram(ax, diagram: xr.Dataset, param: str, scale: float) -> None:
         keep = np.isfinite(da.values)
         colour = _DIRECTION_COLOURS.get(name, "0.3")
         label = f"strobe samples ({'sweep ' + name if name else 'sweep'})"
-        ax.plot(x[keep] * scale, da.values[keep], ".", ms=2, color=colour, alpha=0.45, label=label)
+        y = display_values(da)
+        ax.plot(x[keep] * scale, y[keep], ".", ms=2, color=colour, alpha=0.45, label=label)
 
 
 def branch_figure(
@@ -87,7 +88,7 @@ def branch_figure(
     state: str,
     *,
     diagram: xr.Dataset | None = None,
-    scale: float = 1.0,
+    scale: float | None = None,
     xlabel: str | None = None,
     ylabel: str | None = None,
 ):
@@ -99,10 +100,14 @@ def branch_figure(
     given, the strobe samples of a sweep (:func:`workbench.analysis.bifurcation_diagram` of a
     campaign or a continued sweep, one colour per direction).
 
+    Both axes are in their display units (:func:`~workbench.plot.display_unit`) unless
     ``scale`` multiplies the parameter on the x axis (e.g. ``1 / pi``, with ``xlabel``).
     """
     param = branch.attrs["continuation_parameter"]
     values = branch[f"strobe_{state}"]
+    if scale is None:
+        scale, _ = display_unit(branch[param].attrs.get("units"))
+    shown_values = display_values(values)
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     if diagram is not None:
         _diagram(ax, diagram, diagram.attrs["diagram_parameter"], scale)
@@ -113,7 +118,7 @@ def branch_figure(
         k = int(branch.periods.values[on[0]])
         stable = branch.stable.values[on]
         for s in range(k):
-            y = values.values[on, s]
+            y = shown_values[on, s]
             # runs of equal stability, each drawn to the next point so that the line is whole
             start = 0
             for i in range(1, on.size + 1):
@@ -135,7 +140,7 @@ def branch_figure(
         for s in range(k):
             ax.plot(
                 p[i],
-                values.values[i, s],
+                shown_values[i, s],
                 marker,
                 ms=6,
                 mfc="none",
@@ -146,7 +151,7 @@ def branch_figure(
             shown.add(kind)
         ax.annotate(
             text,
-            (p[i], values.values[i, 0]),
+            (p[i], shown_values[i, 0]),
             textcoords="offset points",
             xytext=(4, 4),
             fontsize=7,
@@ -174,10 +179,11 @@ def chaos_map_figure(
     """Maps of chaos indicators over the two parameter dims of a campaign (from
     :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
     x axis. ``scales`` multiplies a dim's values (e.g. ``{"omega": 1 / pi}``), ``labels``
-    names its axis; a dim without a scale is shown in a readable SI prefix (a clearance in µm,
-    :func:`display_scale`). On the exponent's map, hatched cells hold an exponent that did not
-    converge (``lle_converged`` 0; ``lle_unmet`` says why), a "less or equal" sign marks an
-    upper bound (``lle_status`` 2) and "x" a failed exponent; a legend below the panel says so
+    names its axis; a dim without a scale is shown in its display unit (a clearance in mm,
+    :func:`~workbench.plot.display_unit`). On the exponent's map, hatched cells hold an
+    exponent that did not converge (``lle_converged`` 0; ``lle_unmet`` says why), a "less or
+    equal" sign marks an upper bound (``lle_status`` 2) and "x" a failed exponent; a legend
+    below the panel says so
     where any cell is marked. ``curves`` (of :func:`workbench.continuation.continue_curve` in
     the map's two parameters, either way round) are drawn over every panel
     (:func:`curve_overlay`), within the map's extent, with a legend on the first panel."""
@@ -198,8 +204,8 @@ def chaos_map_figure(
     fig, axes = plt.subplots(1, len(shown), figsize=(4.2 * len(shown), 3.8), squeeze=False)
     for d in (xd, yd):
         if d not in scales:
-            scales[d], units = display_scale(maps[d].values, maps[d].attrs.get("units"))
-            labels.setdefault(d, axis_label(maps[d], units))
+            scales[d], _ = display_unit(maps[d].attrs.get("units"))
+            labels.setdefault(d, axis_label(maps[d]))
     x = maps[xd].values * scales[xd]
     y = maps[yd].values * scales[yd]
     for ax, name in zip(axes[0], shown, strict=True):
@@ -230,8 +236,7 @@ def chaos_map_figure(
                 _mark_exponents(ax, maps, xd, yd, x, y)
         ax.set_xlabel(labels.get(xd, axis_label(maps[xd])))
         ax.set_ylabel(labels.get(yd, axis_label(maps[yd])))
-        units = maps[name].attrs.get("units", "1")
-        ax.set_title(f"{name} [{units}]", fontsize=9)
+        ax.set_title(f"{name}{units_label(maps[name].attrs.get('units'))}", fontsize=9)
         if curves:
             limits = ax.get_xlim(), ax.get_ylim()
             for c in curves:
@@ -262,14 +267,16 @@ def curve_overlay(
     Neimark-Sacker curve's neutral saddles dotted grey), its
     codimension-two points marked as in :data:`CURVE_MARKS` with their short names; with
     ``marks`` the kinds and marks get legend entries. ``scales`` multiplies a variable's values
-    (e.g. ``{"omega": 1 / pi}``). Returns the artists drawn."""
+    (e.g. ``{"omega": 1 / pi}``); a variable without one is drawn in its display unit
+    (:func:`~workbench.plot.display_unit`), as the other figures draw it. Returns the artists
+    drawn."""
     from matplotlib.patheffects import Normal, Stroke
 
     x = x or curve.attrs["continuation_parameter"]
     y = y or curve.attrs["curve_parameter"]
     scales = dict(scales or {})
-    xs = curve[x].values * scales.get(x, 1.0)
-    ys = curve[y].values * scales.get(y, 1.0)
+    xs = curve[x].values * scales.get(x, display_unit(curve[x].attrs.get("units"))[0])
+    ys = curve[y].values * scales.get(y, display_unit(curve[y].attrs.get("units"))[0])
     codes = curve.kind.values
     q = curve.attrs["curve_parameter"]
     over = (
@@ -327,7 +334,7 @@ def curve_figure(
     """Curves of bifurcations (from :func:`workbench.continuation.continue_curve`, all in the
     same two parameters) in the plane of their parameters, the first parameter of the first
     curve on the x axis (:func:`curve_overlay`); ``scales`` as there, ``labels`` names an
-    axis (default the parameter's long name and units)."""
+    axis (default the parameter's long name and display unit)."""
     if not curves:
         raise ValueError("curves: give at least one curve")
     first = curves[0]

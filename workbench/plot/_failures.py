@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import status_flags
+from workbench.plot._base import display_unit
 from workbench.solver import Status
 
 __all__ = ["FAILED_STYLE", "failed_mask", "failure_note", "mark_failed", "run_status_note"]
@@ -58,15 +59,18 @@ def failure_note(ds: xr.Dataset) -> str:
     return f"{int(mask.sum())} of {mask.size} points failed ({kinds})"
 
 
-def mark_failed(ax, ds: xr.Dataset, param: str, *, scale: float = 1.0) -> str:
-    """Mark on ``ax`` (x axis: ``param`` times ``scale``) every value of ``param`` at which a
-    point failed: a red cross on the bottom edge, with a legend entry naming the count and the
-    statuses. Returns :func:`failure_note` ('' when nothing failed)."""
+def mark_failed(ax, ds: xr.Dataset, param: str, *, scale: float | None = None) -> str:
+    """Mark on ``ax`` (x axis: ``param`` times ``scale``; default: in its display unit,
+    :func:`~workbench.plot.display_unit`) every value of ``param`` at which a point failed: a
+    red cross on the bottom edge, with a legend entry naming the count and the statuses.
+    Returns :func:`failure_note` ('' when nothing failed)."""
     mask, counts = failed_mask(ds)
     if mask is None or not counts or param not in mask.dims:
         return ""
     other = [d for d in mask.dims if d != param]
     at = mask.any(other) if other else mask
+    if scale is None:
+        scale, _ = display_unit(ds[param].attrs.get("units"))
     x = ds[param].values[at.values] * scale
     note = failure_note(ds)
     kinds = ", ".join(f"{n} {k}" for k, n in counts.most_common())

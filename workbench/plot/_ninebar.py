@@ -8,7 +8,8 @@ import xarray as xr
 
 from workbench.plot._base import (
     axis_label,
-    display_scale,
+    display_text,
+    display_unit,
     plain_ticks,
     plt,
     register_overview,
@@ -48,12 +49,13 @@ def ninebar_overview(ds: xr.Dataset) -> plt.Figure:
             ax.set_xlabel("x / c")
             ax.set_ylabel("y / c")
             ax.set_title(
-                f"journal centre, joint {j}\n(c = {c[j] * 1e3:g} mm; dashed: e = c)", fontsize=9
+                f"journal centre, joint {j}\n(c = {display_text(c[j], 'm')}; dashed: e = c)",
+                fontsize=9,
             )
     for r, name in enumerate(series):
         ax = fig.add_subplot(grid[r, 1])
         da = ds[name]
-        factor, units = display_scale(da.values, da.attrs.get("units"))
+        factor, _ = display_unit(da.attrs.get("units"))
         extra = [d for d in da.dims if d != "time"]
         if extra:
             for label in da[extra[0]].values:
@@ -63,7 +65,7 @@ def ninebar_overview(ds: xr.Dataset) -> plt.Figure:
             ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
         else:
             ax.plot(ds.time, da * factor, lw=0.7)
-        ax.set_ylabel(wrap_title(axis_label(da, units), 30), fontsize=8)
+        ax.set_ylabel(wrap_title(axis_label(da), 30), fontsize=8)
         ax.grid(alpha=0.3)
         plain_ticks(ax)
         if r == len(series) - 1:

@@ -24,7 +24,7 @@ import xarray as xr
 
 from workbench.plot._base import (
     axis_label,
-    display_scale,
+    display_values,
     plain_ticks,
     plt,
     title_width,
@@ -145,8 +145,7 @@ def _grid(n: int) -> tuple[plt.Figure, np.ndarray]:
 
 
 def _scaled(da: xr.DataArray) -> tuple[np.ndarray, str]:
-    factor, units = display_scale(da.values, da.attrs.get("units"))
-    return np.asarray(da.values, dtype=float) * factor, axis_label(da, units)
+    return display_values(da), axis_label(da)
 
 
 def _panel_title(label: str, value: xr.DataArray, rate: xr.DataArray) -> str:

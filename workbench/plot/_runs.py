@@ -13,7 +13,8 @@ from workbench.archive import save_figure
 from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
 from workbench.plot._base import (
     axis_label,
-    display_scale,
+    display_unit,
+    display_values,
     overview,
     plain_ticks,
     plt,
@@ -88,8 +89,9 @@ def _panel_title(da: xr.DataArray) -> str:
     return wrap_title(str(da.attrs.get("long_name", da.name)), 60)
 
 
-def _short_label(da: xr.DataArray, units: str | None = None) -> str:
-    return f"{da.name}{units_label(units or da.attrs.get('units'))}"
+def _short_label(da: xr.DataArray) -> str:
+    """``name [unit]`` in the display unit (:func:`~workbench.plot.display_unit`)."""
+    return f"{da.name}{units_label(display_unit(da.attrs.get('units'))[1])}"
 
 
 def _last_record(ds: xr.Dataset) -> float:
@@ -162,7 +164,8 @@ def timeseries_figure(
     ds: xr.Dataset, variables: list[str] | None = None, *, title: str | None = None
 ) -> plt.Figure:
     """Variables against time in a grid of panels (up to two columns), each titled with its
-    ``long_name`` and labelled with its name and units (in a readable SI prefix, e.g. µm);
+    ``long_name`` and labelled with its name and display unit (:func:`display_unit`: a
+    length in mm);
     extra dims (e.g. ``joint``) become lines named in a legend beside the panel. A panel
     without a finite value says so; a failed run's status is in the title, and a dotted red
     line marks its last record on the whole span asked for. Give at most
@@ -174,7 +177,7 @@ def timeseries_figure(
     fig, axes = _grid(len(names), f"{text}\n{status}" if status else text)
     for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
         da = ds[name]
-        factor, units = display_scale(da.values, da.attrs.get("units"))
+        factor, _ = display_unit(da.attrs.get("units"))
         if not np.isfinite(da.values).any():
             _empty_panel(ax, da, status)
         for label, line in _lines(da, ("time",)):
@@ -185,7 +188,7 @@ def timeseries_figure(
         if len(da.dims) > 1:
             _legend_outside(ax)
         ax.set_title(_panel_title(da), fontsize=8)
-        ax.set_ylabel(_short_label(da, units), fontsize=8)
+        ax.set_ylabel(_short_label(da), fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
         plain_ticks(ax)
@@ -204,7 +207,7 @@ def campaign_figure(
     ds: xr.Dataset, variables: list[str] | None = None, *, title: str | None = None
 ) -> plt.Figure:
     """Every record of each point against the swept parameter (the dim with the most values,
-    axis labelled with its ``long_name`` and units), one panel per variable: a bifurcation
+    axis labelled with its ``long_name`` and display unit), one panel per variable: a bifurcation
     diagram when the campaign records one sample per forcing period. The other dims (the
     model's, e.g. ``joint``, and other swept ones) are lines named in a legend beside the
     panel. Failed points have no data: each is marked by a red cross on the panel's bottom
@@ -217,18 +220,18 @@ def campaign_figure(
     ok = ds["status"] <= 1 if "status" in ds else True  # ok or terminated
     for k, (ax, name) in enumerate(zip(axes.flat, names, strict=False)):
         da = ds[name].where(ok)
-        factor, units = display_scale(da.values, da.attrs.get("units"))
+        factor, _ = display_unit(da.attrs.get("units"))
         if not np.isfinite(da.values).any():
             _empty_panel(ax, da, note or "")
         for label, line in _lines(da, (param, "time")):
-            x = np.broadcast_to(ds[param].values[:, None], line.transpose(param, "time").shape)
             y = line.transpose(param, "time").values * factor
+            x = np.broadcast_to(display_values(ds[param])[:, None], y.shape)
             ax.plot(x.ravel(), y.ravel(), ".", ms=1.5, alpha=0.6, label=label or None)
         mark_failed(ax, ds, param)  # counted in the title
         if any(d not in (param, "time") for d in da.dims):
             _legend_outside(ax, handles=_proxies(ax))
         ax.set_title(_panel_title(da), fontsize=8)
-        ax.set_ylabel(_short_label(da, units), fontsize=8)
+        ax.set_ylabel(_short_label(da), fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
         plain_ticks(ax)

@@ -8,6 +8,8 @@ import xarray as xr
 
 from workbench.plot._base import (
     axis_label,
+    display_text,
+    display_values,
     plain_ticks,
     plt,
     register_overview,
@@ -31,7 +33,7 @@ def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
     fig, axes = plt.subplots(
         1, 3 if has_joint else 2, figsize=(15 if has_joint else 10, 4.4), layout="constrained"
     )
-    axes[0].plot(angle, ds.slider_acceleration, lw=0.7)
+    axes[0].plot(angle, display_values(ds.slider_acceleration), lw=0.7)
     axes[0].set_ylabel(axis_label(ds.slider_acceleration))
     axes[1].plot(angle, ds.torque.sel(crank="1"), lw=0.7)
     axes[1].set_ylabel("crank moment [N m]")
@@ -48,7 +50,7 @@ def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
         ax.set_xlabel("x / c")
         ax.set_ylabel("y / c")
         ax.set_title(
-            f"journal centre in the slider's bearing\n(c = {c * 1e3:g} mm; dashed: e = c)",
+            f"journal centre in the slider's bearing\n(c = {display_text(c, 'm')}; dashed: e = c)",
             fontsize=9,
         )
     for ax in axes:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, plt
+from workbench.plot._base import axis_label, display_unit, plt
 
 __all__ = ["floquet_figure", "jacobian_spectrum_figure"]
 
@@ -47,15 +47,18 @@ def jacobian_spectrum_figure(spec: xr.Dataset) -> plt.Figure:
 
 def floquet_figure(sweep: xr.Dataset) -> plt.Figure:
     """Moduli of the Floquet multipliers of a continued periodic orbit against the parameter
-    (:func:`workbench.analysis.floquet_sweep`), the unit circle's radius and the first loss of
-    stability marked."""
+    in its display unit (:func:`workbench.analysis.floquet_sweep`), the unit circle's radius
+    and the first loss of stability marked."""
     (param,) = [d for d in sweep.modulus.dims if d != "multiplier"]
     x = sweep[param]
+    scale, _ = display_unit(x.attrs.get("units"))
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
     for m in sweep.multiplier.values:
-        ax.plot(x, sweep.modulus.sel(multiplier=m), "o-", ms=3, lw=0.8, label=f"multiplier {m}")
+        ax.plot(
+            x * scale, sweep.modulus.sel(multiplier=m), "o-", ms=3, lw=0.8, label=f"multiplier {m}"
+        )
     ax.axhline(1.0, color="k", lw=0.8, ls="--", label="|mu| = 1")
-    value = sweep.attrs.get("first_loss_value", np.nan)
+    value = sweep.attrs.get("first_loss_value", np.nan) * scale
     if np.isfinite(value):
         ax.axvline(value, color="C3", lw=0.8)
         ax.text(value, ax.get_ylim()[1], f" {sweep.attrs['first_loss_kind']} at {value:.4g}",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from workbench.plot._base import axis_label, plt
+from workbench.plot._base import axis_label, display_values, plt
 
 
 def verification_figure(ds: xr.Dataset) -> plt.Figure:
@@ -26,7 +26,7 @@ def verification_figure(ds: xr.Dataset) -> plt.Figure:
             da = ds[var].sel(run=run)
             if dim:
                 da = da.sel({dim: label})
-            ax.plot(ds.time, da, style, lw=0.9, label=run)
+            ax.plot(ds.time, display_values(da), style, lw=0.9, label=run)
         ax.set_ylabel(axis_label(ds[var]) + (f"\n{dim} {label}" if dim else ""), fontsize=8)
         ax.grid(alpha=0.3)
     if joints:
@@ -36,7 +36,7 @@ def verification_figure(ds: xr.Dataset) -> plt.Figure:
         for j in joints:
             for run, style in (("workbench", "-"), (finest, "--")):
                 da = ds.contact_force.sel(run=run, joint=j).where(window, drop=True)
-                ax.plot(da.time * 1e3, da, style, lw=0.9, label=f"{j}: {run}")
+                ax.plot(da.time * 1e3, display_values(da), style, lw=0.9, label=f"{j}: {run}")
         ax.set_xlabel("time [ms]")
         ax.set_ylabel("first impacts\n" + axis_label(ds.contact_force), fontsize=8)
         ax.grid(alpha=0.3)

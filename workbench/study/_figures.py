@@ -31,12 +31,12 @@ import xarray as xr
 from workbench.plot import (
     CoarseSamplingWarning,
     coarse_sampling,
-    display_scale,
+    display_unit,
     failure_note,
     mark_failed,
     wrap_title,
 )
-from workbench.plot._base import plain_ticks
+from workbench.plot._base import display_text, display_values, plain_ticks, units_label
 from workbench.plot._phase import COARSE_JUMP
 from workbench.plot._runs import axis_label, plt
 from workbench.study._claims import _key
@@ -152,8 +152,9 @@ def _series(spec, ctx):
         t = da.time - float(ds.time[0])
         color = f"C{i}"
         low, high = _envelope(da, int(ds.attrs.get("samples_per_period", 100)))
-        ax.fill_between(t, low, high, color=color, alpha=0.3, lw=0)
-        ax.plot(t, da.isel(realisation=0), lw=0.7, color=color, label=f"{name}")
+        factor, _ = display_unit(da.attrs.get("units"))
+        ax.fill_between(t, low * factor, high * factor, color=color, alpha=0.3, lw=0)
+        ax.plot(t, da.isel(realisation=0) * factor, lw=0.7, color=color, label=f"{name}")
         labels.append(name)
         peaks.append(np.abs(da).max("time").values)
         records.append(np.abs(whole).max("time").values)
@@ -171,7 +172,7 @@ def _series(spec, ctx):
         ncol=max(1, len(labels)),
     )
     if peaks:
-        _peak_boxes(box, labels, peaks, records, paper, da.attrs.get("units", ""))
+        _peak_boxes(box, labels, peaks, records, paper, da.attrs.get("units"))
     failed = "; ".join(f"{c}: {n}" for c in ctx["runs"] if (n := _failed_in(ctx, c)))
     fig.suptitle(
         _title(
@@ -186,7 +187,12 @@ def _series(spec, ctx):
 
 def _peak_boxes(box, labels, peaks, records, paper, units) -> None:
     """Box plots of the realisations' peak magnitudes per case: over the first cycles (as the
-    paper's values) and over the whole record (as the claims), with the paper's value."""
+    paper's values) and over the whole record (as the claims), with the paper's value; all
+    stored in ``units``, drawn in their display unit."""
+    factor, shown = display_unit(units)
+    peaks = [v * factor for v in peaks]
+    records = [v * factor for v in records]
+    paper = {c: v * factor for c, v in paper.items()}
     x = np.arange(1, len(labels) + 1)
     for values, dx, color, what in (
         (peaks, -0.18, "tab:gray", f"first {PEAK_PERIODS} cycles"),
@@ -206,7 +212,7 @@ def _peak_boxes(box, labels, peaks, records, paper, units) -> None:
     if marked:
         box.plot(*zip(*marked, strict=True), "rx", ms=9, mew=2, label="paper (|value|)")
     box.set_xticks(x, labels, rotation=20, fontsize=8)
-    box.set_ylabel(f"|peak| of the realisations [{units}]")
+    box.set_ylabel(f"|peak| of the realisations{units_label(shown)}")
     box.legend(fontsize=7)
     box.grid(alpha=0.3)
 
@@ -248,9 +254,10 @@ def _first_member(ctx) -> xr.Dataset:
 
 
 def _phase_planes(spec, title: str, ds: xr.Dataset, samples, *fmt, check=False, **style):
-    """One panel per clearance coordinate: its rate against it (mm), at the points ``samples``
-    picks from a variable (every record, or the stroboscopic samples). ``check``: say in the
-    title (and warn) when the records are too coarse for the impacts the curves draw."""
+    """One panel per clearance coordinate: its rate against it (in their display units), at the
+    points ``samples`` picks from a variable (every record, or the stroboscopic samples).
+    ``check``: say in the title (and warn) when the records are too coarse for the impacts the
+    curves draw."""
     pairs = []
     for label, (var, where) in CLEARANCE_COORDINATES.items():
         x = samples(select(ds, var, where))
@@ -272,10 +279,9 @@ def _phase_planes(spec, title: str, ds: xr.Dataset, samples, *fmt, check=False, 
             title += f" - coarse: {spp} samples per crank period draw impacts as straight edges"
     fig, axes = _grid4(spec, title)
     for ax, (label, x, v) in zip(axes, pairs, strict=True):
-        fv, uv = display_scale(v.values, v.attrs.get("units"))
-        ax.plot(x.values.ravel() * 1e3, v.values.ravel() * fv, *fmt, **style)
-        ax.set_xlabel(f"{label}: {axis_label(x, 'mm')}", fontsize=8)
-        ax.set_ylabel(axis_label(v, uv), fontsize=8)
+        ax.plot(display_values(x).ravel(), display_values(v).ravel(), *fmt, **style)
+        ax.set_xlabel(f"{label}: {axis_label(x)}", fontsize=8)
+        ax.set_ylabel(axis_label(v), fontsize=8)
         ax.grid(alpha=0.3)
         plain_ticks(ax)
     return fig
@@ -344,19 +350,17 @@ def _bifurcation(spec, ctx):
         f"bifurcation diagram over {axis_label(ds[param])}; {_realisations_note(ctx)}"
         + (f"; {note} (red crosses)" if note else ""),
     )
-    scale = 1e3 if param == "clearance" else (1 / np.pi if param == "omega" else 1.0)
-    xlabel = {"clearance": "clearance [mm]", "omega": "omega / pi (crank 4)"}.get(
-        param, axis_label(ds[param])
-    )
+    scale = 1 / np.pi if param == "omega" else display_unit(ds[param].attrs.get("units"))[0]
+    xlabel = "omega / pi (crank 4)" if param == "omega" else axis_label(ds[param])
     for ax, (label, (var, where)) in zip(axes, CLEARANCE_COORDINATES.items(), strict=True):
         da = select(ds, var, where).transpose(param, ...)
-        y = da.values.reshape(da.shape[0], -1)
+        y = display_values(da).reshape(da.shape[0], -1)
         x = np.broadcast_to(ds[param].values[:, None] * scale, y.shape)
-        ax.plot(x.ravel(), y.ravel() * 1e3, ".", ms=1.5, color="k", alpha=0.4)
+        ax.plot(x.ravel(), y.ravel(), ".", ms=1.5, color="k", alpha=0.4)
         if mark_failed(ax, ds, param, scale=scale):
             ax.legend(fontsize=6, loc="upper right")
         ax.set_xlabel(xlabel, fontsize=8)
-        ax.set_ylabel(f"{label}: {axis_label(da, 'mm')}", fontsize=8)
+        ax.set_ylabel(f"{label}: {axis_label(da)}", fontsize=8)
         ax.grid(alpha=0.3)
         plain_ticks(ax)
     return fig
@@ -376,7 +380,7 @@ def _sweep_parameter(d: xr.Dataset) -> str:
 
 
 def _case_label(d: xr.Dataset) -> str:
-    return f"c = {d.attrs['clearance'] * 1e3:g} mm"
+    return f"c = {display_text(d.attrs['clearance'], 'm')}"
 
 
 def _mark_sweep_failures(ax, ctx) -> None:

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from workbench.archive import open_run
-from workbench.plot import LABEL_MARKS
-from workbench.plot._base import plt
+from workbench.plot import LABEL_MARKS, display_unit
+from workbench.plot._base import plt, units_label
 from workbench.study._measure import CLEARANCE_COORDINATES, clearance_of, select
 from workbench.study._spec import Study
 
@@ -21,10 +21,13 @@ _STATES = {"x1": "x_A", "y1": "y_A", "x2": "x_B", "y2": "y_B"}
 
 
 def _axis(param: str) -> tuple[float, str]:
+    """The factor and the label of the parameter's axis: omega / pi, a clearance in its display
+    unit (:func:`~workbench.plot.display_unit`), else the parameter as stored."""
     if param == "omega":
-        return 1 / math.pi, "crank speed omega / pi [1]"
+        return 1 / math.pi, "crank speed omega / pi"
     if param == "clearance":
-        return 1e3, "clearance [mm]"
+        factor, unit = display_unit("m")
+        return factor, f"clearance{units_label(unit)}"
     return 1.0, param.replace("_", " ")
 
 
@@ -42,7 +45,7 @@ def route_figures(study: Study, r: dict, directory: Path) -> list[Path]:
         if branch is not None:
             _branch(ax, branch, param, scale, _STATES[label], scene, where["joint"])
         ax.set_xlabel(xlabel, fontsize=8)
-        ax.set_ylabel(f"{label}: strobe samples of {var} at {where['joint']} / c [1]", fontsize=8)
+        ax.set_ylabel(f"{label}: strobe samples of {var} at {where['joint']} / c", fontsize=8)
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
     fig.suptitle(
@@ -90,16 +93,17 @@ def _end(study: Study, scene, e: dict, path: Path, param: str, scale: float, xla
     fig, axes = plt.subplots(3 if b else 1, 1, figsize=(8, 8.4 if b else 3.2), sharex=True)
     axes = np.atleast_1d(axes)
     _samples(axes[0], ds, param, var, where, scene, scale)
-    axes[0].set_ylabel(f"x1: strobe samples of {var} at {where['joint']} / c [1]", fontsize=8)
+    axes[0].set_ylabel(f"x1: strobe samples of {var} at {where['joint']} / c", fontsize=8)
     if b:
         branch = open_run(b["archive"])
         _branch(axes[0], branch, param, scale, _STATES["x1"], scene, where["joint"])
         p = np.array(b["values"]) * scale
-        axes[1].semilogy(p, np.maximum(b["smallest_event"], 1e-12), "k.-", lw=1, ms=3)
-        axes[1].set_ylabel("smallest penetration along the orbit [m]", fontsize=8)
+        factor, unit = display_unit("m")  # the mechanisms' event functions are lengths
+        axes[1].semilogy(p, factor * np.maximum(b["smallest_event"], 1e-12), "k.-", lw=1, ms=3)
+        axes[1].set_ylabel(f"smallest penetration along the orbit{units_label(unit)}", fontsize=8)
         axes[2].semilogy(p, b["largest_modulus"], "k.-", lw=1, ms=3)
         axes[2].axhline(1.0, color="0.5", lw=0.6)
-        axes[2].set_ylabel("largest |Floquet multiplier| [1]", fontsize=8)
+        axes[2].set_ylabel("largest |Floquet multiplier|", fontsize=8)
     axes[0].legend(fontsize=7)
     axes[-1].set_xlabel(xlabel, fontsize=8)
     for ax in axes:
@@ -147,9 +151,9 @@ def _indicators(r: dict, path: Path, param: str, scale: float, xlabel: str) -> P
     for ax in axes[:2]:
         for v in hx:
             ax.axvline(v, color="0.6", lw=0.6, ls=":")
-    axes[0].set_ylabel("strobe spread / c [1]", fontsize=8)
+    axes[0].set_ylabel("strobe spread / c", fontsize=8)
     axes[0].set_yscale("symlog", linthresh=1e-6)
-    axes[1].set_ylabel("0-1 test K [1]", fontsize=8)
+    axes[1].set_ylabel("0-1 test K", fontsize=8)
     axes[0].legend(fontsize=7)
     if panels == 3:
         ax = axes[2]
@@ -188,7 +192,7 @@ def _indicators(r: dict, path: Path, param: str, scale: float, xlabel: str) -> P
             )
             twin.axhline(0.0, color="tab:red", lw=0.5, ls=":")
             twin.set_ylabel("largest Lyapunov exponent [s-1]", fontsize=8, color="tab:red")
-        ax.set_ylabel("largest |multiplier| [1]", fontsize=8)
+        ax.set_ylabel("largest |multiplier|", fontsize=8)
         ax.legend(fontsize=7, loc="upper left")
     axes[-1].set_xlabel(xlabel, fontsize=8)
     for ax in axes:
