@@ -43,13 +43,15 @@ format: $(STAMP)
 
 # What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests,
 # every python block of README.md and of the docs' pages (tests/test_readme.py, test_docs.py),
-# the docs site built with warnings as errors, and the notebooks checked against the code.
+# the docs site built with warnings as errors, and the notebooks checked against the code; then
+# the chaotic and statistical tests once more as another processor would (test-generic).
 # The suite's files are shared among TEST_WORKERS processes (pytest-xdist; one file stays in
 # one process, so a module's fixtures are computed once): the suite's CPU time is about 26 min,
 # and CI has 2 cores.
 TEST_WORKERS ?= 2
 test: lint
 	$(PY) -m pytest -q --timeout=900 -n $(TEST_WORKERS) --dist loadfile --durations=15 --doctest-modules tests workbench
+	$(MAKE) --no-print-directory test-generic
 
 # The tests that assert chaotic or statistical numbers (marker `chaotic`) once more as another
 # processor would run them: kernels compiled for numba's generic CPU (in a cache folder of
@@ -61,7 +63,7 @@ ifeq ($(shell uname -m),x86_64)
 GENERIC_CPU += OPENBLAS_CORETYPE=Nehalem GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA
 endif
 test-generic: $(STAMP)
-	$(GENERIC_CPU) $(PY) -m pytest -q --timeout=900 -m chaotic tests
+	$(GENERIC_CPU) $(PY) -m pytest -q --timeout=900 -n $(TEST_WORKERS) --dist loadfile -m chaotic tests
 
 # The fast tier while developing: no slow, hard-case or exudyn tests (doctests included).
 test-fast: $(STAMP)

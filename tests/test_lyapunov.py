@@ -239,7 +239,9 @@ _CHAOS_FAILURES = {
     ),
 }  # fmt: skip
 # where each failed (s), and the tangent vector's growth from the interval's start to there (its
-# log, rounded): docs/analysis.md quotes e^22 and e^25
+# log, rounded, on the processor that met the failures): docs/analysis.md quotes e^22 and e^25.
+# The interval is chaotic: another processor's rounding gives another growth of that order
+# (28.2 for the first with numba's generic target), so the test asserts the order, not the value
 _FAILED_AT = {"80 cycles, rtol 1e-6": (91.4888603, 25), "60 cycles, rtol 1e-8": (20.9548803, 22)}
 
 
@@ -270,7 +272,9 @@ def test_tangent_run_completes_where_the_model_does(case):
     for y in res.Y:
         _, U, log_size, _ = tangent_state(y, n, na, 1)
         growths.append(log_size[0] + math.log(np.linalg.norm(U[:n, 0] / state_scale(start))))
-    assert abs(growths[0] - grown) < 1.0, growths  # docs/analysis.md quotes e^22 and e^25
+    # grown by e^15 or more when it failed (docs/analysis.md quotes e^22 and e^25): within a
+    # factor e^10 of the growth met there
+    assert 15.0 < growths[0] and abs(growths[0] - grown) < 10.0, growths
     assert 15.0 < growths[1] < 60.0  # chaotic bursts: the vector grew by e^15 .. e^60
 
 
