@@ -180,7 +180,7 @@ def run_campaign(
     >>> with tempfile.TemporaryDirectory() as d:
     ...     ds = workbench.run_campaign(scene, f"{d}/sweep.nc", workers=2)
     >>> ds.x.dims, ds.gamma.attrs["units"], int(ds.status.sum())
-    (('gamma', 'delta', 'time'), 'm s-2', 0)
+    (('gamma', 'delta', 'time'), '1', 0)
     """
     wall0 = time.perf_counter()
     scene = load_scene(scene)
