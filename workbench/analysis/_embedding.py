@@ -133,7 +133,7 @@ def embedding_fnn(
     ``threshold`` of its smallest value. (The smallest value itself can lie anywhere on the
     plateau: on a 2 000-point Duffing section whose fractions levelled off above the
     threshold it lay at the plateau's far end, and Wolf's estimate in that dimension failed;
-    in the plateau's first dimension a Duffing section's estimate is within 5 % of the
+    in the plateau's first dimension a Duffing section's estimate is within 10 % of the
     exponent: tests/test_wolf_heldout.py.)
 
     The fraction is taken over ``points`` reference points evenly spread over the series (all
