@@ -167,13 +167,6 @@ def test_the_flow_over_one_period_is_the_map_with_its_monodromy():
 STOP = {"damping": 0.1, "stop_stiffness": 100.0, "gap": 1.0, "force": 0.5}
 
 
-@pytest.mark.xfail(
-    run=False,
-    reason="known defect (docs/continuation.md, 'Grazing in the tangent system'): at an orbit "
-    "that grazes the stop the tangent system's steps stall on the kink of x > g (its first "
-    "stage on one side, the others on the other, the state's motion below its rounding): "
-    "millions of steps per period at rtol 1e-11, the curve does not finish within 900 s",
-)
 def test_the_grazing_curve_of_the_stop_oscillator_against_the_closed_form():
     """The non-impacting orbit grazes the stop where F / sqrt((k - m w^2)^2 + (c w)^2) = g:
     the grazing located on a branch over omega continued in the force F from 0.3 to 0.7 lies

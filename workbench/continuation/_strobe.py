@@ -83,6 +83,16 @@ class MapValue:
     stats: dict
 
 
+
+def _active(aux: np.ndarray, problem) -> np.ndarray:
+    """Indices of the discrete states that are unknowns of the map: set (non-zero) and with a
+    finite scale (a held onset velocity, m s-1). A discrete state without one (a mode, a
+    counter, a record of the last event) is carried along but never differenced."""
+    aux = np.asarray(aux, dtype=float)
+    scale = np.asarray(problem.aux_scale, dtype=float)
+    return np.flatnonzero((aux != 0.0) & np.isfinite(scale) & (scale > 0.0))
+
+
 class StrobeMap:
     """``P^k`` of a forced scene over one of its parameters.
 
@@ -249,7 +259,7 @@ class StrobeMap:
         span = self.periods * prep.period
         t_end = pb.t0 + span
         n, na = pb.y0.size, pb.aux0.size
-        active = np.flatnonzero(np.asarray(aux) != 0.0)
+        active = _active(aux, pb)
         if not tangent:
             res = self._solve(start, t_end)
             y1, aux1 = res.Y[-1].copy(), res.AUX[-1].copy()
@@ -367,7 +377,7 @@ class StrobeMap:
         pb = self.prepared(p).problem
         y, aux = np.asarray(y, float), np.asarray(aux, float)
         n, na = y.size, aux.size
-        active = np.flatnonzero(aux != 0.0)
+        active = _active(aux, pb)
         if not t > pb.t0:
             W = np.zeros((n + na, n + active.size))
             W[:n, :n] = np.diag(state_scale(pb))

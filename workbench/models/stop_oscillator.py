@@ -5,7 +5,19 @@ forced harmonically, meets a stiff spring (the stop) at the gap ``g`` (Shaw & Ho
 Nordmark 1991; di Bernardo, Budd, Champneys & Kowalczyk 2008, Ch. 2). The stop's force is
 continuous at contact (it grows from zero), so the vector field has a kink, not a jump, at
 ``x = g``: events at contact onset (x rising through g) and end (falling) let the solver step
-exactly to the kink, and count the contacts. A periodic orbit that does not reach the stop is
+exactly to the kink, and count the contacts.
+
+The side of the stop is a discrete state, the *mode* (``aux[0]``: 1 in contact, 0 free), set by
+those events, as in the hybrid-automaton form of a piecewise-smooth system (di Bernardo et al.
+2008, Sec. 2.2): within a band of :data:`SIDE_BAND` times the length scale ``|g| + |F| / k``
+around the stop the mode decides which law applies, beyond it the state does. Without it a step
+that starts on the stop (an event just applied, or a slow crossing) would take its stages from
+both laws; the state's error does not see the kink, but its tangent system's does (the
+Jacobian jumps by ``k_s``), and where the motion crosses slowly the error control asked for
+steps whose increments of ``x`` round away, so that the state never left the stop (millions of
+steps; ``tests/test_curves.py``). A state beyond the band on the other side than
+its mode makes the rhs return :data:`~workbench.models._base.EVENT_INSIDE_STEP`, so that an end
+of the step lands beyond the surface and the event is located. A periodic orbit that does not reach the stop is
 the linear one, of amplitude ``F / sqrt((k - m omega^2)^2 + (c omega)^2)``: it grazes the stop
 where that amplitude equals ``g``, a closed form to check a grazing bifurcation against. SI
 units.
@@ -19,7 +31,30 @@ import numpy as np
 from numba import njit
 
 from workbench.models import register
-from workbench.models._base import Model, Parameter, Problem, Quantity
+from workbench.models._base import EVENT_INSIDE_STEP, Model, Parameter, Problem, Quantity
+
+
+#: half-width of the band around the stop where the mode, not the state, sets the side, relative
+#: to the length scale |g| + |F| / k: some 1e4 roundings of x, far below any contact the
+#: tolerances resolve
+SIDE_BAND = 1e-12
+
+
+@njit(cache=True)
+def in_contact(y, p, aux):
+    """Whether the stop's law applies at state ``y``: beyond the band around the stop the state
+    decides (x > g), inside it the mode ``aux[0]``. Returns ``(contact, consistent)``, where
+    ``consistent`` is False for a state beyond the band on the side its mode is not (an event
+    not yet fired)."""
+    gap = p[4]
+    d = y[0] - gap
+    band = SIDE_BAND * (abs(gap) + abs(p[5]) / p[2])
+    mode = aux[0] > 0.5
+    if d > band:
+        return True, mode
+    if d < -band:
+        return False, not mode
+    return mode, True
 
 
 @njit(cache=True)
@@ -28,18 +63,20 @@ def rhs(t, y, p, ip, aux, work, dydt):
     x = y[0]
     v = y[1]
     f = force * math.cos(omega * t) - c * v - k * x
-    if x > gap:
+    contact, consistent = in_contact(y, p, aux)
+    if contact:
         f -= ks * (x - gap)
     dydt[0] = v
     dydt[1] = f / m
-    return 0
+    return 0 if consistent else EVENT_INSIDE_STEP
 
 
 @njit(cache=True)
 def jacobian(t, y, p, ip, aux, work, J):
-    """d(x', v')/d(x, v): the stop's stiffness adds to k beyond the gap (s-2, s-1)."""
-    m, c, k, ks, gap = p[0], p[1], p[2], p[3], p[4]
-    stiff = k + ks if y[0] > gap else k
+    """d(x', v')/d(x, v): the stop's stiffness adds to k on the contact side (s-2, s-1)."""
+    m, c, k, ks = p[0], p[1], p[2], p[3]
+    contact, _ = in_contact(y, p, aux)
+    stiff = k + ks if contact else k
     J[0, 0] = 0.0
     J[0, 1] = 1.0
     J[1, 0] = -stiff / m
@@ -56,7 +93,9 @@ def event_values(t, y, p, ip, aux, work, g):
 
 @njit(cache=True)
 def apply_event(k, t, y, p, ip, aux, work):
-    return 0  # the force is continuous at the stop: nothing jumps
+    # the force is continuous at the stop: nothing jumps but the mode
+    aux[0] = 1.0 if k == 0 else 0.0
+    return 0
 
 
 @register
@@ -98,7 +137,10 @@ class StopOscillator(Model):
             states=self.fixed_states,
             y0=np.array(y0, dtype=float),
             p=p,
-            aux0=np.zeros(0),
+            # the mode (1 in contact): the side the start lies on; it is no quantity the flow
+            # depends on smoothly (no scale: no tangent or Newton component)
+            aux0=np.array([1.0 if y0[0] > params["gap"] else 0.0]),
+            aux_scale=np.array([np.inf]),
             event_direction=np.array([1, -1]),
         )
 
