@@ -83,7 +83,6 @@ class MapValue:
     stats: dict
 
 
-
 def _active(aux: np.ndarray, problem) -> np.ndarray:
     """Indices of the discrete states that are unknowns of the map: set (non-zero) and with a
     finite scale (a held onset velocity, m s-1). A discrete state without one (a mode, a

@@ -10,17 +10,16 @@ exactly to the kink, and count the contacts.
 The side of the stop is a discrete state, the *mode* (``aux[0]``: 1 in contact, 0 free), set by
 those events, as in the hybrid-automaton form of a piecewise-smooth system (di Bernardo et al.
 2008, Sec. 2.2): within a band of :data:`SIDE_BAND` times the length scale ``|g| + |F| / k``
-around the stop the mode decides which law applies, beyond it the state does. Without it a step
-that starts on the stop (an event just applied, or a slow crossing) would take its stages from
-both laws; the state's error does not see the kink, but its tangent system's does (the
-Jacobian jumps by ``k_s``), and where the motion crosses slowly the error control asked for
-steps whose increments of ``x`` round away, so that the state never left the stop (millions of
-steps; ``tests/test_curves.py``). A state beyond the band on the other side than
-its mode makes the rhs return :data:`~workbench.models._base.EVENT_INSIDE_STEP`, so that an end
-of the step lands beyond the surface and the event is located. A periodic orbit that does not reach the stop is
-the linear one, of amplitude ``F / sqrt((k - m omega^2)^2 + (c omega)^2)``: it grazes the stop
-where that amplitude equals ``g``, a closed form to check a grazing bifurcation against. SI
-units.
+around the stop the mode decides which law applies, beyond it the state does. So a step that
+starts on the stop integrates one smooth law: read from the state alone, its stages could fall
+on both sides, which the state's error does not see but its tangent system's does (the Jacobian
+jumps by ``k_s``; docs/continuation.md, "Grazing in the tangent system"). A state beyond the band
+on the other side than its mode makes the rhs return
+:data:`~workbench.models._base.EVENT_INSIDE_STEP`, so that the step is cut to the event.
+
+A periodic orbit that does not reach the stop is the linear one, of amplitude
+``F / sqrt((k - m omega^2)^2 + (c omega)^2)``: it grazes the stop where that amplitude equals
+``g``, a closed form to check a grazing bifurcation against. SI units.
 """
 
 from __future__ import annotations
@@ -32,7 +31,6 @@ from numba import njit
 
 from workbench.models import register
 from workbench.models._base import EVENT_INSIDE_STEP, Model, Parameter, Problem, Quantity
-
 
 #: half-width of the band around the stop where the mode, not the state, sets the side, relative
 #: to the length scale |g| + |F| / k: some 1e4 roundings of x, far below any contact the
