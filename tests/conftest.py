@@ -3,6 +3,7 @@
 import signal
 
 import matplotlib
+import pytest
 
 matplotlib.use("Agg")
 
@@ -13,3 +14,13 @@ matplotlib.use("Agg")
 # inherit the default action), so the tests mean the same however the suite was started.
 if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures a test left open: pyplot keeps every figure until it is closed, and
+    warns once more than 20 are open, into the output of whatever command runs next."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")

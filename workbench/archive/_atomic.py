@@ -410,14 +410,22 @@ def write_text_atomic(path: str | os.PathLike, text: str, *, overwrite: bool = T
     return Path(path)
 
 
-def save_figure(fig, path: str | os.PathLike, **savefig: object) -> Path:
+def save_figure(fig, path: str | os.PathLike, *, close: bool = False, **savefig: object) -> Path:
     """Write a matplotlib figure to ``path`` atomically (see :func:`atomic_path`; a regular
     file there is replaced), in the format of its suffix (PNG without one); ``savefig`` are
-    :meth:`matplotlib.figure.Figure.savefig`'s options (e.g. ``dpi``)."""
+    :meth:`matplotlib.figure.Figure.savefig`'s options (e.g. ``dpi``). ``close``: release the
+    figure from pyplot afterwards (a figure drawn only to be written; pyplot keeps every
+    figure it made until it is closed)."""
     path = Path(path)
     form = path.suffix.lstrip(".").lower() or "png"
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format=form, **savefig)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=form, **savefig)
+    finally:
+        if close:
+            import matplotlib.pyplot as plt
+
+            plt.close(fig)
     return path
 
 

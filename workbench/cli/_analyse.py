@@ -210,7 +210,7 @@ def _cmd_analyse(args: argparse.Namespace) -> int:
         else:
             print(f"  0-1 test: skipped ({strobe.sizes['strobe']} strobe samples, needs 100)")
     for name, fig in figures.items():
-        path = save_figure(fig, out / f"{stem}-{name}.png", dpi=120)
+        path = save_figure(fig, out / f"{stem}-{name}.png", dpi=120, close=True)
         print(f"figure: {path}")
     if args.output is None:  # said, since no option named the place
         print(f"figures written to the current directory, {Path.cwd()} (-o DIR for another)")

@@ -79,7 +79,7 @@ def _cmd_bifurcation(args: argparse.Namespace) -> int:
         diagram = bifurcation_diagram(ds, args.var, param)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    save_figure(bifurcation_figure(diagram), out, dpi=150)
+    save_figure(bifurcation_figure(diagram), out, dpi=150, close=True)
     n_failed = int(failed(status_flags(ds["status"], repr(args.campaign))).sum())
     note = f" ({n_failed} failed points left out)" if n_failed else ""
     print(f"bifurcation diagram of {args.var} over {param}{note}: {out}")

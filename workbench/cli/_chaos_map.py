@@ -50,7 +50,9 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
 
         scales = {d: 1 / math.pi for d in ds.attrs["campaign_dims"].split() if d == "omega"}
         labels = {"omega": "crank speed omega / pi"} if scales else {}
-        save_figure(chaos_map_figure(ds, scales=scales, labels=labels), args.figure, dpi=150)
+        save_figure(
+            chaos_map_figure(ds, scales=scales, labels=labels), args.figure, dpi=150, close=True
+        )
         print(f"figure: {args.figure}")
     print(f"-> {Path(args.output)}")
     return campaign_exit_code(ds["status"].values)

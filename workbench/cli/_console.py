@@ -179,7 +179,7 @@ def save_with_figure(
 
     save_or_keep(ds, out, overwrite=overwrite, what=what)
     print(f"{what} -> {out}")
-    save_figure(draw(ds), figure, dpi=120)
+    save_figure(draw(ds), figure, dpi=120, close=True)
     print(f"figure: {figure}")
 
 

@@ -174,7 +174,7 @@ def _cmd_orbit(args: argparse.Namespace) -> int:
 
         diagram = _diagram(args) if args.diagram else None
         fig = branch_figure(branch, args.state, diagram=diagram)
-        save_figure(fig, args.figure, dpi=150)
+        save_figure(fig, args.figure, dpi=150, close=True)
         print(f"figure: {args.figure}")
     return 0
 
@@ -246,7 +246,7 @@ def _curve(args, branch, start, stop, curve_range, maps) -> int:
             fig.axes[0].legend(fontsize=7, loc="best")
         else:
             fig = plot.curve_figure([curve])
-        save_figure(fig, args.figure, dpi=150)
+        save_figure(fig, args.figure, dpi=150, close=True)
         print(f"figure: {args.figure}")
     return 0
 

@@ -272,7 +272,6 @@ def run_figures(ds: xr.Dataset, directory: Path) -> list[Path]:
     written = []
     for name, fig in zip(names, figures, strict=True):
         path = directory / name
-        save_figure(fig, path, dpi=120)
-        plt.close(fig)
+        save_figure(fig, path, dpi=120, close=True)
         written.append(path)
     return written
