@@ -603,10 +603,18 @@ def branch_bifurcations(branch: xr.Dataset, parameter: str) -> list[dict]:
     """The bifurcations located on a branch of :func:`continue_orbit`, in order: per
     bifurcation its ``type`` (the label's meaning, e.g. ``period_doubling``), ``value`` (the
     parameter there, in its units), ``critical`` (the critical Floquet multiplier, complex),
-    ``index`` (the branch point nearest to it) and ``resolved`` (False: only bracketed, the
-    defining quantity did not confirm the kind)."""
+    ``index`` (the branch point nearest to it), ``resolved`` (False: only bracketed, the
+    defining quantity did not confirm the kind) and, for a grazing, ``transition`` (how the
+    orbit passes it, a key of ``TRANSITION_FLAGS``; ``"not_a_grazing"`` for the others)."""
     names = branch.label.attrs["flag_meanings"].split()
     values = branch[parameter].values
+    count = branch.sizes.get("bifurcation", 0)
+    if "bifurcation_transition" in branch:
+        kinds = branch.bifurcation_transition.attrs["flag_meanings"].split()
+        codes = list(branch.bifurcation_transition.attrs["flag_values"])
+        transitions = [kinds[codes.index(int(c))] for c in branch.bifurcation_transition.values]
+    else:  # an archive written before transitions were typed
+        transitions = ["not_typed"] * count
     return [
         {
             "type": names[int(k)],
@@ -614,13 +622,15 @@ def branch_bifurcations(branch: xr.Dataset, parameter: str) -> list[dict]:
             "critical": complex(re, im),
             "index": int(np.argmin(np.abs(values - p))),
             "resolved": bool(ok),
+            "transition": tr,
         }
-        for k, p, re, im, ok in zip(
+        for k, p, re, im, ok, tr in zip(
             branch.bifurcation_label.values,
             branch.bifurcation_parameter.values,
             branch.critical_real.values,
             branch.critical_imag.values,
             branch.bifurcation_resolved.values,
+            transitions,
             strict=True,
         )
     ]

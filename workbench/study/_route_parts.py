@@ -98,6 +98,8 @@ def branch_summary(
             {
                 "type": b["type"],
                 "value": b["value"],
+                "resolved": b["resolved"],
+                "transition": b["transition"],
                 "critical": [b["critical"].real, b["critical"].imag],
                 "multipliers": [[float(z.real), float(z.imag)] for z in mu[:4]],
                 "stable_before": bool(stable[max(i - 1, 0)]),
