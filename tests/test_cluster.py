@@ -6,20 +6,13 @@ import sys
 
 import numpy as np
 import pytest
+from _scenes import DUFFING_SWEEP as SCENE
 
 import workbench
 from workbench.campaign import local_cluster, store_paths
 from workbench.campaign._cluster import plugin_name, ready_workers
 
 distributed = pytest.importorskip("distributed")
-
-SCENE = {
-    "model": {"name": "duffing"},
-    "parameters": {"delta": 0.3, "alpha": -1.0, "beta": 1.0, "omega": 1.2},
-    "run": {"cycles": 5, "transient_cycles": 5},
-    "record": {"samples_per_period": 1},
-    "sweep": {"gamma": [0.3, 0.4]},
-}
 
 
 def _kernels_loaded() -> list[str]:

@@ -236,6 +236,7 @@ def test_a_point_whose_forcing_period_fails_is_refused_not_costed(monkeypatch, t
     assert "\n" not in message and "at omega=2 (any other swept values)" in message
     assert "ZeroDivisionError: float division by zero" in message
     _counting_period(monkeypatch, lambda p: -1.0 if p["omega"] == 3.0 else 2 * np.pi)
-    with pytest.raises(CampaignError, match=r"at omega=3 .*: it gives -1\.0;"):
+    bad = r"at omega=3 .*: model 'duffing' gives the forcing period -1\.0, not a finite positive"
+    with pytest.raises(CampaignError, match=bad):
         workbench.run_campaign(scene, tmp_path / "c.nc", workers=1)
     assert not store_paths(tmp_path / "c.nc")["blocks"].exists()

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 import pytest
+from _scenes import DUFFING_SWEEP as SCENE
 
 import workbench
 from workbench.campaign import jobqueue_cluster, local_cluster
@@ -24,14 +25,6 @@ from workbench.campaign._jobqueue import cluster_security, dashboard_options
 distributed = pytest.importorskip("distributed")
 pytest.importorskip("cryptography")
 psutil = pytest.importorskip("psutil")
-
-SCENE = {
-    "model": {"name": "duffing"},
-    "parameters": {"delta": 0.3, "alpha": -1.0, "beta": 1.0, "omega": 1.2},
-    "run": {"cycles": 5, "transient_cycles": 5},
-    "record": {"samples_per_period": 1},
-    "sweep": {"gamma": [0.3, 0.4]},
-}
 
 
 def _listening(procs) -> set[tuple[str, int]]:

@@ -25,7 +25,7 @@ from workbench.archive import save_run, sha256_file
 from workbench.campaign._grid import SweepGrid, code_of, modules_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
-from workbench.run import TIME_ATTRS, run_status, simulate, status_attrs
+from workbench.run import TIME_ATTRS, Prepared, prepare, run_status, simulate, status_attrs
 from workbench.scene import Scene, SceneError, scene_from_toml
 from workbench.scene._modules import import_model_module
 from workbench.solver import Status
@@ -176,17 +176,19 @@ def run_outcome(ds: xr.Dataset, wall: float) -> dict:
     return out | {"wall": wall}
 
 
-def _point(scene: Scene, params: dict[str, float], max_memory=None, per_point=None) -> dict:
-    """Run one point. Its outcome is data: a failed run (its Status), rejected parameters
-    (INVALID) or any exception the point raised (RAISED): one bad point never stops its
-    campaign. An interrupt (KeyboardInterrupt, SystemExit) still stops the block."""
+def _point(base: Prepared, params: dict[str, float], per_point=None) -> dict:
+    """Run one point: the campaign's scene prepared for its points (``base``) at ``params``
+    (:meth:`workbench.run.Prepared.at`). Its outcome is data: a failed run (its Status),
+    rejected parameters (INVALID) or any exception the point raised (RAISED): one bad point
+    never stops its campaign. An interrupt (KeyboardInterrupt, SystemExit) still stops the
+    block."""
     t0 = time.perf_counter()
     try:
-        point = scene.with_parameters(**params)
-        ds = simulate(point, throw=False, max_memory=max_memory)
+        prepared = base.at(**params)
+        ds = simulate(prepared, throw=False)
         measured = None
         if per_point is not None and not run_status(ds).failed:
-            measured = per_point(point, ds)
+            measured = per_point(prepared.scene, ds)
     except SceneError as exc:
         return invalid_outcome(exc, time.perf_counter() - t0)
     except Exception as exc:  # any error is this point's data (flag error, the docstring)
@@ -234,10 +236,7 @@ def run_block(task: BlockTask) -> dict:
     started = time.time()
     wall0 = time.perf_counter()
     scene = task_scene(task.scene_toml, task.model_module, task.model_directory)
-    runs = [
-        _point(scene, dict(zip(task.dims, v, strict=True)), task.max_memory, task.per_point)
-        for v in task.values
-    ]
+    runs = _points(scene, task)
     ds = block_dataset(scene, task.flat, runs)
     ds.attrs.update(campaign_id=task.campaign_id, block=task.block)
     code = code_of(scene, *modules_of(task.per_point))
@@ -251,6 +250,20 @@ def run_block(task: BlockTask) -> dict:
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
     return block_summary(task, ds, runs, code, wall0, keep=ds.nbytes <= RETURN_LIMIT)
+
+
+def _points(scene: Scene, task: BlockTask) -> list[dict]:
+    """The outcomes of the points of a block (:func:`_point`), each prepared from the scene
+    prepared once for them (a scene that cannot be prepared at all: each point's outcome is
+    that error)."""
+    t0 = time.perf_counter()
+    try:
+        base = prepare(scene, max_memory=task.max_memory, points=True)
+    except SceneError as exc:
+        return [invalid_outcome(exc, time.perf_counter() - t0) for _ in task.flat]
+    except Exception as exc:  # any error is the points' data (flag error, _point)
+        return [raised_outcome(exc, time.perf_counter() - t0) for _ in task.flat]
+    return [_point(base, dict(zip(task.dims, v, strict=True)), task.per_point) for v in task.values]
 
 
 def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: float, *,

@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
-import numbers
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
@@ -24,13 +23,14 @@ from workbench.models import get_model
 from workbench.run import (
     REALISATION_ATTRS,
     check_memory,
+    forcing_period,
     parameter_coords,
     record_count,
     results_digest,
     values_per_record,
     what_to_lower,
 )
-from workbench.scene import RUN_SWEEP_KEYS, Scene
+from workbench.scene import RUN_SWEEP_KEYS, Scene, SceneError
 
 __all__ = [
     "MAX_POINTS",
@@ -210,21 +210,18 @@ def grid_periods(scene: Scene, grid: SweepGrid) -> np.ndarray | None:
 
 
 def _period(scene: Scene, params: Mapping, point: dict, none: bool = False) -> float | None:
-    """The model's forcing period (s) with ``params``, the values of ``point`` swept
-    (:func:`grid_periods`); CampaignError naming the point unless it is a finite positive
-    number (or None, if ``none``)."""
+    """The forcing period (s) with ``params`` (:func:`workbench.run.forcing_period`), the values
+    of ``point`` swept (:func:`grid_periods`); CampaignError naming the point unless it is a
+    finite positive number (or None, if ``none``)."""
     try:
-        period = get_model(scene.model).forcing_period(params)
+        period = forcing_period(get_model(scene.model), params)
+    except SceneError as exc:  # not a finite positive number (workbench.run.forcing_period)
+        bad = str(exc)
     except Exception as exc:  # any error: the model's own code; refused below in one line
         # naming the point and the error (never costed)
         bad = f"{type(exc).__name__}: {exc}"
     else:
-        if period is None:
-            bad = None if none else "it gives None"
-        elif isinstance(period, numbers.Real) and 0 < period < math.inf:
-            bad = None
-        else:
-            bad = f"it gives {period!r}"
+        bad = "it gives None" if period is None and not none else None
     if bad is None:
         return period
     at = f"{format_point(point)} (any other swept values)" if point else "the scene's parameters"

@@ -52,6 +52,7 @@ from workbench.continuation._newton import (
     NewtonFailure,
     OrbitPoint,
     correct,
+    next_step,
     orbit_at,
     tangent,
 )
@@ -782,10 +783,7 @@ def trace(
                 "or another parameter range may go further"
             )
             break
-        if B.iterations <= 3:
-            h = min(1.5 * h, cfg.max_step)
-        elif B.iterations >= 6:
-            h /= 1.5
+        h = next_step(h, B.iterations, cfg.max_step)
     else:
         out.ended = f"{cfg.max_points} points reached"
     if len(out.points) > 1 and out.labels[-1] == "regular":

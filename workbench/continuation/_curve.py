@@ -73,7 +73,7 @@ from itertools import combinations
 import numpy as np
 import xarray as xr
 
-from workbench.continuation._newton import NewtonFailure, orbit_at
+from workbench.continuation._newton import NewtonFailure, next_step, orbit_at
 from workbench.continuation._orbits import _attrs, _guess
 from workbench.continuation._report import RangeProgress
 from workbench.continuation._strobe import MapValue, StrobeMap, _event_values
@@ -766,10 +766,7 @@ class _Curve:
                 out.ended = "the curve closed"
                 break
             A = B
-            if B.iterations <= 3:
-                h = min(1.5 * h, cfg.max_step)
-            elif B.iterations >= 6:
-                h /= 1.5
+            h = next_step(h, B.iterations, cfg.max_step)
         else:
             out.ended = f"{cfg.max_points} points reached"
         if out.labels[-1] == "regular":

@@ -21,7 +21,7 @@ from workbench.continuation._strobe import MapValue, StrobeMap
 from workbench.scene import SceneError
 from workbench.solver import SolverError
 
-__all__ = ["NewtonFailure", "OrbitPoint", "correct", "orbit_at", "tangent"]
+__all__ = ["NewtonFailure", "OrbitPoint", "correct", "next_step", "orbit_at", "tangent"]
 
 
 class NewtonFailure(WorkbenchError, RuntimeError):
@@ -181,3 +181,18 @@ def tangent(point: OrbitPoint, orientation: np.ndarray) -> np.ndarray:
     t = _solve(J, np.concatenate([np.zeros(m), [1.0]]))
     t /= np.linalg.norm(t)
     return t if t @ orientation >= 0 else -t
+
+
+def next_step(h: float, iterations: int, max_step: float) -> float:
+    """The continuation step after a point that took ``iterations`` Newton iterations: 1.5 x
+    ``h`` (at most ``max_step``) after an easy correction (at most 3), ``h`` / 1.5 after a hard
+    one (6 or more), else ``h`` (units of ``h``: the branch's or curve's scaled arclength).
+
+    >>> next_step(1.0, 2, 10.0), next_step(1.0, 4, 10.0), next_step(1.5, 7, 10.0)
+    (1.5, 1.0, 1.0)
+    """
+    if iterations <= 3:
+        return min(1.5 * h, max_step)
+    if iterations >= 6:
+        return h / 1.5
+    return h

@@ -156,7 +156,9 @@ class StrobeMap:
         self.method = s["method"] if s["method"] in ("dop853", "dopri5") else "dop853"
         self.method_replaced = self.method != self.scene_method
         self.max_steps = int(s["max_steps"])
-        base = self.prepared(self.value)
+        self._base = prepare(self.scene, variables=())  # the bare problem (no outputs)
+        self._at = lru_cache(maxsize=64)(self._base.at)  # one per parameter value
+        base = self._base
         if base.period is None:
             raise ValueError(f"model {self.scene.model!r} is not forced: it has no strobe map")
         if monodromy not in ("auto", "tangent", "copies"):
@@ -177,8 +179,12 @@ class StrobeMap:
         return float(self.scene.resolved_parameters[self.parameter])
 
     def prepared(self, p: float) -> Prepared:
-        """The bare problem (no outputs) at parameter value ``p``."""
-        return _prepared(self.scene, self.parameter, None if math.isnan(p) else float(p))
+        """The bare problem (no outputs) at parameter value ``p`` (the scene's own for nan or
+        without a parameter; :meth:`workbench.run.Prepared.at`: only ``p`` is checked, a
+        SceneError beyond the parameter's range)."""
+        if self.parameter is None or math.isnan(p):
+            return self._base
+        return self._at(**{self.parameter: float(p)})
 
     def with_periods(self, periods: int) -> StrobeMap:
         """The same map over another number of periods."""
@@ -469,9 +475,3 @@ def _extreme(values: np.ndarray, pick, sign: float) -> np.ndarray:
         curv = a - 2.0 * b + c
         out[k] = b - (c - a) ** 2 / (8.0 * curv) if curv * sign < 0 else b
     return out
-
-
-@lru_cache(maxsize=64)
-def _prepared(scene: Scene, parameter: str | None, p: float | None) -> Prepared:
-    point = scene if parameter is None or p is None else scene.with_parameters(**{parameter: p})
-    return prepare(point, variables=())

@@ -40,7 +40,7 @@ from workbench.run._memory import (
     what_to_lower,
 )
 from workbench.run._parameters import PARAMETERS_ATTR, parameter_coords
-from workbench.run._prepare import Prepared, prepare, record_times
+from workbench.run._prepare import Prepared, forcing_period, prepare, record_times
 from workbench.run._simulate import check_error, integrate, simulate
 
 __all__ = [
@@ -53,6 +53,7 @@ __all__ = [
     "Prepared",
     "check_error",
     "check_memory",
+    "forcing_period",
     "format_bytes",
     "memory_limit",
     "parse_bytes",

@@ -65,7 +65,7 @@ def integrate(
 
 
 def simulate(
-    scene: SceneSource,
+    scene: SceneSource | Prepared,
     *,
     progress: bool = False,
     throw: bool = True,
@@ -75,9 +75,11 @@ def simulate(
 
     Parameters
     ----------
-    scene : Scene, path or mapping
+    scene : Scene, path, mapping or Prepared
         Loaded with :func:`workbench.load_scene`. A scene with a ``[sweep]`` is a campaign:
-        use :func:`workbench.run_campaign`.
+        use :func:`workbench.run_campaign`. A :class:`Prepared` (from :func:`prepare` or
+        :meth:`Prepared.at`) runs as it is (its records were checked against its own memory
+        limit; ``max_memory`` is not used).
     progress : bool
         Show progress over simulated time on stderr: a bar on a terminal, a few lines in a
         log (:class:`workbench._progress.Progress`).
@@ -120,7 +122,10 @@ def simulate(
     >>> ds.x.attrs["units"], ds.sizes["time"], ds.attrs["run_status"]
     ('1', 1001, 'ok')
     """
-    prepared = prepare(scene, max_memory=max_memory)
+    if isinstance(scene, Prepared):
+        prepared = scene
+    else:
+        prepared = prepare(scene, max_memory=max_memory)
     result = _with_progress_bar(prepared) if progress else integrate(prepared)
     derived, result = derive(prepared, result)
     if throw:
