@@ -250,6 +250,7 @@ def test_the_non_impacting_orbit_grazes_at_the_closed_form_and_adds_periods_past
     assert np.all(r.multiplier_imag.values[i] == 0.0)
     flags = r.bifurcation_transition.attrs["flag_meanings"].split()
     assert flags[int(r.bifurcation_transition[0])] == "border_collision"
+    assert found[0]["transition"] == "border_collision"
     note = r.attrs["bifurcation_notes"]
     match = re.search(r"no period-1 orbit found past it; period (\d+) at ([0-9.eE+-]+)", note)
     assert match, note
