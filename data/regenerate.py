@@ -12,8 +12,9 @@ Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), th
 code writes.
 
 - ``--upgrade``: where only how the archives are written changed (the archive format, the
-  CF attributes, the name of a dimension: format 4's ``record``), not what they hold, rewrite each shipped archive in place with the current
-  writer, its values untouched (checked), instead of recomputing it (the maps cost an hour
+  CF attributes, the name of a dimension: format 4's ``record``), not what they hold,
+  rewrite each shipped archive in place with the current writer, its values untouched
+  (checked), instead of recomputing it (the maps cost an hour
   each): read by ``open_run`` (an older format upgraded), given the global attributes every
   archive now carries that it lacks (``Conventions``, ``references``), the scalar
   coordinates of parameters the model declared since (at their defaults: a run whose scene
