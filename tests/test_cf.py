@@ -184,6 +184,39 @@ def test_format_3_is_upgraded(written, kind, tmp_path):
     xr.testing.assert_identical(again.drop_attrs(), new.drop_attrs())
 
 
+def test_readers_of_each_points_record_times(written, tmp_path):
+    """The new layout read by the analyses: mapped over the points, each point's series runs
+    along time with its own step (the forcing period); one point is a record in time; several
+    points with different times, or times decoded to dates by plain xarray, are refused in one
+    line, never read along the wrong axis."""
+    from workbench.analysis import crossing_section, over_parameters, poincare_section
+    from workbench.analysis._series import as_series
+
+    ds = workbench.open_run(written["campaign over omega"])
+
+    def step(x):
+        assert x.dims == ("time",)
+        return xr.Dataset({"dt": ((), as_series(x).dt, {"units": "s"})})
+
+    np.testing.assert_allclose(over_parameters(step)(ds.x).dt, 2 * np.pi / ds.omega, rtol=1e-12)
+    one = ds.x.sel(omega=1.2)
+    np.testing.assert_allclose(as_series(one).dt, 2 * np.pi / 1.2, rtol=1e-12)
+    section = poincare_section(ds, "x")
+    assert section.strobe_time.dims == ("omega", "strobe")
+    np.testing.assert_array_equal(section.strobe_time.values, ds.record_time.values)
+    with pytest.raises(ValueError, match=r"select one point first, e\.g\. \.sel\(omega=") as e:
+        as_series(ds.x)
+    assert "\n" not in str(e.value)
+    with pytest.raises(ValueError, match="select one point first"):
+        crossing_section(ds, "x", 0.0)
+    with xr.open_dataset(written["campaign over omega"]) as plain:  # CF times decoded: dates
+        assert plain.record_time.dtype.kind == "M"
+        with pytest.raises(ValueError, match="are dates, not seconds since t = 0"):
+            over_parameters(step)(plain.x)
+        with pytest.raises(ValueError, match="are dates, not seconds since t = 0"):
+            as_series(plain.x.sel(omega=1.2))
+
+
 def test_the_check_can_fail(tmp_path):
     """The same run written by xarray alone, as workbench 0.5 wrote it: ``_FillValue`` on the
     time coordinate and its units "s" without a reference instant."""

@@ -48,6 +48,7 @@ import numpy as np
 import xarray as xr
 
 from workbench.analysis._broadcast_layout import Layout, all_failed
+from workbench.analysis._series import seconds
 from workbench.archive import RECORD_DIM, RECORD_TIME
 
 __all__ = ["PROBES", "SERIES_DIMS", "broadcast", "over_parameters"]
@@ -112,6 +113,9 @@ def broadcast(
     loop = tuple(d for d in x.dims if d != sdim)
     x = x.transpose(*loop, sdim)
     times, shared_times = _times(x, sdim, loop)
+    for t in (times, None if shared_times is None else x[shared_times]):
+        if t is not None:  # dates (plain xarray decodes CF times) are refused, not read as ns
+            seconds(str(x.name), np.empty(0, t.dtype), str(t.name))
     periods = _periods(x, loop)
     shape = tuple(x.sizes[d] for d in loop)
     template = _template(x, sdim, shared_times)

@@ -9,7 +9,7 @@ import xarray as xr
 
 from workbench.archive import RECORD_DIM, RECORD_TIME
 
-__all__ = ["Series", "as_series", "require_samples", "time_record"]
+__all__ = ["Series", "as_series", "require_samples", "seconds", "time_record"]
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,20 @@ class Series:
     sampling: str = "index"
 
 
+def seconds(name: str, t, coordinate: str) -> np.ndarray:
+    """The times ``t`` of ``name``'s ``coordinate`` as floats (s); ValueError for dates (an
+    archive opened with plain xarray, which decodes CF time coordinates: docs/archives.md)."""
+    t = np.asarray(t)
+    if t.dtype.kind in "Mm":
+        raise ValueError(
+            f"the {coordinate} of {name!r} are dates, not seconds since t = 0: open the archive "
+            "with workbench.open_run (or xarray.open_dataset(..., decode_times=False))"
+        )
+    return t.astype(float)
+
+
 def _uniform_step(name: str, t: np.ndarray, coordinate: str) -> float | None:
+    t = seconds(name, t, coordinate)
     steps = np.diff(t)
     if steps.size and not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
         raise ValueError(
@@ -66,7 +79,7 @@ def time_record(obj):
         )
     rt = obj[RECORD_TIME]
     others = [d for d in rt.dims if d != RECORD_DIM]
-    rows = np.asarray(rt.transpose(*others, RECORD_DIM).values, dtype=float)
+    rows = seconds(str(name), rt.transpose(*others, RECORD_DIM).values, RECORD_TIME)
     rows = rows.reshape(-1, rt.sizes[RECORD_DIM])
     same = (rows == rows[0]) | (np.isnan(rows) & np.isnan(rows[0]))
     if not same.all():
@@ -115,10 +128,10 @@ def as_series(x, dt: float | None = None) -> Series:
                 "the other dims first, e.g. da.sel(joint='A')"
             )
         if dt is None and "time" in x.coords:
-            dt = _uniform_step(name, np.asarray(x["time"].values, dtype=float), "time")
+            dt = _uniform_step(name, x["time"].values, "time")
             sampling = "time"
         elif "strobe_time" in x.coords and x.dims == ("strobe",):
-            step = _uniform_step(name, np.asarray(x["strobe_time"].values, dtype=float), "strobe")
+            step = _uniform_step(name, x["strobe_time"].values, "strobe")
             dt = dt if dt is not None else step
             sampling = "strobe"
         x = x.values
