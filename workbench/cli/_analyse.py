@@ -11,26 +11,17 @@ from workbench.cli._exit_codes import UsageError
 
 
 def _series(ds, var: str, select: list[str]):
-    """The 1-D series ``var`` of a run with ``--select DIM=LABEL`` applied (UsageError if not);
-    one point of a campaign whose points have their own record times as a record in time."""
-    from workbench.analysis._series import time_record
-    from workbench.archive import SERIES_DIMS
-
-    def recorded(name: str) -> bool:
-        return any(d in SERIES_DIMS for d in ds[name].dims)
-
-    if var not in ds or not recorded(var):
-        names = ", ".join(v for v in ds.data_vars if recorded(v))
+    """The 1-D series ``var`` of a run with ``--select DIM=LABEL`` applied (UsageError if not)."""
+    if var not in ds or "time" not in ds[var].dims:
+        names = ", ".join(v for v in ds.data_vars if "time" in ds[v].dims)
         raise UsageError(f"--var: no variable {var!r} over time in the run; there are: {names}")
     da = ds[var]
     for item in select:
         dim, _, label = item.partition("=")
         if dim not in da.dims or label not in [str(v) for v in da[dim].values]:
-            choices = {d: [str(v) for v in da[d].values] for d in da.dims if d not in SERIES_DIMS}
+            choices = {d: [str(v) for v in da[d].values] for d in da.dims if d != "time"}
             raise UsageError(f"--select takes DIM=LABEL among {choices}, got {item!r}")
         da = da.sel({dim: label})
-    if da.ndim == 1:
-        da = time_record(da)
     if da.ndim != 1:
         raise UsageError(
             f"--var {var!r} has dims {da.dims}; pick one element of the others with "
