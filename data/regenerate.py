@@ -12,8 +12,9 @@ Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), th
 code writes.
 
 - ``--upgrade``: where only how the archives are written changed (the archive format, the
-  CF attributes), not what they hold, rewrite each shipped archive in place with the current
-  writer, its values untouched (checked), instead of recomputing it (the maps cost an hour
+  CF attributes, the name of a dimension: format 4's ``record``), not what they hold,
+  rewrite each shipped archive in place with the current writer, its values untouched
+  (checked), instead of recomputing it (the maps cost an hour
   each): read by ``open_run`` (an older format upgraded), given the global attributes every
   archive now carries that it lacks (``Conventions``, ``references``), the scalar
   coordinates of parameters the model declared since (at their defaults: a run whose scene
@@ -46,6 +47,7 @@ import sys
 from pathlib import Path
 
 import workbench
+from workbench.archive import RECORD_DIM, RECORD_TIME, SERIES_DIMS
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "data"
@@ -157,8 +159,8 @@ def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
     with the cost of its run from ``log`` (GNU ``time -v`` output and ``uptime`` lines) as
     attributes, written to ``target``."""
     maps = workbench.open_run(source)
-    timed = [v for v in maps.data_vars if "time" in maps[v].dims]
-    out = maps.drop_vars([*timed, *(c for c in ("time", "record_time") if c in maps.coords)])
+    timed = [v for v in maps.data_vars if any(d in SERIES_DIMS for d in maps[v].dims)]
+    out = maps.drop_vars([*timed, *(c for c in ("time", RECORD_TIME) if c in maps.coords)])
     text = Path(log).read_text()
 
     loads = re.findall(r"load average: ([0-9.]+),", text)
@@ -202,10 +204,10 @@ def periodic_end(target: Path, workers: int = 2) -> Path:
         ds = continued_sweep(scene, Path(tmp) / "sweep.nc", workers=workers, progress=False)
     dims = ("direction", "omega", "clearance")
     samples = xr.concat([ds.clearance_x, ds.clearance_y], "variable")
-    samples = samples.transpose(*dims, "time", "joint", "variable")
+    samples = samples.transpose(*dims, RECORD_DIM, "joint", "variable")  # each point's times
     period = np.zeros([ds.sizes[d] for d in dims], dtype=np.int8)
     for index in np.ndindex(period.shape):
-        s = samples.values[index].reshape(ds.sizes["time"], -1)
+        s = samples.values[index].reshape(ds.sizes[RECORD_DIM], -1)
         period[index] = strobe_period(s[np.isfinite(s).all(axis=1)])
     out = xr.Dataset(
         {

@@ -76,7 +76,7 @@ def test_no_series_dim_is_refused(maps):
 @pytest.fixture(scope="module")
 def campaign_archive(tmp_path_factory):
     """A Duffing campaign over the forcing frequency: strobe records, so each point has its own
-    record times (record_time over omega and time) and its own sampling step, the period."""
+    record times (record_time over omega and record) and its own sampling step, the period."""
     scene = workbench.load_scene(
         {
             "model": {"name": "duffing"},
@@ -100,7 +100,7 @@ def test_lazy_over_a_chunked_campaign_archive(campaign_archive):
 
     estimator = over_parameters(counted)
     eager_ds = workbench.open_run(campaign_archive)
-    with xr.open_dataset(campaign_archive, chunks={}) as ds:
+    with workbench.open_run(campaign_archive, chunks={}) as ds:
         assert ds.x.chunks is not None
         lazy = estimator(ds.x.chunk({"omega": 2}))
         assert len(calls) <= PROBES  # only the points that lay out the result

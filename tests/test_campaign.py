@@ -106,7 +106,7 @@ def test_same_numbers_with_one_or_two_workers_and_as_single_runs(scene, one_work
 
 def test_dims_units_and_archive(scene, one_worker):
     ds = one_worker
-    assert ds.x.dims == ("gamma", "omega", "time")  # parameter dims first
+    assert ds.x.dims == ("gamma", "omega", "record")  # parameter dims first; own record times
     assert ds.status.dims == ("gamma", "omega") and ds.status.dtype == np.int8
     meanings = [s.label for s in workbench.Status] + ["invalid_parameters", "error"]
     assert ds.status.attrs["flag_meanings"].split() == meanings
@@ -117,7 +117,7 @@ def test_dims_units_and_archive(scene, one_worker):
         assert (ds[d].attrs["units"], ds[d].attrs["long_name"]) == (p.units, p.long_name)
     for name, v in ds.variables.items():
         assert "units" in v.attrs and "long_name" in v.attrs, name
-    assert ds.sizes["time"] == 4 * 4 + 1  # only what the scene records
+    assert ds.sizes["record"] == 4 * 4 + 1  # only what the scene records
     assert workbench.scene_from_toml(ds.attrs["scene"]) == scene
     assert ds.attrs["campaign_dims"] == "gamma omega"
     assert ds.attrs["Conventions"] == "CF-1.11" and "numba=" in ds.attrs["package_versions"]

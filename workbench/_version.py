@@ -17,10 +17,11 @@ that says what to do where it is not (:mod:`workbench.archive`); a newer format 
 Formats: 1, workbench 0.1.0 (no ``format_version`` attribute; statuses ``done``,
 ``solver_failed``, ``terminated_early``); 2, workbench 0.2.0 (one status vocabulary:
 :class:`workbench.Status`); 3, workbench 0.6.0 (the simulated time stored as a CF 1.11 time
-coordinate: :mod:`workbench.archive._format`).
+coordinate: :mod:`workbench.archive._format`); 4, workbench 0.6.0 (a campaign whose points
+have their own record times runs along ``record``, not ``time``: :mod:`workbench.archive._format`).
 """
 
 __all__ = ["FORMAT_VERSION", "__version__"]
 
 __version__ = "0.6.0"
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4

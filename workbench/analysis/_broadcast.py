@@ -1,7 +1,8 @@
 """Series estimators over the parameter dims of a campaign: one result per point, lazily.
 
 A campaign's record ``x`` has parameter dims (``omega``, ``clearance``, ...), a model dim or two
-(``joint``) and one dim of its own, the series' (``time``, or ``strobe`` for a Poincaré section).
+(``joint``) and one dim of its own, the series' (``time``; ``record`` when the points have their
+own record times; ``strobe`` for a Poincaré section).
 :func:`over_parameters` makes an estimator of one series (the 0-1 test, Wolf's exponent, ...)
 map over every other dim: ``zero_one_test(campaign.x)`` returns ``K`` over (omega, clearance)
 with each point's evidence (``K_c`` over (omega, clearance, c)), the units of the estimator's
@@ -9,9 +10,11 @@ own result, and ``analysis_error`` (the message of a point the estimator refused
 campaign point, all NaN; empty when none).
 
 Each point is an ordinary call of the estimator on a 1-D DataArray: its values without the NaN
-that pad a shorter run at the end, its own record times (``record_time``, s, when the points'
-times differ: a sweep over the forcing frequency) or the shared ``time`` coordinate, and the
-series' name, units and attributes (a ``forcing_period`` coordinate over the parameter dims
+that pad a shorter run at the end, its own record times (``record_time`` over ``record``, s,
+when the points' times differ: a sweep over the forcing frequency, a continued sweep; the
+point's series then runs along ``time`` with them as its coordinate; ``strobe_time`` over
+``strobe`` for the Poincaré section of such a campaign) or the shared ``time`` coordinate, and
+the series' name, units and attributes (a ``forcing_period`` coordinate over the parameter dims
 becomes the point's ``forcing_period`` attribute).
 
 On a dask-backed record (an archive opened with chunks, ``workbench.open_run(path,
@@ -45,10 +48,14 @@ import numpy as np
 import xarray as xr
 
 from workbench.analysis._broadcast_layout import Layout, all_failed
+from workbench.analysis._series import seconds
+from workbench.archive import RECORD_DIM, RECORD_TIME
 
 __all__ = ["PROBES", "SERIES_DIMS", "broadcast", "over_parameters"]
 
-SERIES_DIMS = ("time", "strobe")  # the dims a series runs along (a record; a section)
+#: the dims a series runs along: a record (``time``, or ``record`` with each point's times in
+#: ``record_time``), a section
+SERIES_DIMS = ("time", RECORD_DIM, "strobe")
 PROBES = 3  # points computed at once to lay out the result of a dask-backed record
 
 
@@ -69,10 +76,10 @@ def over_parameters(estimator: Callable[..., xr.Dataset]) -> Callable[..., xr.Da
 
 
 _NOTE = """
-    Over parameter dims: given a DataArray with dims besides its series' (``time`` or
-    ``strobe``), e.g. a campaign's record, it returns one result per point over those dims, lazily
-    for a dask-backed one (see :mod:`workbench.analysis._broadcast`; ``evidence_sizes`` sets the
-    length of evidence dims in the lazy layout).
+    Over parameter dims: given a DataArray with dims besides its series' (``time``,
+    ``record`` or ``strobe``), e.g. a campaign's record, it returns one result per point over
+    those dims, lazily for a dask-backed one (see :mod:`workbench.analysis._broadcast`;
+    ``evidence_sizes`` sets the length of evidence dims in the lazy layout).
 """
 
 
@@ -89,7 +96,8 @@ def broadcast(
     Parameters
     ----------
     estimator : callable
-        Takes a 1-D DataArray (dim ``time`` or ``strobe``) and returns an :class:`xarray.Dataset`.
+        Takes a 1-D DataArray (dim ``time`` or ``strobe``) and returns an :class:`xarray.Dataset`
+        (a record along ``record`` reaches it along ``time``, with the point's times).
     x : xarray.DataArray
         One dim in :data:`SERIES_DIMS`, any others; numpy- or dask-backed.
     evidence_sizes : dict, optional
@@ -105,6 +113,9 @@ def broadcast(
     loop = tuple(d for d in x.dims if d != sdim)
     x = x.transpose(*loop, sdim)
     times, shared_times = _times(x, sdim, loop)
+    for t in (times, None if shared_times is None else x[shared_times]):
+        if t is not None:  # dates (plain xarray decodes CF times) are refused, not read as ns
+            seconds(str(x.name), np.empty(0, t.dtype), str(t.name))
     periods = _periods(x, loop)
     shape = tuple(x.sizes[d] for d in loop)
     template = _template(x, sdim, shared_times)
@@ -193,11 +204,18 @@ def _series_dim(x: xr.DataArray) -> str:
 
 
 def _times(x: xr.DataArray, sdim: str, loop: tuple[str, ...]):
-    """Each point's record times (s) when they differ between points (``record_time`` over the
-    parameter dims and ``sdim``), else None with the shared coordinate's name."""
-    if "record_time" in x.coords and sdim in x["record_time"].dims and x["record_time"].ndim > 1:
-        rt = x["record_time"].reset_coords(drop=True)
-        return rt.broadcast_like(x).transpose(*loop, sdim), None
+    """Each point's record times (s) when they differ between points (``record_time`` or
+    ``strobe_time`` over the parameter dims and ``sdim``), else None with the shared
+    coordinate's name."""
+    for name in (RECORD_TIME, "strobe_time"):
+        if name in x.coords and sdim in x[name].dims and x[name].ndim > 1:
+            rt = x[name].reset_coords(drop=True)
+            return rt.broadcast_like(x).transpose(*loop, sdim), None
+    if sdim == RECORD_DIM:
+        raise ValueError(
+            f"x ({x.name!r}) runs along {RECORD_DIM!r} without {RECORD_TIME!r} over it (each "
+            "point's record times): open the campaign with workbench.open_run to keep them"
+        )
     for name in (sdim, "strobe_time"):
         if name in x.coords and x[name].dims == (sdim,):
             return None, name
@@ -221,7 +239,10 @@ def _template(x: xr.DataArray, sdim: str, shared: str | None) -> dict:
     if shared is not None:
         c = x[shared]
         coord = (shared, np.asarray(c.values), dict(c.attrs))
-    time_attrs = dict(x["record_time"].attrs) if "record_time" in x.coords else {"units": "s"}
+    time_attrs = {"units": "s"}
+    for name in (RECORD_TIME, "strobe_time"):
+        if name in x.coords and sdim in x[name].dims:
+            time_attrs = dict(x[name].attrs)
     return {"name": x.name, "attrs": attrs, "coord": coord, "time_attrs": time_attrs}
 
 
@@ -236,6 +257,8 @@ def _series(template: dict, sdim: str, values, t, period) -> xr.DataArray:
     if keep == 0:
         raise ValueError("the point's record is all NaN (a campaign point that failed?)")
     coords = {}
+    if sdim == RECORD_DIM:  # a point's own record: along time, as a run's
+        sdim = "time"
     if t is not None:
         name = "time" if sdim == "time" else "strobe_time"
         coords[name] = (sdim, t[:keep], template["time_attrs"])

@@ -6,6 +6,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench.analysis._series import time_record
+from workbench.archive import RECORD_DIM, RECORD_TIME
+
 __all__ = ["phase_portrait", "poincare_section", "crossing_section", "rate_of"]
 
 
@@ -51,7 +54,9 @@ def poincare_section(
     The samples are read from the run's record grid, which lies exactly at ``t0 + k T /
     samples_per_period`` (no interpolation); ``period`` (s) defaults to the run's
     ``forcing_period`` and must be a whole number of record steps. For a campaign (parameter
-    dims) every point is sampled alike.
+    dims) every point is sampled alike; where its points have their own record times (along
+    ``record``, with ``record_time``) the samples' times are ``strobe_time`` over the
+    parameter dims and ``strobe``.
 
     Parameters
     ----------
@@ -104,12 +109,22 @@ def poincare_section(
             "the record grid does not contain these strobe times"
         )
     out = ds if var is None else ds[[var]]
-    out = out.isel(time=slice(None, None, int(round(step))))
-    times = out["time"].values if "time" in out.coords else None
-    out = out.rename(time="strobe")
+    rdim = RECORD_DIM if RECORD_DIM in out.dims else "time"  # each point's times, or shared
+    out = out.isel({rdim: slice(None, None, int(round(step)))})
+    strobe_attrs = {"units": "s", "long_name": "strobe time"}
+    if rdim == RECORD_DIM:
+        times = out[RECORD_TIME].variable if RECORD_TIME in out.coords else None
+        out = out.drop_vars(RECORD_TIME, errors="ignore").rename({RECORD_DIM: "strobe"})
+        if times is not None:
+            dims = tuple("strobe" if d == RECORD_DIM else d for d in times.dims)
+            out = out.assign_coords(strobe_time=(dims, times.values, strobe_attrs))
+        times = None
+    else:
+        times = out["time"].values if "time" in out.coords else None
+        out = out.rename(time="strobe")
     if times is not None:
         out = out.drop_vars("time", errors="ignore").assign_coords(
-            strobe_time=("strobe", times, {"units": "s", "long_name": "strobe time"})
+            strobe_time=("strobe", times, strobe_attrs)
         )
     return out.assign_coords(
         strobe=("strobe", np.arange(out.sizes["strobe"]), {"units": "1", "long_name": "period"})
@@ -119,7 +134,15 @@ def poincare_section(
 def crossing_section(ds: xr.Dataset, var: str, level: float, *, direction: int = 1) -> xr.Dataset:
     """States where ``var`` crosses ``level`` (upwards for ``direction=1``, downwards for -1,
     both for 0), linearly interpolated between records: the Poincaré section of an autonomous
-    run (e.g. Lorenz at z = rho - 1). Dim ``crossing`` with coordinate ``crossing_time`` (s)."""
+    run (e.g. Lorenz at z = rho - 1), or of one point of a campaign (:func:`time_record`). Dim
+    ``crossing`` with coordinate ``crossing_time`` (s). ValueError when ``var`` is not a
+    single series over ``time``."""
+    ds = time_record(ds)
+    if ds[var].dims != ("time",):
+        raise ValueError(
+            f"a crossing section needs one series over 'time'; {var!r} has dims "
+            f"{ds[var].dims!r}: select one element of the others first"
+        )
     v = ds[var].values - level
     a, b = v[:-1], v[1:]
     up = (a < 0) & (b >= 0)

@@ -7,7 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-__all__ = ["Series", "as_series", "require_samples"]
+from workbench.archive import RECORD_DIM, RECORD_TIME
+
+__all__ = ["Series", "as_series", "require_samples", "seconds", "time_record"]
 
 
 @dataclass(frozen=True)
@@ -28,7 +30,20 @@ class Series:
     sampling: str = "index"
 
 
+def seconds(name: str, t, coordinate: str) -> np.ndarray:
+    """The times ``t`` of ``name``'s ``coordinate`` as floats (s); ValueError for dates (an
+    archive opened with plain xarray, which decodes CF time coordinates: docs/archives.md)."""
+    t = np.asarray(t)
+    if t.dtype.kind in "Mm":
+        raise ValueError(
+            f"the {coordinate} of {name!r} are dates, not seconds since t = 0: open the archive "
+            "with workbench.open_run (or xarray.open_dataset(..., decode_times=False))"
+        )
+    return t.astype(float)
+
+
 def _uniform_step(name: str, t: np.ndarray, coordinate: str) -> float | None:
+    t = seconds(name, t, coordinate)
     steps = np.diff(t)
     if steps.size and not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
         raise ValueError(
@@ -39,9 +54,52 @@ def _uniform_step(name: str, t: np.ndarray, coordinate: str) -> float | None:
     return float(steps[0]) if steps.size else None
 
 
+def time_record(obj):
+    """One point of a campaign whose points have their own record times (records along
+    ``record``, their times in ``record_time``: docs/archives.md) as a run's record: along
+    ``time`` with the coordinate ``time`` (s), without the records past the end of its run
+    (NaN times). Several points whose record times are all the same (e.g. the realisations at
+    one value of a sweep over the forcing frequency) become one record in time as well. A
+    Dataset or DataArray without the dim ``record`` is returned as it is.
+
+    Raises
+    ------
+    ValueError
+        ``obj`` holds the records of several points with different times (``record_time`` has
+        other dims than ``record`` and differs along them), or runs along ``record`` without
+        ``record_time``: one line that says which point to select.
+    """
+    if RECORD_DIM not in obj.dims:
+        return obj
+    name = getattr(obj, "name", None) or "the dataset"
+    if RECORD_TIME not in obj.coords:
+        raise ValueError(
+            f"{name!r} runs along {RECORD_DIM!r} without the coordinate {RECORD_TIME!r} (each "
+            "point's record times): open the campaign with workbench.open_run to keep them"
+        )
+    rt = obj[RECORD_TIME]
+    others = [d for d in rt.dims if d != RECORD_DIM]
+    rows = seconds(str(name), rt.transpose(*others, RECORD_DIM).values, RECORD_TIME)
+    rows = rows.reshape(-1, rt.sizes[RECORD_DIM])
+    same = (rows == rows[0]) | (np.isnan(rows) & np.isnan(rows[0]))
+    if not same.all():
+        raise ValueError(
+            f"{name!r} holds the records of several points, each with its own times "
+            f"({RECORD_TIME} over {rt.dims!r}): select one point first, e.g. "
+            f".sel({others[0]}=...), or pass the whole record to an estimator that maps over "
+            "the points (zero_one_test, wolf_lle, ...)"
+        )
+    times = rows[0]
+    keep = np.flatnonzero(np.isfinite(times))
+    attrs = dict(rt.attrs, long_name="time")
+    out = obj.isel({RECORD_DIM: keep}).drop_vars(RECORD_TIME).rename({RECORD_DIM: "time"})
+    return out.assign_coords(time=("time", times[keep], attrs))
+
+
 def as_series(x, dt: float | None = None) -> Series:
     """A :class:`Series` from a 1-D array or a DataArray with a ``time`` coordinate (s) or a
-    ``strobe_time`` coordinate (s, a stroboscopic section).
+    ``strobe_time`` coordinate (s, a stroboscopic section), or one point of a campaign whose
+    points have their own record times (:func:`time_record`).
 
     The DataArray gives ``dt`` itself (its records must be uniform to 1e-6 relative) and its
     ``units``; a forcing period is read from ``forcing_period`` in its attributes. Raises
@@ -60,6 +118,7 @@ def as_series(x, dt: float | None = None) -> Series:
     if dt is not None and not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt={dt!r}: the sampling step must be a positive number of seconds")
     if isinstance(x, xr.DataArray):
+        x = time_record(x)
         name = str(x.name or "x")
         units = str(x.attrs.get("units", "1"))
         period = x.attrs.get("forcing_period")
@@ -69,10 +128,10 @@ def as_series(x, dt: float | None = None) -> Series:
                 "the other dims first, e.g. da.sel(joint='A')"
             )
         if dt is None and "time" in x.coords:
-            dt = _uniform_step(name, np.asarray(x["time"].values, dtype=float), "time")
+            dt = _uniform_step(name, x["time"].values, "time")
             sampling = "time"
         elif "strobe_time" in x.coords and x.dims == ("strobe",):
-            step = _uniform_step(name, np.asarray(x["strobe_time"].values, dtype=float), "strobe")
+            step = _uniform_step(name, x["strobe_time"].values, "strobe")
             dt = dt if dt is not None else step
             sampling = "strobe"
         x = x.values

@@ -15,7 +15,14 @@ from workbench.archive._atomic import (
     save_figure,
     write_text_atomic,
 )
-from workbench.archive._format import stamp_format, status_flags, upgrade_archive
+from workbench.archive._format import (
+    RECORD_DIM,
+    RECORD_TIME,
+    SERIES_DIMS,
+    stamp_format,
+    status_flags,
+    upgrade_archive,
+)
 from workbench.archive._integrity import (
     ArchiveError,
     StoreLocked,
@@ -30,6 +37,9 @@ from workbench.archive._netcdf import open_run, save_run
 from workbench.archive._outputs import check_output_directory, check_output_file
 
 __all__ = [
+    "RECORD_DIM",
+    "RECORD_TIME",
+    "SERIES_DIMS",
     "ArchiveError",
     "DiskFull",
     "OutputExists",

@@ -18,6 +18,19 @@ numbers carry the units ``s since 1970-01-01 00:00:00`` and the calendar ``stand
 reference instant stands for t = 0 and no date is meant (:func:`encode_time` on writing,
 :func:`decode_time` on reading). A format-2 file wrote them as "s": a reader of format 2 that
 decodes CF times (xarray does by default) would read format 3's times as dates.
+
+Format 3 differs from format 4 in the layout of a campaign whose points have their own record
+times (a sweep over the forcing frequency, every continued sweep): format 3 ran its records
+along a dimension ``time`` without a coordinate variable, each point's times being the
+auxiliary coordinate ``record_time`` (parameter dims, time; ``units`` "s", no standard name).
+A dimension named ``time`` reads as a time axis (to CF checkers, and to code that selects or
+reduces along ``time`` expecting times), but its index was a record's number, not a time.
+Format 4 names that dimension ``record`` (:data:`RECORD_DIM`) and gives ``record_time``
+(parameter dims, record) the ``standard_name`` "time", so that it is stored as every simulated
+time is (:func:`encode_time`). A campaign whose points share their record times keeps the
+coordinate variable ``time``. The block files of a campaign's store run along ``record`` in
+format 4 (they ran along ``time`` in format 3). The upgrade is a renaming
+(:func:`_upgrade_from_3`): the numbers are the same.
 """
 
 from __future__ import annotations
@@ -29,7 +42,26 @@ from workbench._version import FORMAT_VERSION, __version__
 from workbench.archive._integrity import ArchiveError
 from workbench.solver import Status
 
-__all__ = ["decode_time", "encode_time", "stamp_format", "status_flags", "upgrade_archive"]
+__all__ = [
+    "RECORD_DIM",
+    "RECORD_TIME",
+    "SERIES_DIMS",
+    "decode_time",
+    "encode_time",
+    "stamp_format",
+    "status_flags",
+    "upgrade_archive",
+]
+
+#: the dim of a campaign's records when its points have their own record times (format 4):
+#: the index of the record in its point's run; the times are :data:`RECORD_TIME`
+RECORD_DIM = "record"
+#: the auxiliary coordinate (parameter dims, :data:`RECORD_DIM`) of each point's record times,
+#: s since t = 0 of its run (NaN past the end of a shorter run)
+RECORD_TIME = "record_time"
+#: the dims a run's or a campaign's record runs along: ``time`` (a coordinate variable of
+#: times) or :data:`RECORD_DIM` (each point's times in :data:`RECORD_TIME`)
+SERIES_DIMS = ("time", RECORD_DIM)
 
 #: the reference instant that stands for t = 0 of a run in the units of its time axis on disk
 #: (CF 1.11 requires one; a simulation has no date: none is meant)
@@ -140,9 +172,27 @@ def upgrade_archive(ds: xr.Dataset, path: str) -> xr.Dataset:
     if found == 1:
         ds = _upgrade_from_1(ds, path)
     # format 2 -> 3: the simulated time is stored otherwise, read the same (module docstring)
+    if found <= 3:
+        ds = _upgrade_from_3(ds)
     ds = ds.copy(deep=False)
     ds.attrs["format_version"] = np.int32(FORMAT_VERSION)
     ds.attrs["upgraded_from_format"] = np.int32(found)
+    return ds
+
+
+def _upgrade_from_3(ds: xr.Dataset) -> xr.Dataset:
+    """Format 3 -> 4 (module docstring): a dataset whose ``record_time`` runs along a dim
+    ``time`` that has no coordinate variable (a campaign with each point's record times, or a
+    block of a campaign's store) runs along ``record`` instead, with ``record_time`` carrying
+    the ``standard_name`` "time"; any other dataset is returned as it is."""
+    if RECORD_TIME not in ds.variables or "time" in ds.variables:
+        return ds
+    if "time" not in ds[RECORD_TIME].dims or RECORD_DIM in ds.dims:
+        return ds
+    ds = ds.rename_dims(time=RECORD_DIM)
+    var = ds.variables[RECORD_TIME]
+    if var.attrs.get("units") == _SECONDS:
+        var.attrs = {**var.attrs, "standard_name": "time"}
     return ds
 
 

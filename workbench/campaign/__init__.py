@@ -70,8 +70,10 @@ Store layout
 
 When every point has the same record times they are the 1-D coordinate ``time`` (as from
 :func:`workbench.simulate`); when they differ (a sweep over the forcing frequency: records at
-``k T / samples_per_period``), ``time`` is a dim without coordinate and ``record_time``
-(parameter dims, time; s) holds each point's times, NaN-padded if runs differ in length.
+``k T / samples_per_period``; a continued sweep), the records run along ``record`` (the
+record's index in its point's run) and the auxiliary coordinate ``record_time`` (parameter dims,
+record; s, ``standard_name`` "time") holds each point's times, NaN-padded if runs differ in
+length (docs/archives.md).
 
 Both executors run through one loop (``_execute``): as many blocks in flight as there are
 workers, the next one submitted, longest first, when one finishes, so the start order is the

@@ -9,7 +9,7 @@ import numpy as np
 import xarray as xr
 
 from workbench._processor import PROCESSOR_ATTRS
-from workbench.archive import open_run
+from workbench.archive import RECORD_DIM, RECORD_TIME, open_run
 from workbench.campaign._block import (
     FAILURE_ATTRS,
     POINT_WALL_ATTRS,
@@ -62,12 +62,14 @@ def assemble(
     """Build the campaign dataset from its blocks: those in ``computed`` (block index ->
     dataset, as the tasks of this call wrote them) from memory, every other from its file.
 
-    Dims: the parameter dims (scene ``[sweep]`` order), then ``time``, then the model's dims;
-    every other parameter of the model is a scalar coordinate with its units
+    Dims: the parameter dims (scene ``[sweep]`` order), then the records', then the model's
+    dims; every other parameter of the model is a scalar coordinate with its units
     (:func:`workbench.run.parameter_coords`; ``model_parameters`` lists them, swept first).
-    When every point has the same record times they are the 1-D coordinate ``time``; otherwise
-    (e.g. a sweep over the forcing frequency) ``time`` is a dim without coordinate and the
-    coordinate ``record_time`` (parameter dims, time) holds each point's times, NaN-padded.
+    When every point has the same record times the records run along ``time``, their 1-D
+    coordinate; otherwise (e.g. a sweep over the forcing frequency, a continued sweep) along
+    ``record`` (the record's index in its point's run, no coordinate variable), and the
+    auxiliary coordinate ``record_time`` (parameter dims, record; ``standard_name`` "time")
+    holds each point's times, NaN-padded (:mod:`workbench.archive._format`, format 4).
     """
     computed = computed or {}
     blocks = [
@@ -103,18 +105,18 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
     measurements of a block (variables over ``point`` alone) become variables over the
     parameter dims, NaN where a block has none."""
     n, shape = grid.size, grid.shape
-    n_time = max(b.sizes["time"] for b in blocks)
+    n_time = max(b.sizes[RECORD_DIM] for b in blocks)
     first = blocks[0]
 
     def gather(name: str, fill) -> np.ndarray:
         v0 = first[name]
-        tail = tuple(n_time if d == "time" else v0.sizes[d] for d in v0.dims[1:])
+        tail = tuple(n_time if d == RECORD_DIM else v0.sizes[d] for d in v0.dims[1:])
         dtype = object if v0.dtype.kind in "OUS" else v0.dtype
         out = np.full((n,) + tail, fill, dtype=dtype)
         for b in blocks:
             v = b[name].values
             idx = b["point"].values
-            if "time" in b[name].dims:
+            if RECORD_DIM in b[name].dims:
                 out[idx, : v.shape[1]] = v
             else:
                 out[idx] = v
@@ -124,21 +126,22 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
     coords: dict = {}
     for d, values in zip(pdims, grid.values, strict=True):
         coords[d] = (d, np.array(values, np.float64), parameter_attrs(scene, d))
-    rt = gather("record_time", np.nan).reshape(n, n_time)
+    rt = gather(RECORD_TIME, np.nan).reshape(n, n_time)
     usable = rt[np.isfinite(rt).any(axis=1)]
     shared = (
         len(usable) > 0 and np.isfinite(usable[0]).all() and (usable == usable[0]).all(axis=None)
     )
-    time_attrs = dict(first["record_time"].attrs)
+    time_attrs = dict(first[RECORD_TIME].attrs)
+    # the records' dim: the shared times' coordinate variable, else the record's index
+    rdim = "time" if shared else RECORD_DIM
     if shared:
         coords["time"] = ("time", usable[0], time_attrs)
     else:
-        coords["record_time"] = (
-            pdims + ("time",),
+        coords[RECORD_TIME] = (
+            pdims + (RECORD_DIM,),
             rt.reshape(shape + (n_time,)),
             dict(time_attrs, long_name="time of the record (NaN past the end of the run)"),
         )
-        coords["record_time"][2].pop("standard_name", None)
     model = get_model(scene.model)
     model_names = {p.name for p in model.parameters}
     for d, (values, attrs) in model.coords(scene.effects).items():
@@ -147,7 +150,8 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
     data_vars: dict = {}
     for name in scene.variables:
         v0 = first[name]
-        data_vars[name] = (pdims + v0.dims[1:], gather(name, np.nan), dict(v0.attrs))
+        dims = tuple(rdim if d == RECORD_DIM else d for d in v0.dims[1:])
+        data_vars[name] = (pdims + dims, gather(name, np.nan), dict(v0.attrs))
     grid_attrs, periods = _grid_attrs(scene, grid)
     if periods is not None:
         data_vars["forcing_period"] = (
@@ -256,11 +260,11 @@ def _measured(name: str, tail: tuple[int, ...], n: int, blocks: list[xr.Dataset]
 def _measured_variables(scene: Scene, blocks: list[xr.Dataset]) -> dict:
     """Per-point measurements found in the blocks: name -> ((dims, sizes) after ``point``,
     attrs), in the order first seen."""
-    known = {*scene.variables, *_PER_POINT, "record_time"}
+    known = {*scene.variables, *_PER_POINT, RECORD_TIME}
     found: dict = {}
     for b in blocks:
         for name, v in b.data_vars.items():
-            if name in known or name in found or "time" in v.dims or v.dims[:1] != ("point",):
+            if name in known or name in found or RECORD_DIM in v.dims or v.dims[:1] != ("point",):
                 continue
             found[name] = ((v.dims[1:], v.shape[1:]), dict(v.attrs))
     return found

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from workbench._processor import processor_attrs
-from workbench.archive import save_run, sha256_file
+from workbench.archive import RECORD_DIM, RECORD_TIME, save_run, sha256_file
 from workbench.campaign._grid import SweepGrid, code_of, modules_of
 from workbench.campaign._lifeline import die_with_parent, watch_process
 from workbench.models import get_model
@@ -289,7 +289,9 @@ def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: floa
 def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
     """The dataset of a block: the points ``flat`` (flat grid indices) with their outcomes
     (:func:`run_outcome`, :func:`invalid_outcome`; an outcome's ``measured`` dataset, if any,
-    becomes per-point variables, NaN where a point has none)."""
+    becomes per-point variables, NaN where a point has none). The records run along
+    ``record`` with each point's times in ``record_time`` (point, record), NaN-padded: the
+    assembly makes them the coordinate ``time`` when every point has the same."""
     model = get_model(scene.model)
     n = len(runs)
     n_time = max([len(r["times"]) for r in runs] + [0])
@@ -312,8 +314,8 @@ def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
                 v = r["ds"][name]
                 arr[i, : v.shape[0]] = v.values
                 attrs = dict(v.attrs)
-        data_vars[name] = (("point", "time") + q.dims, arr, attrs)
-    data_vars["record_time"] = (("point", "time"), record_time, time_attrs)
+        data_vars[name] = (("point", RECORD_DIM) + q.dims, arr, attrs)
+    data_vars[RECORD_TIME] = (("point", RECORD_DIM), record_time, time_attrs)
     data_vars["status"] = (
         "point",
         np.array([r["status"] for r in runs], np.int8),

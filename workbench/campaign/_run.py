@@ -126,8 +126,9 @@ def run_campaign(
         ``solver_rejected_steps``, ``solver_rhs_evaluations``, ``solver_events``,
         ``solver_wall_time`` (s), ``point_wall_time`` (s), and ``forcing_period`` (s) for a
         forced model. When the record times differ between points (a sweep over the forcing
-        frequency), ``time`` has no coordinate and ``record_time`` (s; parameter dims, time)
-        holds each point's times. Attributes: provenance, the scene TOML, the grid
+        frequency), they run along ``record``, not ``time``, and ``record_time`` (s;
+        parameter dims, record) holds each point's times. Attributes: provenance, the scene
+        TOML, the grid
         (``campaign_grid``, JSON), ``computed_blocks`` and ``reused_blocks`` (by this call),
         ``failed_points``, ``campaign_workers``, ``campaign_compute_wall_time`` (s, the task
         phase), ``campaign_wall_time`` (s, all of the call but the final write) and

@@ -18,8 +18,13 @@ __all__ = ["register_cli"]
 
 def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple[xr.Dataset, str]:
     """Apply ``--at DIM=VALUE`` selections; return the dataset and the parameter of the x axis."""
-    if var not in ds.data_vars or "time" not in ds[var].dims:
-        names = ", ".join(v for v in ds.data_vars if "time" in ds[v].dims)
+    from workbench.archive import SERIES_DIMS  # time, or record (each point's record times)
+
+    def recorded(name: str) -> bool:
+        return any(d in SERIES_DIMS for d in ds[name].dims)
+
+    if var not in ds.data_vars or not recorded(var):
+        names = ", ".join(v for v in ds.data_vars if recorded(v))
         raise ValueError(f"no variable {var!r} over time in the campaign; there are: {names}")
     for item in at:
         dim, sep, raw = item.partition("=")
@@ -40,13 +45,14 @@ def _select(ds: xr.Dataset, var: str, param: str | None, at: list[str]) -> tuple
         param = wide[0]
     if param not in pdims:
         raise ValueError(f"--param must be one of the campaign's dims {pdims!r}, got {param!r}")
-    extra = [d for d in ds[var].dims if d not in ("time", param) and ds.sizes[d] > 1]
+    extra = [d for d in ds[var].dims if d not in (*SERIES_DIMS, param) and ds.sizes[d] > 1]
     if extra:
         raise ValueError(
             f"{var!r} also varies over {extra!r}; fix them with --at DIM=VALUE "
             f"(e.g. --at {extra[0]}={ds[extra[0]].values[0]})"
         )
-    return ds.squeeze([d for d in ds.dims if d not in ("time", param) and ds.sizes[d] == 1]), param
+    keep = (*SERIES_DIMS, param)
+    return ds.squeeze([d for d in ds.dims if d not in keep and ds.sizes[d] == 1]), param
 
 
 def _cmd_bifurcation(args: argparse.Namespace) -> int:

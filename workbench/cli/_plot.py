@@ -12,12 +12,12 @@ __all__ = ["register_cli"]
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
-    from workbench.archive import check_output_directory, open_run
+    from workbench.archive import SERIES_DIMS, check_output_directory, open_run
     from workbench.plot import run_figure_names, run_figures
 
     ds = open_run(args.run)
     campaign = "campaign_dims" in ds.attrs
-    series = [v for v in ds.data_vars if "time" in ds[v].dims]
+    series = [v for v in ds.data_vars if any(d in SERIES_DIMS for d in ds[v].dims)]
     if not series:
         raise UsageError(
             f"{args.run!r} has no variables over time: it is not a run or a campaign archive "

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from workbench.archive import save_run
+from workbench.archive import RECORD_DIM, save_run
 from workbench.campaign import (
     block_dataset,
     block_summary,
@@ -216,4 +216,4 @@ def _seam_points(scene: Scene, flat: tuple[int, ...], runs: list[dict]) -> xr.Da
     ds = block_dataset(scene, flat, runs)
     keep = [*scene.variables, "record_time", "status"]
     ds = ds[keep].rename({name: f"seam_{name}" for name in keep})
-    return ds.rename({"point": "seam_point", "time": "seam_time"})
+    return ds.rename({"point": "seam_point", RECORD_DIM: "seam_time"})

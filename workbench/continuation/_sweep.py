@@ -9,7 +9,7 @@ import time
 import numpy as np
 import xarray as xr
 
-from workbench.archive import open_run, save_run
+from workbench.archive import RECORD_DIM, RECORD_TIME, open_run, save_run
 from workbench.campaign import (
     CampaignError,
     Store,
@@ -100,7 +100,7 @@ def continued_sweep(
     >>> with tempfile.TemporaryDirectory() as d:
     ...     ds = continued_sweep(scene, f"{d}/sweep.nc", workers=2)
     >>> ds.x.dims, [str(d) for d in ds.direction.values]
-    (('direction', 'omega', 'time'), ['up', 'down'])
+    (('direction', 'omega', 'record'), ['up', 'down'])
     """
     wall0 = time.perf_counter()
     scene = load_scene(scene)
@@ -246,7 +246,7 @@ def _settle_seams(scene: Scene, plan: Plan, st: Store, cid: str, blocks: dict, r
             clouds = []
             for j in range(plan.segments):
                 b = blocks[plan.block(BRUTE, plan.segment(d, line, j))]
-                clouds += [cloud(b, variables, "point", f, "time") for f in b.point.values]
+                clouds += [cloud(b, variables, "point", f, RECORD_DIM) for f in b.point.values]
             scales[d, line] = line_scale(clouds)
             final[d, line, 0] = plan.block(BRUTE, plan.segment(d, line, 0))
     while True:
@@ -260,7 +260,7 @@ def _settle_seams(scene: Scene, plan: Plan, st: Store, cid: str, blocks: dict, r
                     spec = plan.segment(d, line, j)
                     brute = blocks[plan.block(BRUTE, spec)]
                     f = spec.flat[spec.own_from - 1]
-                    a = cloud(prev, variables, "point", f, "time")
+                    a = cloud(prev, variables, "point", f, RECORD_DIM)
                     seam_vars = [f"seam_{v}" for v in variables]
                     b = cloud(brute, seam_vars, "seam_point", f, "seam_time")
                     cross, within = attractor_distance(a, b, scales[d, line])
@@ -307,6 +307,9 @@ def _assemble(scene: Scene, plan: Plan, final: dict, seams: dict, blocks: dict) 
         )
         if "forcing_period" in ds:
             ds["forcing_period"] = per_direction[0]["forcing_period"]
+        if RECORD_TIME in ds.coords:  # each direction's own (coords="minimal" kept the first's)
+            times = xr.concat([p[RECORD_TIME] for p in per_direction], dim="direction")
+            ds = ds.assign_coords({RECORD_TIME: times})
         ds = ds.assign_coords(direction=("direction", list(plan.directions), DIRECTION_ATTRS))
         ds.attrs["campaign_dims"] = "direction " + ds.attrs["campaign_dims"]
         ds.attrs["campaign_points"] = len(plan.directions) * plan.grid.size

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from workbench.archive import save_figure
+from workbench.archive import SERIES_DIMS, save_figure
 from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
 from workbench.plot._base import (
     axis_label,
@@ -39,8 +39,9 @@ _COLUMNS = 2
 
 
 def _series(ds: xr.Dataset) -> list[str]:
-    """The stored variables over time (in dataset order)."""
-    return [v for v in ds.data_vars if "time" in ds[v].dims]
+    """The stored variables over time (in dataset order): along ``time``, or along ``record``
+    in a campaign whose points have their own record times."""
+    return [v for v in ds.data_vars if any(d in SERIES_DIMS for d in ds[v].dims)]
 
 
 def _pages(names: list[str]) -> list[list[str]]:
@@ -223,12 +224,13 @@ def campaign_figure(
         factor, _ = display_unit(da.attrs.get("units"))
         if not np.isfinite(da.values).any():
             _empty_panel(ax, da, note or "")
-        for label, line in _lines(da, (param, "time")):
-            y = line.transpose(param, "time").values * factor
+        rdim = next(d for d in da.dims if d in SERIES_DIMS)  # time, or record
+        for label, line in _lines(da, (param, rdim)):
+            y = line.transpose(param, rdim).values * factor
             x = np.broadcast_to(display_values(ds[param])[:, None], y.shape)
             ax.plot(x.ravel(), y.ravel(), ".", ms=1.5, alpha=0.6, label=label or None)
         mark_failed(ax, ds, param)  # counted in the title
-        if any(d not in (param, "time") for d in da.dims):
+        if any(d not in (param, rdim) for d in da.dims):
             _legend_outside(ax, handles=_proxies(ax))
         ax.set_title(_panel_title(da), fontsize=8)
         ax.set_ylabel(_short_label(da), fontsize=8)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench.archive import SERIES_DIMS
 from workbench.models import get_model
 from workbench.scene import Scene
 
@@ -52,7 +53,7 @@ def select(ds: xr.Dataset, var: str, where: dict | None = None) -> xr.DataArray:
     for dim, label in (where or {}).items():
         if dim not in da.dims or label not in da[dim].values:
             # e.g. contact force at B in a run with clearance only at A: nothing to measure
-            return xr.full_like(da.isel({d: 0 for d in da.dims if d != "time"}), np.nan)
+            return xr.full_like(da.isel({d: 0 for d in da.dims if d not in SERIES_DIMS}), np.nan)
         da = da.sel({dim: label})
     return da
 
@@ -61,8 +62,11 @@ def member_run(ds: xr.Dataset, select_params: dict[str, float] | None = None) ->
     """One case of a study's campaign as an ensemble: the point ``select_params`` of its
     parameter sweep (none for a case without one), dims ``realisation``, ``time`` and the
     model's; the forcing period (s) as the attribute ``forcing_period``."""
+    from workbench.analysis._series import time_record
+
     if select_params:
-        ds = ds.sel(select_params, method="nearest")
+        # a point of a sweep over the forcing frequency: its realisations' records in time
+        ds = time_record(ds.sel(select_params, method="nearest"))
     if "forcing_period" in ds.data_vars:
         period = float(np.nanmax(ds["forcing_period"].values))
         ds = ds.drop_vars("forcing_period")
@@ -117,19 +121,29 @@ def seconds_per_cycle(wall_time: float, scene: Scene) -> float:
     return float(wall_time) / max(cycles, 1)
 
 
+def record_dim(da: xr.DataArray) -> str:
+    """The dim ``da``'s records run along: ``time``, or ``record`` in a campaign whose points have
+    their own record times (docs/archives.md)."""
+    found = [d for d in da.dims if d in SERIES_DIMS]
+    if len(found) != 1:
+        raise ValueError(f"{da.name!r} (dims {da.dims!r}) has no record dim of {SERIES_DIMS!r}")
+    return found[0]
+
+
 def contact_fraction(force: xr.DataArray) -> xr.DataArray:
     """Fraction of the record with a contact force above zero (1): the share of time the
     journal touches its bearing (records are equally spaced in time). NaN records (a failed
     run) are left out; reduces dim ``time``."""
     valid = np.isfinite(force)
-    out = (force > 0).where(valid).sum("time") / valid.sum("time")
+    rdim = record_dim(force)
+    out = (force > 0).where(valid).sum(rdim) / valid.sum(rdim)
     return out.assign_attrs(units="1", long_name="fraction of the time in contact")
 
 
 def force_percentiles(force: xr.DataArray, q: tuple[float, ...] = PERCENTILES) -> xr.DataArray:
     """The contact force exceeded during (100 - q) % of the time, for each q in ``q`` (N):
     percentiles over the record (zero while out of contact); new dim ``percentile`` (%)."""
-    out = force.quantile(np.asarray(q) / 100.0, dim="time", skipna=True)
+    out = force.quantile(np.asarray(q) / 100.0, dim=record_dim(force), skipna=True)
     out = out.rename(quantile="percentile").assign_coords(
         percentile=("percentile", np.asarray(q), {"units": "%", "long_name": "percentile"})
     )

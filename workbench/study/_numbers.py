@@ -22,6 +22,7 @@ from workbench.study._measure import (
     friction_law,
     member_run,
     peak,
+    record_dim,
     seconds_per_cycle,
     select,
     strobe,
@@ -173,9 +174,10 @@ def _bifurcation_spread(ds: xr.Dataset, scene: Scene) -> dict:
             c = v if param == "clearance" else clearance_of(scene, joint)
             x = select(point, "clearance_x", {"joint": joint})
             y = select(point, "clearance_y", {"joint": joint})
+            rdim = record_dim(x)  # time, or record (each point's own record times)
             for da in (x, y):
-                acc.append(da.std("time", skipna=True).values / c)
-            touch.append((np.hypot(x, y) > c).where(np.isfinite(x)).mean("time").values)
+                acc.append(da.std(rdim, skipna=True).values / c)
+            touch.append((np.hypot(x, y) > c).where(np.isfinite(x)).mean(rdim).values)
         spreads.append([float(s) for s in np.nanmean(acc, axis=0)])
         in_contact.append([float(s) for s in np.nanmean(touch, axis=0)])
     return {"parameter": param, "values": values, "spread": spreads, "in_contact": in_contact}
