@@ -105,7 +105,7 @@ def register_cli(sub) -> None:
         default=0.05,
         metavar="F",
         help="fraction of the points whose exponent the full protocol measures too, to check "
-        "the map's own precision (default 0.05, at least 3 points; 0: none)",
+        "the map's own precision (default 0.05; at least 3 points, 0: none)",
     )
     p.add_argument(
         "--full-seed", type=int, default=0, help="seed of that subset's choice (default 0)"
