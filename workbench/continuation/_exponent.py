@@ -38,9 +38,10 @@ vector in the error norm holds them to rtol of themselves, at the price of more 
 (docs/continuation.md, "Chaos maps", gives what both read on the chaotic nine-bar).
 Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve with the
 model's Jacobian, not the derived system's. A point's budget leaves out one check of each
-estimator (:data:`NOT_RUN`: the run at rtol / 100); the estimate is ``converged`` where every
-condition its estimator did run holds (error target, variants, the variational exponent, the
-sum check), and ``unmet`` names those that did not.
+estimator (:data:`NOT_RUN`: the run at rtol / 100; the fast protocol of a map,
+:data:`PROTOCOLS`, also the separation and growth variants, :data:`FAST_NOT_RUN`); the
+estimate is ``converged`` where every condition its estimator did run holds (error target,
+variants, the variational exponent, the sum check), and ``unmet`` names those that did not.
 """
 
 from __future__ import annotations

@@ -8,9 +8,13 @@ and the **largest Lyapunov exponent** with its error (:func:`workbench.continuat
 point_exponent`): where the strobe has a period k, ``ln |mu_max| / (k T)`` of the period-k
 orbit Newton finds from the state where the run ended (a trajectory method cannot measure a
 strongly contracting orbit: :mod:`workbench.continuation._exponent`), else over
-:func:`lle_cycles` forcing periods after the scene's transient from the variational equations
-with saltation for a model with an analytic Jacobian, or by the linearised two-trajectory method
-(the mechanisms), checked by the variational exponent on the same trajectories. A failure of
+:func:`lle_cycles` forcing periods (grown to a 10 % error or the sign decided beyond three
+errors) from where the run ended, from the variational equations with saltation for a model
+with an analytic Jacobian, or by the linearised two-trajectory method (the mechanisms),
+checked by the variational exponent on the same trajectory: the map's own precision (the fast
+protocol of :func:`~workbench.continuation.point_exponent`), nothing integrated twice. On a
+reproducible random subset of a map's points the full protocol runs too (:func:`chaos_map`,
+:func:`full_subset`), and the map says how the two agree (:func:`subset_agreement`). A failure of
 the exponent's runs is recorded (``lle_status``), not raised, so one hard point does not stop a
 map; whether the exponent converged is recorded beside it (``lle_converged``, and
 ``lle_unmet``: which of its conditions did not hold,
