@@ -19,7 +19,13 @@ import xarray as xr
 
 from workbench.analysis._convergence import TARGET, agree, batch_error, judge, pooled
 from workbench.analysis._copies_run import follow_copies, joined
-from workbench.analysis._window import Window, length_limit, measurement_window
+from workbench.analysis._window import (
+    Window,
+    length_limit,
+    measurement_window,
+    precision_condition,
+    stopping_rule,
+)
 from workbench.scene import SceneSource, load_scene
 
 __all__ = ["lle_from_equations"]
@@ -56,10 +62,18 @@ VARIANTS = (
 
 
 def _start_windows(
-    scene: SceneSource, starts: int, cycles, duration, method: str | None
+    scene: SceneSource, starts: int, cycles, duration, method: str | None, start=None
 ) -> list[Window]:
     """The measurement windows of the starts: realisations r0, r0 + 1, ... of the scene (r0 its
-    own, default 0: the unperturbed run), each advanced through the scene's transient."""
+    own, default 0: the unperturbed run), each advanced through the scene's transient; with
+    ``start`` (one start) the window that begins there (:func:`measurement_window`)."""
+    if start is not None:
+        if starts != 1:
+            raise ValueError(
+                f"starts={starts!r}: a given start (t, y, aux) is one start; pass starts=1"
+            )
+        return [measurement_window(scene, cycles=cycles, duration=duration, method=method,
+                                   start=start)]  # fmt: skip
     base = load_scene(scene)
     r0 = int(base.run.get("realisation", 0))
     out = []
@@ -114,6 +128,9 @@ def lle_from_equations(
     check: bool = True,
     variational: bool = True,
     seed: int = 0,
+    variants: bool = True,
+    sign: float | None = None,
+    start: tuple | None = None,
 ) -> xr.Dataset:
     """Largest Lyapunov exponent (1/s) of a scene's model by the two-trajectory method, from
     independent starts, with its convergence shown.
@@ -162,6 +179,11 @@ def lle_from_equations(
     (the Hertz force's curvature is unbounded there). On the chaos case both are measured (see
     ``SEPARATION``): the default d0 = sqrt(eps) sits between them, at rtol 1e-6 and 1e-10.
 
+    With ``sign`` the windows also stop growing where the sign of the estimate is decided,
+    ``|lle| > sign * stderr`` (a sequential rule: the error target or the sign, whichever comes
+    first; the ``stopped_by`` attribute names the rule that held, ``budget`` where neither
+    did), and the error target's condition below holds where either rule does.
+
     ``converged`` holds only where (1) the error target is met, (2) the five variants spread
     by at most 5 % and each lies within two standard errors of the estimate, (3) runs at
     ``rtol / 100`` (not below 1e-11) from the same starts agree within two standard errors of
@@ -206,6 +228,16 @@ def lle_from_equations(
         it the estimate is never ``converged``.
     seed : int
         Seed of the direction of the initial separation (start k uses ``seed + k``).
+    variants : bool
+        Run the four separation and growth variants beside the estimate's copy; without them
+        (one copy) the estimate is never ``converged``.
+    sign : float, optional
+        Also stop where the estimate's sign is decided beyond this many standard errors (see
+        above; default: the error target alone).
+    start : tuple, optional
+        ``(t, y, aux)``: one start from this time (s) and state instead of the scene's
+        transient (:func:`workbench.analysis._window.measurement_window`), e.g. where the
+        scene's own run ended; with ``starts=1``.
 
     Returns
     -------
@@ -220,7 +252,8 @@ def lle_from_equations(
         ``running`` estimate over ``elapsed`` (s, per start), ``lle_variational`` with its
         ``stderr_variational`` and ``difference`` (two trajectories minus variational, s-1)
         with its ``stderr_difference``, ``lle_tight``; attributes ``starts``, ``cycles`` or
-        ``duration`` used in total and per start.
+        ``duration`` used in total and per start, ``stopped_by`` (the rule that ended the
+        window: ``error target``, ``sign`` or ``budget``).
 
     Examples
     --------
@@ -237,14 +270,17 @@ def lle_from_equations(
         raise ValueError(f"growth={growth!r}: must be a positive log growth")
     if not separation > 0:
         raise ValueError(f"separation={separation!r}: must be a positive scaled separation")
-    preps = _start_windows(scene, int(starts), cycles, duration, method)
+    if sign is not None and not sign > 0:
+        raise ValueError(f"sign={sign!r}: must be a positive number of standard errors")
+    preps = _start_windows(scene, int(starts), cycles, duration, method, start)
     prep = preps[0]
     prep.require_explicit()
     length = prep.length / starts
     limit = length_limit(prep, budget) / starts
     rtol = prep.rtol if rtol is None else float(rtol)
-    seps = np.array([v[1] for v in VARIANTS]) * float(separation)
-    grow = np.array([v[2] for v in VARIANTS]) * float(growth)
+    copies = VARIANTS if variants else VARIANTS[:1]
+    seps = np.array([v[1] for v in copies]) * float(separation)
+    grow = np.array([v[2] for v in copies]) * float(growth)
 
     def follow(p, k, span, tol, copies=slice(None), var=variational, resume=None):
         return follow_copies(
@@ -254,41 +290,42 @@ def lle_from_equations(
     tried = []
     while True:
         runs = [follow(p, k, length, rtol) for k, p in enumerate(preps)]
-        estimates = np.array([_estimate(runs, c)["value"] for c in range(len(VARIANTS))])
+        estimates = np.array([_estimate(runs, c)["value"] for c in range(len(copies))])
         spread = float(np.max(np.abs(estimates - estimates[0])) / max(abs(estimates[0]), 1e-300))
         tried.append((rtol, float(estimates[0]), spread))
         if spread <= TOLERANCE or not tighten or rtol / 100 < MIN_RTOL:
             break
         rtol /= 100  # the variants part by the integration error: tighten, and say so
-    while True:  # the windows grow until the error target is met or the budget is spent
+    while True:  # the windows grow until a stopping rule holds or the budget is spent
         elapsed = runs[0]["times"][-1] - runs[0]["times"][0]
         est = _estimate(runs)
-        if est["stderr"] <= target * abs(est["value"]) or 2 * elapsed > limit * (1 + 1e-12):
+        rule = stopping_rule(est["value"], est["stderr"], target, sign)
+        if rule or 2 * elapsed > limit * (1 + 1e-12):
             break
         runs = [
             joined(r, follow(p, k, elapsed, rtol, resume=r))
             for k, (p, r) in enumerate(zip(preps, runs, strict=True))
         ]
     lle, stderr = est["value"], est["stderr"]
-    estimates = np.array([_estimate(runs, c)["value"] for c in range(len(VARIANTS))])
+    estimates = np.array([_estimate(runs, c)["value"] for c in range(len(copies))])
     spread = float(np.max(np.abs(estimates - lle)) / max(abs(lle), 1e-300))
     worst = float(np.max(np.abs(estimates - lle)))
     unit = prep.period if prep.period is not None else 1.0
     units = "cycles" if prep.period is not None else "s"
-    conditions = {
-        "error target": (
-            stderr <= target * abs(lle),
-            f"the standard error is {stderr / abs(lle):.1%} of the estimate after "
-            f"{starts} x {elapsed / unit:g} {units} (target {target:.0%}, budget "
-            f"{starts * limit / unit:g} {units})",
-        ),
-        "variants": (
+    precision, rule = precision_condition(
+        lle, stderr, target, sign,
+        f"after {starts} x {elapsed / unit:g} {units} (budget {starts * limit / unit:g} {units})",
+    )  # fmt: skip
+    conditions = {"error target": precision}
+    if variants:
+        conditions["variants"] = (
             spread <= TOLERANCE and worst <= 2 * stderr,
             f"the separation and growth variants read {np.round(estimates, 4).tolist()} 1/s: "
             f"spread {spread:.1%} (allowed {TOLERANCE:.0%}), largest deviation "
             f"{worst:.3g} 1/s (allowed two standard errors, {2 * stderr:.3g})",
-        ),
-    }
+        )
+    else:
+        conditions["variants"] = (False, "not run (variants=False)")
     tight = None
     if check:
         rtol_t = max(rtol / 100, MIN_RTOL)
@@ -319,6 +356,7 @@ def lle_from_equations(
     return _dataset(
         prep, runs, est, estimates, spread, seps, grow, tried, tight, var, diff,
         converged=converged, failed=failed, rtol=rtol, starts=int(starts),
+        stopped_by=rule or "budget", names=[v[0] for v in copies],
     )  # fmt: skip
 
 
@@ -365,7 +403,7 @@ def _dataset(
             ),
         },
         coords={
-            "variant": ("variant", [v[0] for v in VARIANTS]),
+            "variant": ("variant", info["names"]),
             "start": ("start", np.arange(len(runs)), {"long_name": "start (realisation offset)"}),
             "elapsed": ("elapsed", elapsed, {"units": "s", "long_name": "time followed"}),
         },
@@ -375,6 +413,7 @@ def _dataset(
             "rtol": info["rtol"],
             "start_time": float(times0[0]),
             "failed": info["failed"],
+            "stopped_by": info["stopped_by"],
             "starts": info["starts"],
             key: info["starts"] * elapsed[-1] / unit,
             f"{key}_per_start": elapsed[-1] / unit,

@@ -6,7 +6,6 @@ repeated QR re-orthonormalisation (Benettin, Galgani, Giorgilli & Strelcyn 1980,
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import xarray as xr
@@ -19,7 +18,14 @@ from workbench.analysis._convergence import (
     batch_error,
     judge,
 )
-from workbench.analysis._window import Window, length_limit, measurement_window, time_scale
+from workbench.analysis._window import (
+    Window,
+    length_limit,
+    measurement_window,
+    precision_condition,
+    stopping_rule,
+    time_scale,
+)
 from workbench.scene import SceneSource
 from workbench.solver import (
     state_scale,
@@ -140,16 +146,20 @@ def _joined(a: dict, b: dict) -> dict:
     return out
 
 
-def grown_run(prep: Window, m: int, *, limit: float, target: float, **kwargs) -> dict:
-    """:func:`tangent_run` over the window, continued (its length doubled each time) while the
-    standard error of the largest exponent exceeds ``target`` of its magnitude and the doubled
-    length stays within ``limit`` (s)."""
+def grown_run(
+    prep: Window, m: int, *, limit: float, target: float, sign: float | None = None, **kwargs
+) -> dict:
+    """:func:`tangent_run` over the window, continued (its length doubled each time) while no
+    stopping rule holds for the largest exponent (its standard error above ``target`` of its
+    magnitude and, with ``sign``, its sign not decided beyond ``sign`` standard errors:
+    :func:`workbench.analysis._window.stopping_rule`) and the doubled length stays within
+    ``limit`` (s)."""
     run = tangent_run(prep, m, **kwargs)
     while True:
         elapsed = run["times"][-1] - run["start"]
         lam = run["log_growth"][:, 0].sum() / elapsed
         err = batch_error(run["times"], run["log_growth"][:, :1], run["start"])[0]
-        if err <= target * abs(lam) or 2 * elapsed > limit * (1 + 1e-12):
+        if stopping_rule(lam, err, target, sign) or 2 * elapsed > limit * (1 + 1e-12):
             return run
         more = tangent_run(prep, m, length=elapsed, resume=run, **kwargs)
         run = _joined(run, more)
@@ -168,6 +178,8 @@ def lyapunov_spectrum(
     defect: float = DEFECT,
     check: bool = True,
     seed: int = 0,
+    sign: float | None = None,
+    start: tuple | None = None,
 ) -> xr.Dataset:
     """Lyapunov spectrum of a scene's model from its variational equations with saltation.
 
@@ -179,7 +191,11 @@ def lyapunov_spectrum(
     (its length doubled, the run continued) until the largest exponent's standard error is
     below ``target`` of its magnitude or the ``budget`` is spent. Valid for the non-smooth
     contact models, whose impacts the two-trajectory method sees only through its separation;
-    the reference for :func:`workbench.analysis.lle_from_equations`.
+    the reference for :func:`workbench.analysis.lle_from_equations`. With ``sign`` the window
+    also stops growing where the largest exponent's sign is decided, ``|lambda_1| > sign *
+    stderr`` (the error target or the sign, whichever comes first; the ``stopped_by``
+    attribute names the rule, ``budget`` where neither held), and the error target's condition
+    below holds where either rule does.
 
     ``converged`` holds only where the error target is met, a run at ``rtol / 100`` over the
     same window agrees with every exponent within two standard errors of the difference, and
@@ -215,6 +231,13 @@ def lyapunov_spectrum(
         without it the estimate is never ``converged``.
     seed : int
         Seed of the random initial tangent vectors.
+    sign : float, optional
+        Also stop where the largest exponent's sign is decided beyond this many standard
+        errors (see above; default: the error target alone).
+    start : tuple, optional
+        ``(t, y, aux)``: the window starts at this time (s) and state instead of after the
+        scene's transient (:func:`workbench.analysis._window.measurement_window`), e.g. where
+        the scene's own run ended.
 
     Returns
     -------
@@ -224,7 +247,9 @@ def lyapunov_spectrum(
         models), ``spectrum_sum``, ``volume_rate`` and ``sum_check``; with all n exponents the
         mean phase-space contraction rate ``divergence`` and the discrete state's share
         ``memory_rate`` (their sum is the volume rate); ``converged`` and the check at the
-        tighter tolerance; attributes ``cycles`` or ``duration`` followed, ``failed``.
+        tighter tolerance; attributes ``cycles`` or ``duration`` followed, ``failed``,
+        ``stopped_by`` (the rule that ended the window: ``error target``, ``sign`` or
+        ``budget``).
 
     Examples
     --------
@@ -239,23 +264,26 @@ def lyapunov_spectrum(
     """
     if not 0 < target < 1:
         raise ValueError(f"target={target!r}: must be a relative error in (0, 1)")
-    prep = measurement_window(scene, cycles=cycles, duration=duration, method=method)
+    if sign is not None and not sign > 0:
+        raise ValueError(f"sign={sign!r}: must be a positive number of standard errors")
+    prep = measurement_window(scene, cycles=cycles, duration=duration, method=method, start=start)
     prep.require_explicit()
     limit = length_limit(prep, budget)
     n = prep.problem.y0.size
     m = n if exponents is None else int(exponents)
-    run = grown_run(prep, m, limit=limit, target=target, rtol=rtol, defect=defect, seed=seed)
+    run = grown_run(
+        prep, m, limit=limit, target=target, sign=sign, rtol=rtol, defect=defect, seed=seed
+    )
     out = _spectrum_dataset(prep, run)
     length = float(out.elapsed[-1])
     lam, err = out["exponent"].values, out["stderr"].values
     unit, units = time_scale(prep), ("cycles" if prep.period is not None else "s")
-    rel = float(err[0] / abs(lam[0])) if lam[0] != 0 else math.inf
+    precision, rule = precision_condition(
+        float(lam[0]), float(err[0]), target, sign,
+        f"after {length / unit:g} {units} (budget {limit / unit:g} {units})",
+    )  # fmt: skip
     conditions = {
-        "error target": (
-            rel <= target,
-            f"the largest exponent's standard error is {rel:.1%} of it after "
-            f"{length / unit:g} {units} (target {target:.0%}, budget {limit / unit:g} {units})",
-        ),
+        "error target": precision,
         "sum check": (
             float(out.sum_check) <= SUM_CHECK,
             f"the spectrum's sum and the integrated volume rate differ by "
@@ -296,6 +324,7 @@ def lyapunov_spectrum(
         {"long_name": f"converged, agrees at rtol/100, standard error <= {TRUST:.0%}"},
     )
     out.attrs["failed"] = failed
+    out.attrs["stopped_by"] = rule or "budget"
     out.attrs["cycles" if prep.period is not None else "duration"] = length / unit
     return out
 

@@ -29,7 +29,13 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
         ds = chaos_map(
-            scene, args.output, workers=args.workers, restart=args.restart, progress=not args.quiet
+            scene,
+            args.output,
+            workers=args.workers,
+            restart=args.restart,
+            progress=not args.quiet,
+            full_fraction=args.full_fraction,
+            full_seed=args.full_seed,
         )
     print(summary(ds))
     status = ds["lle_status"].values if "lle_status" in ds else None
@@ -45,6 +51,13 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
             f"  {int((ds['lle_converged'] == 0).sum())} exponents did not converge "
             "(lle_converged = 0; lle_unmet names the conditions; hatched on the figure)"
         )
+    n_full = int(ds.attrs.get("lle_full_points", 0))
+    if n_full:
+        print(
+            f"  full protocol at {n_full} points: {ds.attrs['lle_full_agreeing']:.0%} agree with "
+            f"the map's exponents (within 10 % or 2 combined errors), "
+            f"{ds.attrs['lle_full_same_verdict']:.0%} with the same verdict (chaotic or regular)"
+        )
     if args.figure:
         from workbench.plot import chaos_map_figure
 
@@ -58,6 +71,17 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
     return campaign_exit_code(ds["status"].values)
 
 
+def _fraction(text: str) -> float:
+    """argparse type: a number in [0, 1]."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"got {text!r}; allowed: a number in [0, 1]") from None
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"got {value}; allowed: a number in [0, 1]")
+    return value
+
+
 def register_cli(sub) -> None:
     """Add the ``chaos-map`` subcommand."""
     p = sub.add_parser(
@@ -66,12 +90,25 @@ def register_cli(sub) -> None:
         description="Run a scene's [sweep] as a campaign whose workers measure each point's "
         "strobe period, 0-1 test K and largest Lyapunov exponent with its error (the "
         "Floquet multipliers' where the strobe is periodic, else the variational equations "
-        "or the two-trajectory method); resumable like 'workbench campaign'.",
+        "or the two-trajectory method, from where each point's run ended, to a 10 % error or "
+        "the sign beyond 3 errors; the full protocol on a random subset); resumable like "
+        "'workbench campaign'.",
     )
     p.add_argument("scene", help="scene file (TOML) with a [sweep], recorded per period")
     p.add_argument("-o", "--output", required=True, help="campaign netCDF file to write")
     p.add_argument("--workers", type=positive_int, help="processes (default: CPUs)")
     p.add_argument("--figure", metavar="PNG", help="draw the maps (two swept dims)")
     p.add_argument("--restart", action="store_true", help="discard a stored map")
+    p.add_argument(
+        "--full-fraction",
+        type=_fraction,
+        default=0.05,
+        metavar="F",
+        help="fraction of the points whose exponent the full protocol measures too, to check "
+        "the map's own precision (default 0.05; at least 3 points, 0: none)",
+    )
+    p.add_argument(
+        "--full-seed", type=int, default=0, help="seed of that subset's choice (default 0)"
+    )
     add_quiet(p)
     p.set_defaults(func=_cmd_chaos_map)

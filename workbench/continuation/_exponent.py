@@ -38,9 +38,10 @@ vector in the error norm holds them to rtol of themselves, at the price of more 
 (docs/continuation.md, "Chaos maps", gives what both read on the chaotic nine-bar).
 Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve with the
 model's Jacobian, not the derived system's. A point's budget leaves out one check of each
-estimator (:data:`NOT_RUN`: the run at rtol / 100); the estimate is ``converged`` where every
-condition its estimator did run holds (error target, variants, the variational exponent, the
-sum check), and ``unmet`` names those that did not.
+estimator (:data:`NOT_RUN`: the run at rtol / 100; the fast protocol of a map,
+:data:`PROTOCOLS`, also the separation and growth variants, :data:`FAST_NOT_RUN`); the
+estimate is ``converged`` where every condition its estimator did run holds (error target,
+variants, the variational exponent, the sum check), and ``unmet`` names those that did not.
 """
 
 from __future__ import annotations
@@ -52,14 +53,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.analysis import lle_from_equations, lyapunov_spectrum
-from workbench.analysis._convergence import TRUST, ConvergenceWarning
+from workbench.analysis._convergence import TARGET, TRUST, ConvergenceWarning
 from workbench.continuation._newton import NewtonFailure, orbit_at
 from workbench.continuation._strobe import StrobeMap
 from workbench.run import prepare
 from workbench.scene import Scene
 from workbench.solver import SolverError, jacobian_for
 
-__all__ = ["PointExponent", "exponent_method", "point_exponent"]
+__all__ = ["MAP_SIGN", "MAP_TARGET", "PointExponent", "exponent_method", "point_exponent"]
 
 #: how a point's exponent was measured (the flag values of ``lle_method``)
 METHODS = {
@@ -82,8 +83,22 @@ CHECK_FACTOR = 100.0
 #: CHECK_FACTOR was the differences' noise
 NOISE_DROP = 10.0
 #: the convergence conditions of a trajectory estimator a map point does not run (its cost):
-#: they are left out of ``converged`` (every other condition must hold)
+#: they are left out of ``converged`` (every other condition must hold); per protocol
+#: (:data:`PROTOCOLS`), then per method
 NOT_RUN = {"variational": ("tolerance check",), "copies": ("tolerance check",)}
+FAST_NOT_RUN = {"variational": ("tolerance check",), "copies": ("tolerance check", "variants")}
+#: the protocols of a point's exponent: ``full`` (four independent starts after the scene's
+#: transient, the separation and growth variants, the 3 % error target; Newton from the state
+#: after the transient and the recorded cycles, integrated again) and ``fast`` (a map's own
+#: precision: one start from where the point's run ended, the estimate's copy alone, the error
+#: target MAP_TARGET or the sign decided beyond MAP_SIGN standard errors, whichever first;
+#: Newton from where the run ended)
+PROTOCOLS = ("full", "fast")
+#: the fast protocol's default relative error target
+MAP_TARGET = 0.1
+#: the fast protocol's default sign rule: the window stops growing where |value| exceeds this
+#: many standard errors
+MAP_SIGN = 3.0
 #: why an exponent is not converged, in the order of the bits of ``PointExponent.unmet_code``
 #: (the trajectory estimators' condition names, Floquet's check, the bound, a failed run, any
 #: condition not named here, and the copies' variational check, added last so that the older
@@ -108,7 +123,9 @@ class PointExponent:
     value is only an upper bound: the multipliers are below the noise of the differences;
     error NaN), ``detail`` (why Floquet's value was not taken, what failed, or the
     trajectory method's unmet convergence conditions), ``unmet`` (the names, from
-    :data:`UNMET`, of the conditions that did not hold; empty where the estimate converged)."""
+    :data:`UNMET`, of the conditions that did not hold; empty where the estimate converged),
+    ``rule`` (a trajectory estimate's stopping rule that held: ``"error target"`` or
+    ``"sign"``; empty for Floquet's and where neither held)."""
 
     value: float
     error: float
@@ -117,6 +134,7 @@ class PointExponent:
     detail: str = ""
     bound: bool = False
     unmet: tuple[str, ...] = ()
+    rule: str = ""
 
     def __post_init__(self):
         unmet = tuple(u for u in self.unmet if u != "failed")
@@ -132,6 +150,15 @@ class PointExponent:
     def converged(self) -> bool:
         """Every convergence condition that was run holds (not a bound, not failed)."""
         return not self.unmet
+
+    @property
+    def converged_code(self) -> int:
+        """The flag ``lle_converged``: 0 not converged, 1 converged (the error target met, or
+        Floquet's check), 2 converged on the sign rule (the sign decided, the error target not
+        met; every other condition holds)."""
+        if not self.converged:
+            return 0
+        return 2 if self.rule == "sign" else 1
 
     @property
     def unmet_code(self) -> int:
@@ -215,12 +242,28 @@ def point_exponent(
     state=None,
     discrete_state=None,
     start_cycles: int | None = None,
+    start_time: float | None = None,
+    protocol: str = "full",
+    target: float | None = None,
+    sign: float | None = None,
 ) -> PointExponent:
     """The largest Lyapunov exponent of one point of a forced scene (see the module docstring):
     Floquet's where ``period`` (the strobe's period in forcing periods, 0 for none) is at least
-    1 and Newton converges, else the trajectory method over ``cycles`` forcing periods after
-    the scene's transient. A failed run gives ``failed`` and a NaN value, never an exception
-    (one hard point must not stop a map).
+    1 and Newton converges, else the trajectory method over ``cycles`` forcing periods (grown
+    by doubling within its budget until its stopping rule holds). A failed run gives
+    ``failed`` and a NaN value, never an exception (one hard point must not stop a map).
+
+    Two protocols (:data:`PROTOCOLS`). ``full``: the trajectory method from four independent
+    starts after the scene's transient, with the separation and growth variants (copies) and
+    the error target ``target`` (default 3 %). ``fast`` (a map's own precision): everything
+    starts where the point's run ended (``state``, ``discrete_state`` at ``start_time``, s,
+    whole forcing periods after the problem's start, e.g. the run's ``end_time``,
+    ``end_state`` and ``end_discrete_state``): Newton from there, and the trajectory method
+    as one start from there (its error from the batch means of its time blocks), the
+    estimate's copy alone with the variational exponent on the same trajectory (copies), its
+    window grown until the standard error is at most ``target`` (default :data:`MAP_TARGET`)
+    of the estimate or its sign is decided beyond ``sign`` (default :data:`MAP_SIGN`)
+    standard errors, whichever first; ``rule`` says which held.
 
     Parameters
     ----------
@@ -235,7 +278,31 @@ def point_exponent(
     start_cycles : int, optional
         Without ``state``: Newton starts after this many forcing periods from the scene's
         initial state (default its transient).
+    start_time : float, optional
+        The time of ``state`` (s); required by the fast protocol.
+    protocol : str
+        ``"full"`` (default) or ``"fast"`` (see above).
+    target : float, optional
+        Relative standard error the trajectory method's window grows to (default 3 % for the
+        full protocol, :data:`MAP_TARGET` for the fast one).
+    sign : float, optional
+        Fast protocol: standard errors beyond which the sign is decided and the window stops
+        (default :data:`MAP_SIGN`); the full protocol has no sign rule.
     """
+    if protocol not in PROTOCOLS:
+        raise ValueError(f"protocol={protocol!r}: must be one of {PROTOCOLS!r}")
+    fast = protocol == "fast"
+    if fast and (state is None or start_time is None):
+        raise ValueError(
+            "protocol='fast' starts where the point's run ended: pass state and start_time "
+            "(the run's end_state and end_time)"
+        )
+    if not fast and sign is not None:
+        raise ValueError(f"sign={sign!r}: the full protocol has no sign rule; use protocol='fast'")
+    if target is None:
+        target = MAP_TARGET if fast else TARGET
+    if fast and sign is None:
+        sign = MAP_SIGN
     notes = ""
     if period >= 1:
         try:
@@ -256,11 +323,15 @@ def point_exponent(
             # the estimators warn on any condition they did not check, also on those a map
             # skips on purpose (NOT_RUN); the point warns below only where one that ran failed
             warnings.simplefilter("ignore", ConvergenceWarning)
-            value, error, unmet = _trajectory_exponent(scene, method, cycles)
+            start = (start_time, state, discrete_state) if fast else None
+            value, error, unmet, rule = _trajectory_exponent(
+                scene, method, cycles, target=target, sign=sign, start=start
+            )
     except (SolverError, FloatingPointError, ValueError) as exc:
         return PointExponent(math.nan, math.nan, method, True, notes + str(exc)[:200])
+    skipped = (FAST_NOT_RUN if fast else NOT_RUN)[method]
     point = PointExponent(
-        value, error, method, False, notes + unmet, unmet=_unmet(unmet, NOT_RUN[method])
+        value, error, method, False, notes + unmet, unmet=_unmet(unmet, skipped), rule=rule
     )
     return _warn_unconverged(point)
 
@@ -278,19 +349,32 @@ def _warn_unconverged(point: PointExponent) -> PointExponent:
     return point
 
 
-def _trajectory_exponent(scene: Scene, method: str, cycles: int) -> tuple[float, float, str]:
-    """The exponent (s-1), its batch-means error (s-1) and the estimator's ``failed`` text, by
-    ``method`` ("variational" or "copies") over ``cycles`` forcing periods after the scene's
-    transient, without the checks of :data:`NOT_RUN`."""
+def _trajectory_exponent(
+    scene: Scene, method: str, cycles: int, *, target: float, sign=None, start=None
+) -> tuple[float, float, str, str]:
+    """The exponent (s-1), its batch-means error (s-1), the estimator's ``failed`` text and
+    the stopping rule that held ("" where none did), by ``method`` ("variational" or
+    "copies") over ``cycles`` forcing periods after the scene's transient, without the checks
+    of :data:`NOT_RUN`; with ``start`` (t, y, aux), the fast protocol: one start from there,
+    the estimate's copy alone (:data:`FAST_NOT_RUN`)."""
     if method == "variational":
         spec = lyapunov_spectrum(
-            scene, exponents=1, cycles=cycles, check=False, method=_explicit(scene)
-        )
-        return float(spec.exponent[0]), float(spec.stderr[0]), spec.attrs["failed"]
+            scene, exponents=1, cycles=cycles, check=False, method=_explicit(scene),
+            target=target, sign=sign, start=start,
+        )  # fmt: skip
+        rule = _rule(spec.attrs["stopped_by"])
+        return float(spec.exponent[0]), float(spec.stderr[0]), spec.attrs["failed"], rule
+    fast = {} if start is None else {"starts": 1, "variants": False, "start": start}
     r = lle_from_equations(
-        scene, cycles=cycles, tighten=False, check=False, method=_explicit(scene)
-    )
-    return float(r.lle), float(r.stderr), r.attrs["failed"]
+        scene, cycles=cycles, tighten=False, check=False, method=_explicit(scene),
+        target=target, sign=sign, **fast,
+    )  # fmt: skip
+    return float(r.lle), float(r.stderr), r.attrs["failed"], _rule(r.attrs["stopped_by"])
+
+
+def _rule(stopped_by: str) -> str:
+    """An estimator's ``stopped_by`` as a point's ``rule`` ("" for the budget)."""
+    return "" if stopped_by == "budget" else stopped_by
 
 
 def _unmet(failed: str, skipped: tuple[str, ...]) -> tuple[str, ...]:

@@ -8,9 +8,13 @@ and the **largest Lyapunov exponent** with its error (:func:`workbench.continuat
 point_exponent`): where the strobe has a period k, ``ln |mu_max| / (k T)`` of the period-k
 orbit Newton finds from the state where the run ended (a trajectory method cannot measure a
 strongly contracting orbit: :mod:`workbench.continuation._exponent`), else over
-:func:`lle_cycles` forcing periods after the scene's transient from the variational equations
-with saltation for a model with an analytic Jacobian, or by the linearised two-trajectory method
-(the mechanisms), checked by the variational exponent on the same trajectories. A failure of
+:func:`lle_cycles` forcing periods (grown to a 10 % error or the sign decided beyond three
+errors) from where the run ended, from the variational equations with saltation for a model
+with an analytic Jacobian, or by the linearised two-trajectory method (the mechanisms),
+checked by the variational exponent on the same trajectory: the map's own precision (the fast
+protocol of :func:`~workbench.continuation.point_exponent`), nothing integrated twice. On a
+reproducible random subset of a map's points the full protocol runs too (:func:`chaos_map`,
+:func:`full_subset`), and the map says how the two agree (:func:`subset_agreement`). A failure of
 the exponent's runs is recorded (``lle_status``), not raised, so one hard point does not stop a
 map; whether the exponent converged is recorded beside it (``lle_converged``, and
 ``lle_unmet``: which of its conditions did not hold,
@@ -19,12 +23,24 @@ map; whether the exponent converged is recorded beside it (``lle_converged``, an
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import math
+
 import numpy as np
 import xarray as xr
 
 from workbench.analysis import poincare_section, zero_one_test
-from workbench.campaign import run_campaign
-from workbench.continuation._exponent import METHODS, NOT_RUN, UNMET, point_exponent
+from workbench.archive import save_run
+from workbench.campaign import expand_sweep, run_campaign
+from workbench.continuation._exponent import (
+    FAST_NOT_RUN,
+    MAP_SIGN,
+    MAP_TARGET,
+    METHODS,
+    UNMET,
+    point_exponent,
+)
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = [
@@ -57,30 +73,48 @@ LLE_METHOD = {
     **{f"method_{k}": v for k, v in METHODS.items()},
 }
 LLE_CONVERGED = {
-    "long_name": "the largest Lyapunov exponent converged",
+    "long_name": "the largest Lyapunov exponent converged, and on which rule",
     "units": "1",
-    "flag_values": np.array([0, 1], np.int8),
-    "flag_meanings": "not_converged converged",
-    "comment": "1 where every convergence condition the map runs holds (lle_unmet = 0): "
-    "trajectory methods: the error target, the separation and growth variants and the "
-    "variational exponent on the same trajectories (copies), the error target and the sum "
-    "check (variational); floquet: the "
-    "exponent moves by at most 20 % with its check; never for an upper bound or a failed "
-    "run. Not run in a map (their cost): "
-    + "; ".join(f"{m}: {', '.join(c)}" for m, c in NOT_RUN.items()),
+    "flag_values": np.array([0, 1, 2], np.int8),
+    "flag_meanings": "not_converged converged converged_on_sign",
+    "comment": "nonzero where every convergence condition the map runs holds (lle_unmet = 0). "
+    "Trajectory methods: the window (one start from where the point's run ended, its error "
+    "from batch means) grew, doubling, until its standard error was at most the map's target "
+    "(lle_target) of the estimate (1: converged) or the sign was decided beyond lle_sign "
+    "standard errors (2: converged_on_sign, the error target not met), whichever first; with "
+    "the variational exponent on the same trajectory (copies) or the sum check (variational). "
+    "floquet: the exponent moves by at most 20 % with its check (1). 0 for an upper bound, a "
+    "failed run, or a window whose budget ended before either rule held. Not run in a map's "
+    "fast protocol (their cost; lle_full_protocol marks the points where the full protocol "
+    "ran too): " + "; ".join(f"{m}: {', '.join(c)}" for m, c in FAST_NOT_RUN.items()),
 }
 LLE_UNMET = {
     "long_name": "the convergence conditions of the largest Lyapunov exponent that failed",
     "units": "1",
     "flag_masks": np.array([1 << i for i in range(len(UNMET))], np.int16),
     "flag_meanings": " ".join(u.replace(" ", "_") for u in UNMET),
-    "comment": "bit field, 0: converged. error_target: the standard error is above 3 % of the "
-    "estimate after the window's budget; variants: the two-trajectory separation and growth "
-    "variants disagree; tolerance_check: the run at rtol / 100 disagrees; sum_check: the "
-    "spectrum's sum and the integrated volume rate differ; floquet_check: the Floquet exponent "
-    "moves by more than 20 % with its check; upper_bound: see lle_status; failed: the "
-    "exponent's runs failed; variational: the copies' exponent and the variational one on the "
-    "same trajectories differ; other: a condition of the estimator not named here",
+    "comment": "bit field, 0: converged. error_target: after the window's budget the "
+    "standard error is above the target of the estimate (lle_target) and the sign is not "
+    "decided beyond lle_sign standard errors (the full protocol: above 3 %, no sign rule); "
+    "variants: the two-trajectory separation and growth variants disagree; tolerance_check: "
+    "the run at rtol / 100 disagrees; sum_check: the spectrum's sum and the integrated volume "
+    "rate differ; floquet_check: the Floquet exponent moves by more than 20 % with its check; "
+    "upper_bound: see lle_status; failed: the exponent's runs failed; variational: the "
+    "copies' exponent and the variational one on the same trajectories differ; other: a "
+    "condition of the estimator not named here",
+}
+
+
+LLE_FULL_PROTOCOL = {
+    "long_name": "the full protocol of the exponent ran at this point too",
+    "units": "1",
+    "flag_values": np.array([0, 1], np.int8),
+    "flag_meanings": "fast_only full_protocol",
+    "comment": "1 on the map's random subset (lle_full_fraction of the points, at least 3, "
+    "chosen from the points' parameter values and lle_full_seed): the exponent measured again "
+    "by the full protocol (four independent starts after the transient, the separation and "
+    "growth variants, a 3 % error target; Newton from the state integrated again) in lle_full "
+    "and lle_full_stderr; the map's attributes lle_full_* say how it agrees with lle",
 }
 
 
@@ -111,20 +145,44 @@ def lle_cycles(scene: Scene) -> int:
     return max(10, scene.run["cycles"] // 5)
 
 
-def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
+def chaos_indicators(
+    scene: Scene,
+    run: xr.Dataset,
+    *,
+    full_protocol: bool = False,
+    target: float = MAP_TARGET,
+    sign: float = MAP_SIGN,
+) -> xr.Dataset:
     """The chaos indicators of one point (a campaign's ``per_point``): ``strobe_period``,
     ``zero_one_K`` (median over the recorded variables' components) and ``zero_one_K_<var>``
     (per variable, over its model dims), ``lle`` and ``lle_stderr`` (s-1), ``lle_per_period``
     (1), ``lle_method`` (floquet, variational or copies: :func:`workbench.continuation.
     point_exponent`), ``lle_status``, ``lle_converged`` and ``lle_unmet`` (why not; the
-    estimator's own words in the attribute ``lle_detail``).
+    estimator's own words in the attribute ``lle_detail``), and ``lle_full_protocol`` with
+    ``lle_full`` and ``lle_full_stderr`` (s-1; NaN where the full protocol did not run).
+
+    The exponent is measured by the fast protocol (a map's own precision,
+    :func:`~workbench.continuation.point_exponent` with ``protocol="fast"``): Newton and the
+    trajectory method start where the run ended (its ``end_state`` at ``end_time``), nothing
+    is integrated again, and the trajectory method's window grows until its standard error is
+    at most ``target`` of the estimate or its sign is decided beyond ``sign`` standard
+    errors. With ``full_protocol`` the full protocol runs too (the check of the fast values on
+    a subset of a map's points, :func:`chaos_map`).
 
     Parameters
     ----------
     scene : Scene
         The point's single-run scene (forced, recorded per period).
     run : xarray.Dataset
-        Its run (:func:`workbench.simulate`).
+        Its run (:func:`workbench.simulate`, with the end-state attributes).
+    full_protocol : bool
+        Also measure the exponent by the full protocol (``lle_full``, ``lle_full_stderr``).
+    target : float
+        The fast protocol's relative error target (default :data:`~workbench.continuation.
+        _exponent.MAP_TARGET`, 10 %).
+    sign : float
+        The fast protocol's sign rule: standard errors beyond which the sign is decided
+        (default :data:`~workbench.continuation._exponent.MAP_SIGN`, 3).
     """
     section = poincare_section(run)
     out: dict = {}
@@ -159,13 +217,19 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
         float(np.nanmedian(ks)) if np.isfinite(ks).any() else np.nan,
         {"long_name": "0-1 test K, median over the recorded variables", "units": "1"},
     )
+    period_s = float(run.attrs["forcing_period"])
+    t, y, aux = run_end(run)
     exp = point_exponent(
         scene,
         period=period,
         cycles=lle_cycles(scene),
-        start_cycles=scene.run["transient_cycles"] + scene.run["cycles"],
+        state=y,
+        discrete_state=aux,
+        start_time=t,
+        protocol="fast",
+        target=target,
+        sign=sign,
     )
-    period_s = float(run.attrs["forcing_period"])
     out["lle"] = (
         (),
         exp.value,
@@ -188,9 +252,52 @@ def chaos_indicators(scene: Scene, run: xr.Dataset) -> xr.Dataset:
     out["lle_method"] = ((), np.int8(list(METHODS).index(exp.method)), LLE_METHOD)
     status = 1 if exp.failed else 2 if exp.bound else 0
     out["lle_status"] = ((), np.int8(status), LLE_STATUS)
-    out["lle_converged"] = ((), np.int8(exp.converged), LLE_CONVERGED)
+    out["lle_converged"] = ((), np.int8(exp.converged_code), LLE_CONVERGED)
     out["lle_unmet"] = ((), np.int16(exp.unmet_code), LLE_UNMET)
+    full = None
+    if full_protocol:  # today's protocol, its own runs from scratch (start_cycles)
+        full = point_exponent(
+            scene,
+            period=period,
+            cycles=lle_cycles(scene),
+            start_cycles=scene.run["transient_cycles"] + scene.run["cycles"],
+        )
+    out["lle_full_protocol"] = ((), np.int8(full_protocol), LLE_FULL_PROTOCOL)
+    out["lle_full"] = (
+        (),
+        full.value if full is not None else np.nan,
+        {"long_name": "largest Lyapunov exponent by the full protocol", "units": "s-1"},
+    )
+    out["lle_full_stderr"] = (
+        (),
+        full.error if full is not None else np.nan,
+        {"long_name": "error of lle_full", "units": "s-1"},
+    )
     return xr.Dataset(out, attrs={"lle_detail": exp.detail})
+
+
+def run_end(run: xr.Dataset) -> tuple[float, np.ndarray, np.ndarray | None]:
+    """``(end_time, end_state, end_discrete_state)`` of a run (:func:`workbench.simulate`'s
+    attributes; the discrete state None for a model without one), checked to lie whole forcing
+    periods after the run's start, where the strobe map's phase is."""
+    a = run.attrs
+    if "end_state" not in a or "end_time" not in a:
+        raise ValueError(
+            "the run has no end_state and end_time attributes (the state it ended in, which "
+            "workbench.simulate writes): simulate the point again"
+        )
+    t = float(a["end_time"])
+    y = np.atleast_1d(np.asarray(a["end_state"], dtype=float))
+    aux = a.get("end_discrete_state")
+    aux = None if aux is None else np.atleast_1d(np.asarray(aux, dtype=float))
+    period = float(a["forcing_period"])
+    since = (t - float(run.time[0])) / period  # the first record is at phase 0
+    if abs(since - round(since)) > 1e-6:
+        raise ValueError(
+            f"the run ended at t = {t!r} s, {since:.6g} forcing periods after its first record: "
+            "a map point's run must end a whole number of periods after it (run.cycles)"
+        )
+    return t, y, aux
 
 
 def strobe_zero_one(x: np.ndarray) -> float:
@@ -205,6 +312,93 @@ def strobe_zero_one(x: np.ndarray) -> float:
     return float(zero_one_test(x).K)
 
 
+#: default fraction of a map's points whose exponent is measured by the full protocol too
+FULL_FRACTION = 0.05
+#: the least number of such points (all of them in a smaller map)
+FULL_LEAST = 3
+#: a fast exponent agrees with the full protocol's within this fraction of it ...
+AGREE_RELATIVE = 0.1
+#: ... or within this many combined standard errors
+AGREE_SIGMAS = 2.0
+
+
+def subset_key(values: dict[str, float], seed: int) -> float:
+    """A point's place in [0, 1) for the map's random subset: from a SHA-256 digest of its
+    swept values (exactly, by their bits) and ``seed``, so that the same grid and seed pick the
+    same points in any process, on resume and on another machine."""
+    text = f"{int(seed)}|" + ";".join(f"{k}={float(v).hex()}" for k, v in sorted(values.items()))
+    return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big") / 2.0**64
+
+
+def full_subset(grid, fraction: float, seed: int) -> tuple[np.ndarray, float]:
+    """The flat indices of a grid's points (a :class:`workbench.campaign.SweepGrid`) whose
+    exponent the full protocol measures too: the ``max(FULL_LEAST, ceil(fraction * size))``
+    points (all for a smaller grid; none for ``fraction`` 0) of least :func:`subset_key`; and
+    the largest key chosen (-1 for none), which decides a point from its own values."""
+    keys = np.array([subset_key(grid.point(i), seed) for i in range(grid.size)])
+    count = 0 if fraction == 0 else min(grid.size, max(FULL_LEAST, math.ceil(fraction * grid.size)))
+    if count == 0:
+        return np.zeros(0, np.int64), -1.0
+    chosen = np.sort(np.argsort(keys, kind="stable")[:count])
+    return chosen, float(keys[chosen].max())
+
+
+def _map_point(
+    scene: Scene, run: xr.Dataset, *, dims: tuple, seed: int, threshold: float, **rule
+) -> xr.Dataset:
+    """:func:`chaos_indicators` of one map point, with the full protocol where the point's
+    :func:`subset_key` is at most ``threshold`` (:func:`full_subset`)."""
+    values = {d: scene.parameters[d] if d in scene.parameters else scene.run[d] for d in dims}
+    full = subset_key(values, seed) <= threshold
+    return chaos_indicators(scene, run, full_protocol=full, **rule)
+
+
+def map_measurement(scene: Scene, fraction: float, seed: int, target: float, sign: float):
+    """The per-point measurement of a chaos map (``run_campaign``'s ``per_point``): the
+    indicators with the full protocol on the subset :func:`full_subset` picks. Its name (the
+    campaign's identity) carries the settings, so a store measured with others is refused or
+    recomputed, never mixed."""
+    grid = expand_sweep(scene)
+    _, threshold = full_subset(grid, fraction, seed)
+    fn = functools.partial(
+        _map_point, dims=tuple(scene.sweep), seed=int(seed), threshold=threshold,
+        target=float(target), sign=float(sign),
+    )  # fmt: skip
+    fn.__module__ = __name__
+    fn.__qualname__ = (
+        f"chaos_indicators(full_fraction={fraction:g}, full_seed={int(seed)}, "
+        f"target={target:g}, sign={sign:g})"
+    )
+    return fn
+
+
+def subset_agreement(maps: xr.Dataset) -> dict:
+    """How the full protocol's exponents (``lle_full``) agree with the fast ones (``lle``) on
+    the points where both ran and are finite: attributes ``lle_full_points``,
+    ``lle_full_agreeing`` (the fraction within AGREE_RELATIVE of the full value or
+    AGREE_SIGMAS combined standard errors; a bound, whose error is NaN, by the first alone),
+    ``lle_full_same_verdict`` (the fraction with the same verdict, chaotic where the exponent is
+    positive, else regular) and ``lle_full_agreement`` (what they mean)."""
+    chosen = maps["lle_full_protocol"].values == 1
+    fast, full = maps["lle"].values, maps["lle_full"].values
+    both = chosen & np.isfinite(fast) & np.isfinite(full)
+    f, g = fast[both], full[both]
+    combined = np.hypot(maps["lle_stderr"].values[both], maps["lle_full_stderr"].values[both])
+    diff = np.abs(f - g)
+    near = (diff <= AGREE_RELATIVE * np.abs(g)) | (diff <= AGREE_SIGMAS * combined)
+    n = int(both.sum())
+    return {
+        "lle_full_points": n,
+        "lle_full_agreeing": float(near.mean()) if n else np.nan,
+        "lle_full_same_verdict": float(((f > 0) == (g > 0)).mean()) if n else np.nan,
+        "lle_full_agreement": f"on the {n} points where the full protocol ran (lle_full_protocol "
+        f"= 1) and both values are finite: lle_full_agreeing is the fraction whose fast lle lies "
+        f"within {AGREE_RELATIVE:.0%} of lle_full or {AGREE_SIGMAS:g} combined standard errors, "
+        "lle_full_same_verdict the fraction with the same verdict (chaotic: lle > 0, else "
+        "regular)",
+    }
+
+
 def chaos_map(
     scene: SceneSource,
     store,
@@ -214,11 +408,24 @@ def chaos_map(
     chunk: int | None = None,
     restart: bool = False,
     progress: bool = False,
+    full_fraction: float = FULL_FRACTION,
+    full_seed: int = 0,
+    target: float = MAP_TARGET,
+    sign: float = MAP_SIGN,
 ) -> xr.Dataset:
     """A campaign over the scene's ``[sweep]`` that measures the chaos indicators of every
     point in its worker (:func:`chaos_indicators`) and stores them over the parameter dims,
     beside the strobe samples the scene records (resumable like any campaign,
     :func:`workbench.run_campaign`).
+
+    Each point's exponent is measured at the map's own precision (the fast protocol: from
+    where its run ended, the error target ``target`` or the sign decided beyond ``sign``
+    standard errors, whichever first); on a random subset of the points
+    (``full_fraction`` of them, at least 3, chosen reproducibly from their parameter values
+    and ``full_seed``: a resumed map picks the same) the full protocol runs too
+    (``lle_full_protocol``, ``lle_full``, ``lle_full_stderr``), and the map's attributes say
+    how the two agree (:func:`subset_agreement`), with ``lle_full_fraction``,
+    ``lle_full_seed``, ``lle_target`` and ``lle_sign``.
 
     The scene should record per forcing period (``record.samples_per_period = 1``) at least
     100 cycles (the 0-1 test needs 100 samples). Draw the maps with
@@ -240,6 +447,15 @@ def chaos_map(
         Discard whatever the store holds and start afresh.
     progress : bool
         Show a progress bar over points.
+    full_fraction : float
+        Fraction of the points (0 to 1) where the full protocol runs too (default 5 %; at
+        least 3 points, all of a smaller map; 0: none).
+    full_seed : int
+        Seed of the subset's choice.
+    target : float
+        The fast protocol's relative error target (default 10 %).
+    sign : float
+        The fast protocol's sign rule, in standard errors (default 3).
 
     Returns
     -------
@@ -247,8 +463,17 @@ def chaos_map(
         The campaign (:func:`workbench.run_campaign`) with the indicators of
         :func:`chaos_indicators` over the parameter dims.
     """
+    if not 0 <= full_fraction <= 1:
+        raise ValueError(f"full_fraction={full_fraction!r}: must be a fraction in [0, 1]")
+    if not 0 < target < 1:
+        raise ValueError(f"target={target!r}: must be a relative error in (0, 1)")
+    if not sign > 0:
+        raise ValueError(f"sign={sign!r}: must be a positive number of standard errors")
     scene = load_scene(scene)
-    return run_campaign(
+    if not scene.sweep:
+        raise ValueError("the scene has no [sweep]: a chaos map runs over a campaign's grid")
+    measure = map_measurement(scene, full_fraction, full_seed, target, sign)
+    maps = run_campaign(
         scene,
         store,
         client=client,
@@ -256,5 +481,18 @@ def chaos_map(
         chunk=chunk,
         restart=restart,
         progress=progress,
-        per_point=chaos_indicators,
+        per_point=measure,
     )
+    attrs = {
+        "lle_full_fraction": float(full_fraction),
+        "lle_full_seed": int(full_seed),
+        "lle_target": float(target),
+        "lle_sign": float(sign),
+        **(subset_agreement(maps) if "lle_full_protocol" in maps else {}),
+    }
+    if any(k not in maps.attrs for k in attrs):  # a resumed, complete map has them already
+        maps = maps.load()
+        maps.close()
+        maps.attrs.update(attrs)
+        save_run(maps, store)
+    return maps

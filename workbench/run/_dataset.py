@@ -24,6 +24,7 @@ from workbench.solver import TEMPLATE_MODULES, RunResult, SolverError, Status
 __all__ = [
     "TIME_ATTRS",
     "derive",
+    "end_state_attrs",
     "provenance",
     "references",
     "run_status",
@@ -88,8 +89,8 @@ def to_dataset(prepared: Prepared, result: RunResult, derived: dict[str, np.ndar
     (:func:`workbench.run.parameter_coords`; their names in the attribute ``model_parameters``),
     and so is ``realisation`` when the scene asks for one. Global attributes:
     :func:`provenance`, the solver's statistics (``solver_*``), the model, ``run_status`` (a
-    :class:`Status` label) and ``run_message`` (empty when ok), the forcing period and the
-    attributes of the record times.
+    :class:`Status` label) and ``run_message`` (empty when ok), the forcing period, the
+    attributes of the record times and the state the run ended in (:func:`end_state_attrs`).
     """
     scene, model = prepared.scene, prepared.model
     declared = model.variables(scene.effects)
@@ -120,7 +121,29 @@ def to_dataset(prepared: Prepared, result: RunResult, derived: dict[str, np.ndar
         ds.attrs["forcing_period"] = float(prepared.period)
         ds.attrs["forcing_period_units"] = "s"
     ds.attrs.update(prepared.record_attrs)
+    ds.attrs.update(end_state_attrs(prepared, result))
     return ds
+
+
+def end_state_attrs(prepared: Prepared, result: RunResult) -> dict:
+    """The state a run ended in, as attributes, so that a measurement of the run continues from
+    it instead of integrating the run again: ``end_time`` (s), ``end_state`` (every state of
+    the problem, in its order and its units, whether recorded or not), ``end_state_names``
+    (their names, space-separated) and ``end_discrete_state`` (the discrete state, e.g. a
+    contact's held onset velocity; absent for a model without one). The end is the last
+    record that holds the solution (the run's end for a completed run); none for a run
+    without one."""
+    n = result.recorded
+    if n < 1:
+        return {}
+    out = {
+        "end_time": float(result.t[n - 1]),
+        "end_state": np.asarray(result.Y[n - 1], dtype=np.float64).copy(),
+        "end_state_names": " ".join(q.name for q in prepared.problem.states),
+    }
+    if result.AUX.shape[1] > 0:
+        out["end_discrete_state"] = np.asarray(result.AUX[n - 1], dtype=np.float64).copy()
+    return out
 
 
 def status_attrs(long_name: str, extra: dict[int, str] | None = None) -> dict:

@@ -96,8 +96,12 @@ def simulate(
     -------
     xarray.Dataset
         Dim ``time`` (the records after the transient), one variable per requested state and
-        output, ``units`` and ``long_name`` on everything, provenance, solver statistics and
-        ``run_status`` (a :class:`workbench.Status` label) in the global attributes.
+        output, ``units`` and ``long_name`` on everything, provenance, solver statistics,
+        ``run_status`` (a :class:`workbench.Status` label) and the state the run ended in in
+        the global attributes: ``end_time`` (s), ``end_state`` (every state of the problem, in
+        its order and units, recorded or not), ``end_state_names`` (space-separated) and, for
+        a model with a discrete state, ``end_discrete_state`` (at the last record that holds
+        the solution; a measurement continues from there instead of integrating the run again).
 
     Raises
     ------

@@ -1,0 +1,261 @@
+"""A chaos map's own precision (issue 39): a run's dataset carries the state it ended in, a map
+point's exponent starts there (no second run of the whole transient and records), stops on the
+error target or on the sign, whichever holds first (and says which), and the full protocol
+runs on a reproducible random subset of the map's points, whose agreement the map reports."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import workbench
+from workbench.analysis import ConvergenceWarning, lle_from_equations
+from workbench.analysis._window import stopping_rule
+from workbench.campaign import expand_sweep
+from workbench.continuation import chaos_map, lle_cycles, point_exponent
+from workbench.continuation._indicators import (
+    FULL_LEAST,
+    _map_point,
+    full_subset,
+    map_measurement,
+    subset_key,
+)
+from workbench.run import integrate, prepare
+
+DUFFING = {
+    "model": {"name": "duffing"},
+    "parameters": {"delta": 0.3},
+    "run": {"cycles": 100, "transient_cycles": 150},
+    "record": {"samples_per_period": 1},
+}
+
+
+def duffing(gamma: float, **tables):
+    data = dict(DUFFING, **tables)
+    data["parameters"] = dict(data["parameters"], gamma=gamma)
+    return workbench.load_scene(data)
+
+
+class StepCounter:
+    """Sums the solver steps of every integration that the strobe map and the exponents'
+    windows run (the transient included), by wrapping the solver's integrate where they call
+    it."""
+
+    def __init__(self, monkeypatch):
+        import workbench.analysis._window as window
+        import workbench.continuation._strobe as strobe
+        import workbench.run._simulate as simulate
+
+        self.steps = 0
+        self.runs = 0
+        for module, name in (
+            (strobe, "integrate"),
+            (window, "integrate"),
+            (simulate, "_integrate"),
+        ):
+            monkeypatch.setattr(module, name, self.wrap(getattr(module, name)))
+
+    def wrap(self, fn):
+        def counted(*args, **kwargs):
+            res = fn(*args, **kwargs)
+            self.steps += int(res.stats["steps"])
+            self.runs += 1
+            return res
+
+        return counted
+
+
+# -- the end state --------------------------------------------------------------------------------
+def test_a_run_carries_the_state_it_ended_in():
+    """end_time, end_state (every state, the problem's order), end_state_names and
+    end_discrete_state equal a fresh integration's end (the stop oscillator has a discrete
+    state); a campaign archive does not copy them."""
+    scene = workbench.load_scene(
+        {
+            "model": {"name": "stop_oscillator"},
+            "parameters": {"omega": 0.8},
+            "run": {"cycles": 5, "transient_cycles": 3},
+            "record": {"samples_per_period": 4, "variables": ["x"]},  # v is not recorded
+            "solver": {"rtol": 1e-10, "atol": 1e-10},
+        }
+    )
+    run = workbench.simulate(scene)
+    prep = prepare(scene)
+    t_end = prep.problem.t0 + 8 * prep.period
+    fresh = integrate(prep, [t_end])
+    assert run.attrs["end_time"] == pytest.approx(t_end, rel=1e-14)
+    assert run.attrs["end_state_names"] == "x v"
+    np.testing.assert_allclose(run.attrs["end_state"], fresh.Y[-1], rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(run.attrs["end_discrete_state"], fresh.AUX[-1], atol=1e-10)
+    assert float(run.x[-1]) == run.attrs["end_state"][0]  # the last record
+
+
+def test_a_campaign_archive_does_not_carry_the_end_state(tmp_path):
+    scene = workbench.load_scene(dict(DUFFING, run={"cycles": 3, "transient_cycles": 1},
+                                      sweep={"gamma": [0.3, 0.4]}))  # fmt: skip
+    ds = workbench.run_campaign(scene, tmp_path / "c.nc", workers=1)
+    assert not [k for k in ds.attrs if k.startswith("end_")]
+
+
+# -- Floquet from the end state -------------------------------------------------------------------
+def test_a_periodic_points_exponent_from_where_its_run_ended(monkeypatch):
+    """The period-1 point's Floquet exponent from the run's end state equals the full
+    protocol's (Newton from the state integrated again), and its integrations take fewer
+    steps than the run itself: the full protocol's integrate the run again (more)."""
+    scene = duffing(0.2)
+    run = workbench.simulate(scene)
+    counter = StepCounter(monkeypatch)
+    fast = point_exponent(
+        scene,
+        period=1,
+        cycles=lle_cycles(scene),
+        state=run.attrs["end_state"],
+        start_time=run.attrs["end_time"],
+        protocol="fast",
+    )
+    fast_steps = counter.steps
+    counter.steps = 0
+    full = point_exponent(scene, period=1, cycles=lle_cycles(scene), start_cycles=250)
+    assert fast.method == full.method == "floquet" and fast.converged_code == 1
+    assert abs(fast.value - full.value) <= 2 * math.hypot(fast.error, full.error) + 1e-9
+    assert abs(fast.value + 0.15) < 1e-6  # -delta / 2
+    run_steps = int(run.attrs["solver_steps"])
+    assert fast_steps < 0.5 * run_steps < run_steps < counter.steps, (fast_steps, run_steps)
+
+
+# -- the sequential stopping rule ------------------------------------------------------------------
+def test_the_stopping_rule():
+    assert stopping_rule(1.0, 0.05, 0.1, 3.0) == "error target"
+    assert stopping_rule(1.0, 0.2, 0.1, 3.0) == "sign"  # 5 errors from zero
+    assert stopping_rule(1.0, 0.5, 0.1, 3.0) == ""  # 2 errors: neither
+    assert stopping_rule(-1.0, 0.2, 0.1, None) == ""  # no sign rule
+    assert stopping_rule(1.0, math.nan, 0.1, 3.0) == ""
+
+
+@pytest.mark.chaotic
+def test_a_map_point_stops_on_the_sign_or_on_the_target_and_says_which():
+    """The chaotic Duffing point (lambda ~ 0.1 1/s) from where its run ended: with a 1 % target
+    its window cannot meet the target but decides the sign (beyond 3 errors) first, and is
+    converged on the sign (lle_converged 2), not on the target; with a 50 % target it stops on
+    the target (1); where neither rule can hold within the budget (a sign rule of 1000 errors)
+    it is not converged and says error_target."""
+    scene = duffing(0.5)
+    run = workbench.simulate(scene)
+    kw = {
+        "period": 0,
+        "cycles": lle_cycles(scene),
+        "state": run.attrs["end_state"],
+        "start_time": run.attrs["end_time"],
+        "protocol": "fast",
+    }
+    sign = point_exponent(scene, target=0.01, **kw)
+    assert sign.rule == "sign" and sign.converged_code == 2 and sign.unmet == ()
+    assert sign.error > 0.01 * abs(sign.value) and abs(sign.value) > 3 * sign.error
+    target = point_exponent(scene, target=0.5, **kw)
+    assert target.rule == "error target" and target.converged_code == 1
+    assert target.error <= 0.5 * abs(target.value)
+    with pytest.warns(ConvergenceWarning, match="has not converged: error target"):
+        neither = point_exponent(scene, target=0.01, sign=1000.0, **kw)
+    assert neither.rule == "" and neither.converged_code == 0
+    assert neither.unmet == ("error target",)
+    assert neither.value > 0 and abs(neither.value - sign.value) < 3 * sign.error
+
+
+def test_the_copies_start_where_the_run_ended():
+    """The two-trajectory method from a given state: one start there (its window begins at the
+    given time), the estimate's copy alone, and the stopping rule it met named."""
+    scene = workbench.load_scene({"model": {"name": "lorenz"}, "run": {"duration": 20.0}})
+    run = workbench.simulate(scene)
+    start = (run.attrs["end_time"], run.attrs["end_state"], None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        r = lle_from_equations(
+            scene, duration=50.0, starts=1, variants=False, check=False, start=start,
+            target=0.1, sign=3.0,
+        )  # fmt: skip
+    assert r.sizes["variant"] == 1 and r.attrs["start_time"] == run.attrs["end_time"]
+    assert r.attrs["stopped_by"] in ("error target", "sign")
+    assert abs(float(r.lle) - 0.9056) < 3 * float(r.stderr) + 0.05  # Sprott (2003)
+    assert "variants: not run" in r.attrs["failed"]
+    with pytest.raises(ValueError, match="starts=4: a given start"):
+        lle_from_equations(scene, starts=4, start=start)
+
+
+# -- the subset of the full protocol --------------------------------------------------------------
+def test_the_full_protocols_subset_is_reproducible_and_of_its_size():
+    scene = workbench.load_scene(
+        dict(
+            DUFFING,
+            sweep={
+                "gamma": {"start": 0.2, "stop": 0.5, "num": 41},
+                "delta": {"start": 0.2, "stop": 0.4, "num": 21},
+            },
+        )  # fmt: skip
+    )
+    grid = expand_sweep(scene)
+    chosen, threshold = full_subset(grid, 0.05, 0)
+    assert chosen.size == math.ceil(0.05 * 41 * 21) == 44
+    again, _ = full_subset(expand_sweep(scene), 0.05, 0)
+    np.testing.assert_array_equal(chosen, again)
+    other, _ = full_subset(grid, 0.05, 1)
+    assert other.size == 44 and set(other) != set(chosen)
+    small = workbench.load_scene(dict(DUFFING, sweep={"gamma": [0.2, 0.3, 0.4, 0.5, 0.6]}))
+    assert full_subset(expand_sweep(small), 0.05, 0)[0].size == FULL_LEAST == 3
+    tiny = workbench.load_scene(dict(DUFFING, sweep={"gamma": [0.2, 0.3]}))
+    assert full_subset(expand_sweep(tiny), 0.05, 0)[0].size == 2
+    assert full_subset(grid, 0.0, 0)[0].size == 0
+    # a worker decides from the point's own values what the client chose
+    picked = {int(i) for i in chosen}
+    for i in range(grid.size):
+        point = grid.point(i)
+        assert (subset_key(point, 0) <= threshold) == (i in picked)
+    # the settings are the campaign's identity: another fraction is another measurement
+    name = map_measurement(scene, 0.05, 0, 0.1, 3.0).__qualname__
+    assert name == map_measurement(scene, 0.05, 0, 0.1, 3.0).__qualname__
+    assert name != map_measurement(scene, 0.1, 0, 0.1, 3.0).__qualname__
+
+
+def test_a_map_runs_the_full_protocol_on_its_subset_and_says_how_it_agrees(tmp_path):
+    """A 2 x 2 Duffing map (two periodic, two chaotic points): three points (the least) run
+    the full protocol too; its values sit beside the fast ones, NaN elsewhere, and the map's
+    attributes say how they agree."""
+    scene = workbench.load_scene(
+        dict(
+            DUFFING,
+            run={"cycles": 100, "transient_cycles": 100},
+            sweep={"gamma": [0.25, 0.5], "delta": [0.3, 0.25]},
+        )  # fmt: skip
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        maps = chaos_map(scene, tmp_path / "map.nc", workers=1)
+    flag = maps.lle_full_protocol
+    assert flag.dtype == np.int8 and flag.attrs["flag_meanings"] == "fast_only full_protocol"
+    assert int(flag.sum()) == 3
+    chosen = flag.values == 1
+    assert np.isfinite(maps.lle_full.values[chosen]).all()
+    assert np.isnan(maps.lle_full.values[~chosen]).all()
+    assert maps.lle_full.attrs["units"] == "s-1"
+    stored = workbench.open_run(tmp_path / "map.nc")
+    assert stored.attrs["lle_full_points"] == 3 and stored.attrs["lle_full_fraction"] == 0.05
+    assert stored.attrs["lle_full_same_verdict"] == 1.0  # same verdict at every point
+    assert 0 <= stored.attrs["lle_full_agreeing"] <= 1
+    # the map's exponents are the fast protocol's, converged on one rule or another
+    assert set(np.unique(maps.lle_converged.values)) <= {0, 1, 2}
+    periodic = maps.sel(gamma=0.25, delta=0.3)
+    assert int(periodic.lle_converged) == 1 and abs(float(periodic.lle) + 0.15) < 1e-6
+
+
+def test_a_map_point_in_a_worker_picks_its_subset_from_its_values(monkeypatch):
+    """_map_point decides from the point's own swept values (what a worker has)."""
+    seen = []
+    monkeypatch.setattr(
+        "workbench.continuation._indicators.chaos_indicators",
+        lambda scene, run, full_protocol, **rule: seen.append(full_protocol),
+    )
+    point = duffing(0.5)
+    key = subset_key({"gamma": 0.5}, 7)
+    _map_point(point, None, dims=("gamma",), seed=7, threshold=key, target=0.1, sign=3.0)
+    _map_point(point, None, dims=("gamma",), seed=7, threshold=key / 2, target=0.1, sign=3.0)
+    assert seen == [True, False]
