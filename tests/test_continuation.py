@@ -631,3 +631,28 @@ def test_the_copies_alone_agree_on_the_chaotic_nine_bar_once_shallow_contacts_ar
     page = " ".join((ROOT / "docs" / "continuation.md").read_text().split())
     assert "read 36.1 +- 0.8 1/s after 4 x 40 cycles" in page
     assert "together read 35.8 +- 0.9 1/s" in page and "36.1 +- 0.8 1/s at rtol 1e-8" in page
+
+
+def test_a_correction_onto_another_part_of_the_solution_set_is_not_taken(monkeypatch):
+    """Newton can converge far from its prediction, on another part of the solution set
+    (branch jumping), and a turn of the tangent or a change of a test function between the two
+    parts would be labelled a bifurcation that is not there. A corrected point more than two
+    steps from the last one is refused and the step halved: here the corrector is made to land
+    ten steps off once, and that point is not on the branch, which goes on."""
+    import workbench.continuation._branch as branch_module
+
+    real = branch_module._at
+    jumped = {}
+
+    def jumping(smap, A, sigma, cfg):
+        B = real(smap, A, sigma, cfg)
+        if not jumped and A.p > 1.02:
+            B.y = B.y + 10.0 * sigma * smap.scale() * np.array([1.0, 0.0])
+            jumped["x"] = float(B.y[0])
+        return B
+
+    monkeypatch.setattr(branch_module, "_at", jumping)
+    r = continue_orbit(hardening(), "omega", stop=1.06, rtol=1e-10, tolerance=1e-9)
+    assert jumped, "the branch never stepped past omega = 1.02"
+    assert not np.isclose(r.orbit_x.values, jumped["x"], rtol=0, atol=1e-9).any()
+    assert float(r.omega[-1]) == pytest.approx(1.06) and (r.omega.diff("point") > 0).all()

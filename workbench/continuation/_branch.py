@@ -92,6 +92,21 @@ MULTIPLIER_TOLERANCE = 1e-3
 #: a located grazing is labelled only where the extremum's value is this small relative to
 #: the range of its event function along the orbit
 MARGIN_TOLERANCE = 1e-6
+#: a corrected point lies at most this many steps (scaled arclength) from the point it was
+#: predicted from: on the step's hyperplane the correction then moved it at most sqrt(3) steps
+#: off the prediction. Further away, Newton has reached another part of the solution set
+#: (branch jumping), where a turn of the tangent or a change of a test function would be
+#: labelled a bifurcation that is not there
+JUMP = 2.0
+
+
+def _distance(smap, A: OrbitPoint, B: OrbitPoint, pscale: float) -> float:
+    """Distance of two orbits in the scaled states and parameter (the discrete states left
+    out: their live sets may differ), in the units of the scaled arclength."""
+    s = smap.scale()
+    a = np.concatenate([A.y / s, [A.p / pscale]])
+    b = np.concatenate([B.y / s, [B.p / pscale]])
+    return float(np.linalg.norm(b - a))
 
 
 @dataclass
@@ -386,6 +401,17 @@ def _locate(
     best, sigma = (pt_lo, lo) if f_a <= f_b else (pt_hi, hi)
     f_best = value(best)
     ok, test, why = _confirm(smap, kind, best, f_best, graze)
+    if ok and kind == "nonsmooth_fold":
+        # a turn is where one curve folds back: the bracket's two ends lie on it, no further
+        # apart than their arclength allows; further, they lie on two parts of the solution set
+        gap = _distance(smap, pt_lo, pt_hi, cfg.pscale)
+        allowed = JUMP * abs(hi - lo) + 10.0 * cfg.tolerance
+        if gap > allowed:
+            ok = False
+            why = (
+                f"the bracket's ends lie {gap:.3g} apart (scaled), more than {allowed:.3g} for "
+                "their arclength: two parts of the solution set, not a turn of one"
+            )
     special = Special(
         kind=kind,
         point=best,
@@ -717,6 +743,13 @@ def trace(
             B = _at(smap, A, h, cfg)
             sharp = float(A.tau @ B.tau) < 0.5  # too sharp a turn: halve
             failure = "the branch turns sharply however short the step" if sharp else ""
+            far = _distance(smap, A, B, cfg.pscale)
+            if not sharp and far > JUMP * h:  # Newton left the branch: halve
+                sharp = True
+                failure = (
+                    f"the corrector reaches another part of the solution set however short the "
+                    f"step ({far / h:.3g} steps away)"
+                )
         except NewtonFailure as exc:
             B, sharp, failure = None, True, f"the corrector failed at the smallest step ({exc})"
         if sharp:
