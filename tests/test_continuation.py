@@ -472,7 +472,7 @@ def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
     lasting contact at omega = 1.5 pi (Fig. 32's scene) the tangent system, whose Jacobian is
     differenced along every column, makes the step control take several times the bare model's
     steps per crank cycle, where the copies take about the bare model's. docs/continuation.md
-    and the StrobeMap module quote the counts."""
+    quotes the counts."""
     import re
 
     scene = workbench.load_scene(ROOT / "studies" / "bifurcation_speed" / "sweep.toml")

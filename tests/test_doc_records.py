@@ -1,13 +1,16 @@
-"""The numbers docs/analysis.md and docs/robustness.md quote from benchmark records and from the
-code (the project's rule: the docs quote only what the code produces now, and a test checks
-each number). Each test reads the page and the records it names (benchmarks/records/: one JSON
-file per run, benchmarks/_results.py) or the measurement made by hand (benchmarks/NOTES.md) and
-asserts that they agree: a current figure is the newest record of its benchmark (and window),
-a "before" figure the record the page names. A record's numbers are formatted as the benchmark
-prints them (and the page quotes them)."""
+"""The numbers docs/analysis.md, docs/continuation.md and docs/robustness.md quote from benchmark
+records, from tests and from the code (the project's rule: the docs quote only what the code
+produces now, and a test checks each number; docstrings describe and quote none). Each test
+reads the page and the records it names (benchmarks/records/: one JSON file per run,
+benchmarks/_results.py), the measurement made by hand (benchmarks/NOTES.md) or the test that
+asserts the figure, and asserts that they agree: a current figure is the newest record of its
+benchmark (and window), a "before" figure the record the page names, a tested figure the value
+its test asserts. A record's numbers are formatted as the benchmark prints them (and the page
+quotes them)."""
 
 import importlib.util
 import json
+import math
 import re
 from pathlib import Path
 
@@ -41,6 +44,37 @@ def records(benchmark: str) -> list[dict]:
 def _page(name: str) -> str:
     """A page of docs/ with its whitespace collapsed."""
     return " ".join((ROOT / "docs" / name).read_text().split())
+
+
+def _test_source(path: str, name: str) -> str:
+    """The source of one test function of tests/``path`` (up to the next top-level def)."""
+    source = (ROOT / "tests" / path).read_text()
+    return re.split(r"\n(?:@|def )", source.split(f"def {name}(")[1])[0]
+
+
+def _contracting_orbit_test() -> tuple[str, str]:
+    """The two-trajectory and variational exponents of the nine-bar's stable orbit (omega =
+    0.5 pi, c = 20 um, one cycle) that tests/test_lyapunov.py asserts, as it writes them."""
+    test = _test_source(
+        "test_lyapunov.py", "test_contracting_nine_bar_orbit_reads_a_negative_exponent"
+    )
+    assert "with_parameters(omega=0.5 * math.pi, clearance=2e-5)" in test
+    return re.search(
+        r"assert abs\(float\(r\.lle\) - (-[\d.]+)\) < [\d.]+ and "
+        r"abs\(float\(r\.lle_variational\) - (-[\d.]+)\) < [\d.]+",
+        test,
+    ).groups()
+
+
+def _floquet_bound_test() -> str:
+    """The upper bound of that orbit's Floquet exponent that tests/test_continuation.py
+    asserts."""
+    test = _test_source(
+        "test_continuation.py",
+        "test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate",
+    )
+    assert "with_parameters(omega=0.5 * math.pi, clearance=2e-5)" in test
+    return re.search(r"assert abs\(float\(ind\.lle\) - (-[\d.]+)\) <", test)[1]
 
 
 def _and(items) -> str:
@@ -295,6 +329,87 @@ def test_the_noise_floor_before_and_now_are_the_scans():
         f"+{min(floor[1e-9]):.1f}-{max(floor[1e-9]):.1f} at 1e-9 in every run, "
         f"+{free:.1f} at 1e-8 at rtol 1e-6 with the step free)"
     ) in page
+
+
+def test_the_decorrelation_time_and_the_shrinkages_are_the_newest_chaos_record():
+    """docs/analysis.md: the time after which the starts' windows are independent, ln(1/1e-9) /
+    λ at the newest ``--chaos`` record's exponent, and the shrinkages among that record's
+    renormalisations at rtol 1e-6."""
+    page = _page("analysis.md")
+    newest = chaos_records()[-1]
+    lle = _chaos_numbers(newest)[0]
+    assert (
+        f"after ln(1/1e-9) / λ: {math.log(1e9) / float(lle):.1f} s on the chaos case at its "
+        f"λ = {lle} 1/s, the newest `benchmarks/lle.py --chaos` record, at {newest['commit']}, "
+        "rtol 1e-6)"
+    ) in page
+    call = newest["figures"]["1e-06"]
+    assert (call["starts"], call["cycles_per_start"], call["converged"]) == (4, 20, True)
+    total, shrunk = call["renormalisations"][0], call["shrink_renormalisations"][0]
+    assert (
+        f"at rtol 1e-6, {shrunk} of the estimate's {total} renormalisations over 4 x 20 cycles "
+        "were shrinkages (`benchmarks/lle.py --chaos 1e-6`)"
+    ) in page
+
+
+# -- figures of docs/analysis.md and docs/continuation.md that tests assert ----------------------
+def test_the_contracting_orbit_figures_are_the_tests():
+    """The nine-bar's stable orbit at omega = 0.5 pi, c = 20 um: the two-trajectory and
+    variational exponents tests/test_lyapunov.py asserts and the Floquet bound
+    tests/test_continuation.py asserts, as docs/analysis.md and docs/continuation.md quote them;
+    the "before" (copies renormalised on growth alone) from the oldest ``benchmarks/
+    continuation.py --parts chaos_maps`` record, which docs/continuation.md names."""
+    copies, variational = _contracting_orbit_test()
+    bound = _floquet_bound_test()
+    assert (
+        f"| nine-bar, omega = 0.5 pi, c = 20 um (A+B, Coulomb c_f = 0.01), 1 x 1 cycle | {copies} "
+        f"| {variational} (variational, same trajectory); a stable period-1 orbit, Floquet "
+        f"exponent below the bound {bound} (`tests/test_continuation.py`) |"
+    ) in _page("analysis.md")
+
+    page = _page("continuation.md")
+    assert (
+        f"and there they now read {copies} 1/s over one cycle, "
+        f"{(float(copies) / float(variational) - 1) * -100:.0f} % above the variational "
+        f"exponent on the same trajectory ({variational}; `tests/test_lyapunov.py`"
+    ) in page
+    assert f"such an orbit: the bound is {bound} 1/s" in page
+    # the "before": the oldest chaos_maps record (later ones give the orbit's Floquet bound)
+    oldest = next(r for r in records("continuation.py") if "--parts chaos_maps" in r["command"])
+    corner = oldest["figures"]["chaos_map_corners"][
+        "omega_clearance at omega=1.571, clearance=2e-05"
+    ]
+    mantissa, exponent = f"{corner['lle']:.3g}".split("e")
+    assert (
+        f"at omega = 0.5 pi, c = 20 um {mantissa}e{int(exponent)} +- {corner['lle_stderr']:.2g} "
+        f"1/s, the `benchmarks/continuation.py --parts chaos_maps` record at {oldest['commit']})"
+    ) in page
+
+
+def test_the_short_chaos_window_is_the_test_s():
+    """docs/analysis.md, "When an exponent has converged": the chaos case over 3 cycles as
+    tests/test_lyapunov.py asserts it."""
+    test = _test_source("test_lyapunov.py", "test_chaos_case_two_trajectory_and_variational_agree")
+    assert '"cycles": 3' in test
+    short, err = re.search(
+        r"assert agrees\(float\(r\.lle\), float\(r\.stderr\), ([\d.]+), ([\d.]+)\)", test
+    ).groups()
+    assert f"(over 3 cycles the chaos case read {short} +/- {err} 1/s" in _page("analysis.md")
+
+
+def test_the_fnn_plateau_figure_is_the_heldout_test_s():
+    """docs/analysis.md, the Wolf estimate's embedding: the bound tests/test_wolf_heldout.py
+    holds a Duffing section's estimate to in the plateau's first dimension."""
+    test = _test_source("test_wolf_heldout.py", "test_heldout_duffing_section")
+    assert "assert float(r.lle) == pytest.approx(per_period, rel=FLOW_GROSS)" in test
+    source = (ROOT / "tests" / "test_wolf_heldout.py").read_text()
+    rel = float(
+        re.search(r"^FLOW_BOUND, FLOW_GROSS, FLOW_MISSES = [\d.]+, ([\d.]+),", source, re.M)[1]
+    )
+    assert (
+        f"in the plateau's first dimension a Duffing section's estimate is within "
+        f"{rel * 100:.0f} % of the exponent: `tests/test_wolf_heldout.py`"
+    ) in _page("analysis.md")
 
 
 # -- docs/robustness.md ---------------------------------------------------------------------------

@@ -32,12 +32,9 @@ __all__ = ["lle_from_equations"]
 
 #: default scaled separation of the copies: sqrt(machine epsilon), the step of a forward
 #: difference that balances round-off (relative error eps / d) against the neglected curvature
-#: (relative error ~d). On the chaos case (`benchmarks/lle.py --scan`, benchmarks/results/
-#: lle_separation_scan.json, docs/analysis.md) the copies' estimate minus the variational
-#: exponent on the same trajectory, mean over 4 starts, per decade of d0 from 1e-10 to 1e-4,
-#: was +4.0, +0.3, 0.0, +0.4, +0.3, +0.5, +0.7 1/s at rtol 1e-6, +4.9, +0.5, -0.2, 0.0, 0.0,
-#: 0.0, 0.0 at 1e-8 and +4.5, +0.3, 0.0, 0.0, 0.0, 0.0, 0.0 at 1e-10 (exponent ~27 1/s): below
-#: ~1e-9 a noise floor at every tolerance; above it, at rtol 1e-6, a heavy-tailed lift of
+#: (relative error ~d). docs/analysis.md, "One answer from both methods", gives the copies'
+#: estimate minus the variational exponent per decade of d0 on the chaos case: a noise floor
+#: below about 1e-9 at every tolerance; above it, at loose tolerances, a heavy-tailed lift of
 #: some windows.
 SEPARATION = math.sqrt(np.finfo(float).eps)
 #: default log change of a copy's separation that triggers its renormalisation: growth or
@@ -138,36 +135,32 @@ def lle_from_equations(
     The measured length is shared among ``starts`` independent starts: realisations 0, 1, ... of
     the scene (:mod:`workbench.run._ensemble`: initial states perturbed by the scene's
     ``perturbation``, 1e-9 of each state's size by default, then its transient), whose windows
-    are independent once the perturbation has grown to the attractor's size (ln(1/1e-9) / λ,
-    0.8 s on the chaos case at its λ = 25.66 1/s: the newest ``benchmarks/lle.py --chaos``
-    record, at 2e994d4-dirty, rtol 1e-6). On each start a fiducial trajectory and copies
-    displaced by a scaled separation ``d0`` (each state divided by its size, the model's
-    ``atol_scale``) are integrated side by side in one step sequence; whenever a copy's
-    separation has grown by ``exp(growth)`` or shrunk by the same factor (located as events, so
-    that the copies stay in the linear range through the bursts of stretching at impacts) it
-    adds the log change and is moved back to ``d0`` along its separation. Renormalising on
-    shrinkage as well (Benettin et al. 1980 rescale at every renormalisation, whatever the
-    change) keeps the copies off the integration's noise on a contracting orbit, so that
-    negative exponents (stable equilibria and periodic orbits) are measured: renormalised on
-    growth alone, a copy shrank onto the fiducial trajectory until its separation was noise, and
-    the noise's growth was read as the exponent (on the nine-bar's stable period-1 orbit at
+    are independent once the perturbation has grown to the attractor's size (after about
+    ln(1/1e-9) / λ; docs/analysis.md gives it on the chaos case). On each start a fiducial
+    trajectory and copies displaced by a scaled separation ``d0`` (each state divided by its
+    size, the model's ``atol_scale``) are integrated side by side in one step sequence; whenever
+    a copy's separation has grown by ``exp(growth)`` or shrunk by the same factor (located as
+    events, so that the copies stay in the linear range through the bursts of stretching at
+    impacts) it adds the log change and is moved back to ``d0`` along its separation.
+    Renormalising on shrinkage as well (Benettin et al. 1980 rescale at every renormalisation,
+    whatever the change) keeps the copies off the integration's noise on a contracting orbit, so
+    that negative exponents (stable equilibria and periodic orbits) are measured: renormalised
+    on growth alone, a copy shrank onto the fiducial trajectory until its separation was noise,
+    and the noise's growth was read as the exponent (on the nine-bar's stable period-1 orbit at
     omega = 0.5 pi, c = 20 um), or it coincided with the fiducial trajectory and the run failed
-    (a damped linear oscillator); on that nine-bar orbit they now read -67.9 1/s over one cycle
-    against -74.2 1/s for the variational exponent on the same trajectory
-    (tests/test_lyapunov.py), a gap that depends on neither d0, tolerance nor step and is not
-    yet explained (docs/analysis.md). The trigger is the same both ways, so that a copy's
-    separation stays within a band symmetric about ``d0`` in the log: the default ``d0``
-    balances round-off (relative error eps / d) against curvature (relative error ~d), and the
-    band keeps both within the same factor ``exp(growth)`` of that balance (on the chaos case
-    the noise floor at d0 = 1e-10 fell from +6.2-6.8 1/s, the ``benchmarks/lle.py --scan``
-    records at d99dfdb, 968e2fe and 968e2fe-dirty, to 4-5 1/s, the newest, at 2e994d4-dirty; at
-    rtol 1e-6, 3555 of 8002 renormalisations were shrinkages, the ``--chaos`` record at
-    2e994d4-dirty; docs/analysis.md). Five copies run at once: ``(d0, growth)`` (the estimate),
-    ``(d0 / 2, growth)``, ``(2 d0, growth)``, ``(d0, growth / 2)`` and ``(d0, 2 growth)``. The
-    windows then grow (their lengths doubled, the runs continued) until the pooled estimate's
-    standard error is below ``target`` of its magnitude or the ``budget`` is spent. The standard
-    error is the larger of the spread across the starts and the starts' batch means (10 per
-    start) combined (:func:`workbench.analysis._convergence.pooled`).
+    (a damped linear oscillator); on that nine-bar orbit they now read somewhat above the
+    variational exponent on the same trajectory, a gap that depends on neither d0, tolerance nor
+    step and is not yet explained (docs/analysis.md, "Contracting orbits"). The trigger is the
+    same both ways, so that a copy's separation stays within a band symmetric about ``d0`` in
+    the log: the default ``d0`` balances round-off (relative error eps / d) against curvature
+    (relative error ~d), and the band keeps both within the same factor ``exp(growth)`` of that
+    balance (docs/analysis.md gives the noise floor before and after on the chaos case, and how
+    many renormalisations were shrinkages). Five copies run at once: ``(d0, growth)`` (the
+    estimate), ``(d0 / 2, growth)``, ``(2 d0, growth)``, ``(d0, growth / 2)`` and ``(d0, 2
+    growth)``. The windows then grow (their lengths doubled, the runs continued) until the
+    pooled estimate's standard error is below ``target`` of its magnitude or the ``budget`` is
+    spent. The standard error is the larger of the spread across the starts and the starts'
+    batch means (10 per start) combined (:func:`workbench.analysis._convergence.pooled`).
 
     The reference is the variational exponent, carried by the same fiducial trajectories
     (``lle_variational``): the two-trajectory estimate is a forward difference of the flow

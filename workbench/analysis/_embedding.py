@@ -131,10 +131,8 @@ def embedding_fnn(
     neighbours is below ``threshold``; where it levels off above it (noise, or few points:
     neighbours far apart fail the second test; Kennel et al. 1992, Sec. IV), the first d within
     ``threshold`` of its smallest value. (The smallest value itself can lie anywhere on the
-    plateau: on a 2 000-point Duffing section whose fractions levelled off above the
-    threshold it lay at the plateau's far end, and Wolf's estimate in that dimension failed;
-    in the plateau's first dimension a Duffing section's estimate is within 10 % of the
-    exponent: tests/test_wolf_heldout.py.)
+    plateau, and Wolf's estimate in a dimension at its far end can fail: docs/analysis.md, "The
+    Wolf estimate, in three stages".)
 
     The fraction is taken over ``points`` reference points evenly spread over the series (all
     of them if None), each with its nearest neighbour among all points more than ``theiler``

@@ -44,16 +44,11 @@ __all__ = ["lyapunov_spectrum"]
 #: A re-orthonormalisation costs no evaluation (see
 #: :mod:`workbench.solver._templates.tangent_hooks`), but it sets the directions apart again,
 #: and on the nine-bar's contacts they re-align within microseconds: the steps that resolve
-#: that are the cost (chaos case, 8 exponents over 0.1 cycle, rtol 1e-6: D = 1 took 5.6e6
-#: steps per cycle against 736 780 at D = 10, measured at 1949aa1: benchmarks/RESULTS.md, "The
-#: tangent system re-orthonormalised at step ends"). With fewer exponents than states the
-#: integrated volume (the sum check) needs the orthogonal parts: 4 exponents over 2 cycles
-#: closed to 2.8e-2 at rtol 1e-6 and 8.6e-4 at 1e-8 (at 877b731 and 76a1cc9-dirty), with D = 3
-#: over 0.5 cycles to 3.8e-4 and 1.7e-6 (at f61ab54), for 47 770 steps per cycle at rtol 1e-6
-#: against 13 186 at D = 10 (at 56c825a-dirty); with all of them the volume rate is the trace
-#: on the whole state space and closes at rtol 1e-6 (2.9e-4 over 2 cycles, at 877b731). The
-#: commits name the newest benchmarks/tangent_speed.py records of each window (in
-#: benchmarks/records/tangent_speed/), as docs/analysis.md does.
+#: that are the cost, which grows as D falls. With fewer exponents than states the integrated
+#: volume (the sum check) needs the orthogonal parts, and a smaller D or a tighter tolerance
+#: closes it; with all of them the volume rate is the trace on the whole state space and closes
+#: at the scene's tolerance. docs/analysis.md ("The sum check", "What the tangent system
+#: costs") gives both on the nine-bar's chaos case.
 DEFECT = 10.0
 #: records of the accumulated growths (running estimate, batch means)
 RECORDS = 400

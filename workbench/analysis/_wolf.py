@@ -104,7 +104,7 @@ def wolf_lle(
     20th for a map (it follows the density of the data); ``scale_min`` = scale_max / 1000
     (noise-free data: Wolf et al. put it above the noise level, so raise it for noisy data).
     They were tuned on a development set (Henon; Lorenz and Rossler x, 30 series) and checked
-    on held-out maps and flows (tests/test_wolf_heldout.py).
+    on held-out maps and flows (docs/results.md, "Analysis", gives the held-out figures).
 
     **Reliability.** ``reliable`` is 0, with the reasons in its ``message`` attribute (and the
     ``warning`` attribute of the Dataset), when: a series with a time step does not look like

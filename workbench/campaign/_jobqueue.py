@@ -26,7 +26,7 @@ with
 
 * ``WORKBENCH_CACHE_DIR`` set to a directory on shared storage, so that every worker loads the
   compiled kernel that :func:`workbench.campaign.warm_kernel` put there instead of compiling it
-  (30-90 s per model and worker otherwise);
+  (tens of seconds of CPU per model and worker otherwise: docs/cluster.md);
 * numpy's BLAS and OpenMP pools at one thread (``OMP_NUM_THREADS=1`` and the like), so that the
   analysis a worker may run does not start a thread per core beside the other workers;
 * dask's idle timers slowed (:data:`DASK_CONFIG`, exported as ``DASK_...`` variables);

@@ -8,10 +8,10 @@ the multipliers come from the monodromy matrix of the orbit found by Newton's me
 method is slower there and, on the nine-bar, biased: the two-trajectory method
 (:func:`workbench.analysis.lle_from_equations`) renormalises a copy when its separation grows
 or shrinks by a set factor (renormalised on growth alone, every copy shrank onto a contracting
-orbit until its separation was the integration's noise, and the nine-bar's omega = 0.5 pi,
-c = 20 um read 3.34e4 +- 53 1/s, the noise's rate: the ``benchmarks/continuation.py --parts
-chaos_maps`` record at cf87888); it now reads -67.9 1/s over one cycle there, against -74.2
-1/s for the variational exponent on the same trajectory (tests/test_lyapunov.py).
+orbit until its separation was the integration's noise, and the method read the noise's rate),
+and on the nine-bar's contracting orbit at omega = 0.5 pi, c = 20 um it still reads above the
+variational exponent on the same trajectory (docs/continuation.md, "Chaos maps", gives the
+readings).
 
 So where the strobe samples repeat with period k (:func:`workbench.continuation.strobe_period`)
 the exponent is Floquet's. Its check: with the monodromy by copies (the mechanisms), the
@@ -20,10 +20,9 @@ matrix again with a 100x larger difference step, which leaves a true multiplier 
 1 / step); with the tangent system, the orbit again at a 100x tighter tolerance. The change is
 the error. Where the largest multiplier falls by more than 10x with the larger step it was the
 noise floor of the differences, and the exponent is only bounded: ``ln |mu_max| / (k T)`` at
-the larger step is an upper bound (``bound``). The nine-bar's point above is such an orbit:
-the copies' Jacobian there is noise (entries of no structure), the bound is -3.8 1/s
-(tests/test_continuation.py), and the variational monodromy of
-:func:`workbench.analysis.floquet` puts its exponent below it.
+the larger step is an upper bound (``bound``). The contracting nine-bar orbit above is such
+an orbit: the copies' Jacobian there is noise (entries of no structure), and the variational
+monodromy of :func:`workbench.analysis.floquet` puts its exponent below the bound.
 
 The Floquet exponent is ``converged`` where it is not a bound and its check moved it by at most
 :data:`~workbench.analysis._convergence.TRUST` (20 %) of its value.

@@ -22,8 +22,8 @@ accurate than the tolerance (the error of a difference is the tolerance times th
 plus O(h^2) and the rounding 1e-16 / h), and events are located per copy. The tangent system is
 exact but carries the model's Jacobian along every column: by central differences of the rhs for
 the mechanisms, which have no analytic Jacobian, where its step control takes several times the
-bare model's steps (a nine-bar orbit in lasting contact at omega = 1.5 pi: 30 885 against 8 163
-steps per crank cycle, where copies take 7 998; tests/test_continuation.py). ``"auto"``
+bare model's steps, where copies take about the bare model's (docs/continuation.md gives the
+counts on a nine-bar orbit in lasting contact). ``"auto"``
 (default) takes the tangent system for a model with an analytic Jacobian and copies otherwise.
 
 The map is integrated by an explicit compiled method: the scene's own where it is ``dop853`` or

@@ -8,13 +8,12 @@ work-precision diagrams; for non-smooth systems e.g. Acary & Brogliato 2008, Ch.
     chaotic divergence, relative to the reference's range. The horizon is half the time after
     which the reference and a run 100x looser than it separate by 1 % of a variable's range
     (at most the first forcing period from t0): for an impacting mechanism whose nearby
-    trajectories separate at tens of 1/s or more (the nine-bar's chaos case: 25.66 1/s, the
-    newest ``benchmarks/lle.py --chaos`` record, at 2e994d4-dirty), a whole crank cycle would
-    measure chaos, not accuracy. It is cut further where the reference itself stops being
-    exact: where it and a twin run 10x tighter separate by REFERENCE_FLOOR (1e-6) of a range
-    (impacts amplify the reference's own error too, which would make small errors a matter of
-    luck; docs/accuracy.md). The largest twin separation over the horizon is stored as
-    ``reference_error``;
+    trajectories separate at tens of 1/s or more (the nine-bar's chaos case: docs/analysis.md),
+    a whole crank cycle would measure chaos, not accuracy. It is cut further where the
+    reference itself stops being exact: where it and a twin run 10x tighter separate by
+    REFERENCE_FLOOR (1e-6) of a range (impacts amplify the reference's own error too, which
+    would make small errors a matter of luck; docs/accuracy.md). The largest twin separation
+    over the horizon is stored as ``reference_error``;
 (b) ``peak_error``: the relative error of the peak of each variable over that horizon (e.g.
     the peak force of the first impacts), and ``events_error``: the relative error of the
     number of events (e.g. contact onsets and ends) per forcing period over the whole run;

@@ -1,9 +1,9 @@
 """Ensembles of a scene: the same run from initial states perturbed at round-off-like size.
 
-A clearance mechanism is chaotic (largest Lyapunov exponent 25.66 1/s on the nine-bar's chaos
-case: the newest ``benchmarks/lle.py --chaos`` record, at 2e994d4-dirty): a peak of one run is
-one sample of a distribution, and a difference of 1e-12 in the initial state changes it within
-a few crank cycles. An ensemble runs a scene several times, realisation k starting from
+A clearance mechanism is chaotic (its largest Lyapunov exponent is tens of 1/s; docs/analysis.md
+gives the nine-bar's chaos case): a peak of one run is one sample of a distribution, and a
+difference of 1e-12 in the initial state changes it within a few crank cycles. An ensemble runs
+a scene several times, realisation k starting from
 
     y0_k = y0 + perturbation * atol_scale * N_k(0, 1)
 

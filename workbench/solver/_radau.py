@@ -13,8 +13,7 @@ embedded 3rd-order solution's filtered by the L-stable factor, so that it stays 
 components (Eq. 8.19-8.20); step sizes follow the predictive controller of Gustafsson (1994) as
 in RADAU5. The estimate is held to the run's own tolerances, as in scipy's ``Radau``, not to
 RADAU5's transformed ones (``rtol' = 0.1 rtol^(2/3)``): the estimate is of order 3 while the
-solution is of order 5, so the global error lies below the tolerance (measured on Van der Pol
-and Robertson in tests/test_implicit.py: within a few tolerances of scipy's Radau).
+solution is of order 5, so the global error lies below the tolerance.
 """
 
 from __future__ import annotations

@@ -145,10 +145,9 @@ def _chaos_measures(ds: xr.Dataset, scene: Scene) -> dict:
 
 
 #: measured crank cycles of the exponents from the equations (at least; grown to twice that
-#: until their standard error is 3 %: over 3 cycles the chaos case read 23.6 +/- 10.1 1/s,
-#: tests/test_lyapunov.py; over 4 x 20 cycles 25.66 +/- 0.58 at rtol 1e-6, the newest
-#: benchmarks/lle.py --chaos record, at 2e994d4-dirty; the two-trajectory estimate shares them
-#: among four independent starts), and of the stroboscopic map
+#: until their standard error is 3 %: a few cycles are far from it on the chaos case, 4 x 20
+#: cycles reach it, docs/analysis.md; the two-trajectory estimate shares them among four
+#: independent starts), and of the stroboscopic map
 EXPONENT_CYCLES = 40
 STROBE_CYCLES = 400
 _EXPONENT_VARS = ("lle", "lle_per_cycle", "stderr", "trusted", "note", "wall_time")
