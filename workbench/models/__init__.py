@@ -12,6 +12,12 @@ public: ``from workbench.models import Model, Parameter, Quantity, register`` (a
 system without events. The guide with worked examples (Rössler with its Lyapunov spectrum, a
 bouncing ball with events): ``docs/own-models.md``.
 
+The built-in models are found, not listed: every public module or package of this package is
+the model of its name (but the libraries :mod:`.contact`, :mod:`.friction` and
+:mod:`.no_events`), imported on first use. A model names what the layers above it use for it
+(:attr:`Model.overview_figure`, :attr:`Model.verification`, :attr:`Model.compile_stand_in`),
+which those layers import (:meth:`Model.plugin`).
+
 The hooks, in the model's module, compiled with ``numba.njit(cache=True)``; the integration
 loop imports them by name from the module (``Model.hooks``, default the class's module):
 

@@ -90,7 +90,9 @@ class Model:
     the parameters to the hooks in their declared order (``p[k]`` is the k-th of
     :attr:`parameters`), starts from :attr:`initial_values` overridden by the scene's
     ``[initial]``, and takes the hooks from :attr:`hooks` (default: the module that defines the
-    class); :attr:`forcing_frequency` names the parameter of a periodic forcing.
+    class); :attr:`forcing_frequency` names the parameter of a periodic forcing. Its plug-ins
+    (:attr:`overview_figure`, :attr:`verification`, :attr:`compile_stand_in`) are what the
+    figures, the exudyn verification and the compile notice use for it.
     """
 
     name: ClassVar[str]
