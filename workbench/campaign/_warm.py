@@ -9,6 +9,7 @@ import tempfile
 from pathlib import Path
 
 from workbench.campaign._block import task_scene
+from workbench.models import Model, get_model
 from workbench.run import derive, integrate, prepare, provenance, to_dataset
 from workbench.scene import Scene
 
@@ -19,18 +20,22 @@ __all__ = ["compile_record", "kernel_cached", "load_kernel", "warm_io", "warm_ke
 #: ``cores``, ``load`` (the 1-min load average before and after), ``date``, ``commit``,
 #: ``command``. Written by ``benchmarks/cache.py``, read by :func:`compile_record`.
 COMPILE_TIMES = Path(__file__).with_name("compile_times.json")
-_STAND_IN = "duffing"  # the measured model quoted for a model without its own record
 
 
 def compile_record(model: str) -> tuple[str, dict] | None:
     """The measured first run with an empty kernel cache (:data:`COMPILE_TIMES`) of ``model``,
-    else of the model that stands in for it (Duffing's: the smallest kernel measured), as
-    (the model measured, its record); None when neither was measured."""
+    else of the model that stands in for it (the model's
+    :attr:`~workbench.models.Model.compile_stand_in`), as (the model measured, its record);
+    None when neither was measured."""
     try:
         records = json.loads(COMPILE_TIMES.read_text())
     except (OSError, ValueError):  # pragma: no cover - a package installed without it
         return None
-    for name in (model, _STAND_IN):
+    try:
+        stand_in = get_model(model).compile_stand_in
+    except KeyError:  # a model this process does not know
+        stand_in = Model.compile_stand_in
+    for name in (model, stand_in):
         if name in records:
             return name, records[name]
     return None

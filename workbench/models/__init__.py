@@ -12,6 +12,12 @@ public: ``from workbench.models import Model, Parameter, Quantity, register`` (a
 system without events. The guide with worked examples (Rössler with its Lyapunov spectrum, a
 bouncing ball with events): ``docs/own-models.md``.
 
+The built-in models are found, not listed: every public module or package of this package is
+the model of its name (but the libraries :mod:`.contact`, :mod:`.friction` and
+:mod:`.no_events`), imported on first use. A model names what the layers above it use for it
+(:attr:`Model.overview_figure`, :attr:`Model.verification`, :attr:`Model.compile_stand_in`),
+which those layers import (:meth:`Model.plugin`).
+
 The hooks, in the model's module, compiled with ``numba.njit(cache=True)``; the integration
 loop imports them by name from the module (``Model.hooks``, default the class's module):
 
@@ -34,7 +40,9 @@ the declared parameters in order), ``ip`` integer parameters, ``aux`` the discre
 
 from __future__ import annotations
 
+import functools
 import importlib
+import pkgutil
 
 from workbench.models._base import EVENT_INSIDE_STEP, Effect, Model, Parameter, Problem, Quantity
 
@@ -52,28 +60,31 @@ __all__ = [
 ]
 
 _REGISTRY: dict[str, type[Model]] = {}
-# The built-in models by name and the module that defines (and registers) each: imported on
-# first use, so that a run loads (and numba compiles) only the model it needs.
-_BUILTIN = {
-    "bouncing_ball": "workbench.models.bouncing_ball",
-    "duffing": "workbench.models.duffing",
-    "free_journal": "workbench.models.free_journal",
-    "impact_oscillator": "workbench.models.impact_oscillator",
-    "lorenz": "workbench.models.lorenz",
-    "ninebar": "workbench.models.ninebar",
-    "slider_crank": "workbench.models.slider_crank",
-    "stop_oscillator": "workbench.models.stop_oscillator",
-}
+# The public modules of this package that are libraries for models, not models: every other
+# public module or package of workbench.models is the built-in model of its name.
+_LIBRARIES = frozenset({"contact", "friction", "no_events"})
+
+
+@functools.cache
+def _builtin() -> dict[str, str]:
+    """The built-in models by name and the module that defines (and registers) each: the public
+    modules and packages of this package (listed from its own folder, never imported here),
+    so that a run loads (and numba compiles) only the model it needs."""
+    return {
+        m.name: f"{__name__}.{m.name}"
+        for m in pkgutil.iter_modules(__path__)
+        if not m.name.startswith("_") and m.name not in _LIBRARIES
+    }
 
 
 def register(cls: type[Model]) -> type[Model]:
     """Class decorator: make a model available to scenes under ``cls.name`` (a name of a
     built-in model is refused for any other class; registering a name again replaces it)."""
-    builtin = _BUILTIN.get(cls.name)
+    builtin = _builtin().get(cls.name)
     if builtin is not None and not (cls.__module__ + ".").startswith(builtin + "."):
         raise ValueError(
             f"model name {cls.name!r} is taken by the built-in model of {builtin}; choose "
-            f"another name (built-in: {', '.join(sorted(_BUILTIN))})"
+            f"another name (built-in: {', '.join(sorted(_builtin()))})"
         )
     _REGISTRY[cls.name] = cls
     return cls
@@ -81,13 +92,13 @@ def register(cls: type[Model]) -> type[Model]:
 
 def available_models() -> tuple[str, ...]:
     """Names of the registered and built-in models."""
-    return tuple(sorted(set(_REGISTRY) | set(_BUILTIN)))
+    return tuple(sorted(set(_REGISTRY) | set(_builtin())))
 
 
 def get_model(name: str) -> Model:
     """An instance of the model registered as ``name`` (KeyError if unknown)."""
-    if name not in _REGISTRY and name in _BUILTIN:
-        importlib.import_module(_BUILTIN[name])
+    if name not in _REGISTRY and name in _builtin():
+        importlib.import_module(_builtin()[name])
     return _REGISTRY[name]()
 
 

@@ -8,8 +8,9 @@ self-described. The guide to writing one: :mod:`workbench.models` and ``docs/own
 
 from __future__ import annotations
 
+import importlib
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -20,6 +21,8 @@ import numpy as np
 from workbench.solver import EVENT_INSIDE_STEP, Problem
 
 __all__ = ["EVENT_INSIDE_STEP", "Effect", "Model", "Parameter", "Problem", "Quantity"]
+
+_PLUGINS = ("overview_figure", "verification")  # the plug-ins named "module:function"
 
 
 @dataclass(frozen=True)
@@ -87,7 +90,9 @@ class Model:
     the parameters to the hooks in their declared order (``p[k]`` is the k-th of
     :attr:`parameters`), starts from :attr:`initial_values` overridden by the scene's
     ``[initial]``, and takes the hooks from :attr:`hooks` (default: the module that defines the
-    class); :attr:`forcing_frequency` names the parameter of a periodic forcing.
+    class); :attr:`forcing_frequency` names the parameter of a periodic forcing. Its plug-ins
+    (:attr:`overview_figure`, :attr:`verification`, :attr:`compile_stand_in`) are what the
+    figures, the exudyn verification and the compile notice use for it.
     """
 
     name: ClassVar[str]
@@ -117,7 +122,39 @@ class Model:
     #: the forcing period is 2 pi / that value; None for an autonomous system
     forcing_frequency: ClassVar[str | None] = None
 
+    # -- plug-ins: what the layers above the models use, named "module:function" and imported
+    # only by them (:meth:`plugin`), so that importing a model imports neither matplotlib nor
+    # exudyn, and no module of the models imports a layer above it
+    #: the overview figure of a run, ``f(ds: xarray.Dataset) -> matplotlib.figure.Figure``,
+    #: which :func:`workbench.plot.run_figures` draws beside the time series; None: no overview
+    overview_figure: ClassVar[str | None] = None
+    #: the model as the exudyn multibody engine rebuilds it, ``f(scene) ->
+    #: workbench.verification._mechanisms.Mechanism`` (:func:`workbench.verification.verify`);
+    #: None: not verifiable
+    verification: ClassVar[str | None] = None
+    #: the model whose measured first compile (``workbench/campaign/compile_times.json``) the
+    #: notice before a first compile quotes while this model has no record of its own: one of
+    #: a kernel of about this model's size (default Duffing's, the smallest kernel measured)
+    compile_stand_in: ClassVar[str] = "duffing"
+
     # -- declarations -------------------------------------------------------------------------
+    def plugin(self, kind: str) -> Callable | None:
+        """The plug-in function ``kind`` (``"overview_figure"`` or ``"verification"``), imported
+        from the module its dotted name ``"module:function"`` names; None when the model
+        declares none.
+
+        >>> from workbench.models import get_model
+        >>> get_model("lorenz").plugin("overview_figure") is None
+        True
+        """
+        if kind not in _PLUGINS:
+            raise ValueError(f"plug-in {kind!r} is not one of {', '.join(_PLUGINS)}")
+        dotted = getattr(self, kind)
+        if dotted is None:
+            return None
+        module, _, name = dotted.partition(":")
+        return getattr(importlib.import_module(module), name)
+
     def parameter(self, name: str) -> Parameter:
         """The declared parameter ``name``."""
         for p in self.parameters:

@@ -8,8 +8,9 @@ stored in given units with: lengths in mm, others as stored, the same in every f
 title broken into lines), :func:`failure_note` and :func:`run_status_note` (text on failed
 points or a failed run), :func:`mark_failed` (marks failed parameter values on given axes and
 returns a note), :func:`curve_overlay` (draws a curve of bifurcations in two parameters on
-given axes), :func:`run_figure_names` (the file names :func:`run_figures` writes) and
-:func:`register_overview` (a decorator that adds a model's overview to :func:`run_figures`).
+given axes) and :func:`run_figure_names` (the file names :func:`run_figures` writes). The
+overview figure that :func:`run_figures` adds for a model is the model's to declare
+(:attr:`workbench.models.Model.overview_figure`).
 """
 
 from workbench.plot._accuracy import work_precision_figure
@@ -21,7 +22,7 @@ from workbench.plot._analysis import (
     poincare_figure,
     zero_one_figure,
 )
-from workbench.plot._base import display_unit, register_overview, wrap_title
+from workbench.plot._base import display_unit, wrap_title
 from workbench.plot._continuation import (
     CURVE_COLOURS,
     CURVE_MARKS,
@@ -74,7 +75,6 @@ __all__ = [
     "lle_figure",
     "phase_figure",
     "poincare_figure",
-    "register_overview",
     "run_figure_names",
     "run_figures",
     "timeseries_figure",

@@ -1,8 +1,8 @@
 """What every figure module shares: matplotlib without a display, the one display unit of each
 stored unit (:func:`display_unit`: lengths in mm, every other unit as stored), axis labels from
 ``long_name`` and that unit (none for a dimensionless ``1``), tick labels without an offset,
-titles that wrap between words but never inside "Sec. 4.2" or "0.5 mm", and the registry of
-model-specific overview figures."""
+titles that wrap between words but never inside "Sec. 4.2" or "0.5 mm", and the overview
+figure a model declares."""
 
 from __future__ import annotations
 
@@ -26,7 +26,6 @@ __all__ = [
     "overview",
     "plain_ticks",
     "plt",
-    "register_overview",
     "run_parameters",
     "title_width",
     "units_label",
@@ -43,18 +42,6 @@ _KEEP_TOGETHER = (
     re.compile(r"\s+=\s+"),
     re.compile(r"\([^()\n]{1,40}\)"),  # a short parenthesis: "(Chen et al. 2019, Sec. 4.2)"
 )
-
-_OVERVIEWS: dict[str, Callable[[xr.Dataset], plt.Figure]] = {}
-
-
-def register_overview(model: str):
-    """Decorator: a function ``f(ds) -> Figure`` drawn by :func:`run_figures` for ``model``."""
-
-    def deco(f):
-        _OVERVIEWS[model] = f
-        return f
-
-    return deco
 
 
 def run_parameters(ds: xr.Dataset) -> dict[str, float]:
@@ -158,6 +145,13 @@ def plain_ticks(ax) -> None:
                 pass
 
 
-def overview(model: str) -> Callable[[xr.Dataset], plt.Figure] | None:
-    """The overview figure registered for ``model`` (None if there is none)."""
-    return _OVERVIEWS.get(model)
+def overview(model: str | None) -> Callable[[xr.Dataset], plt.Figure] | None:
+    """The overview figure of ``model``: the function its ``overview_figure`` names
+    (:attr:`workbench.models.Model.overview_figure`); None for a model without one, or one
+    that this process does not know (a stored run of a model not imported)."""
+    from workbench.models import get_model
+
+    try:
+        return get_model(model).plugin("overview_figure")
+    except KeyError:
+        return None

@@ -12,7 +12,6 @@ from workbench.plot._base import (
     display_unit,
     plain_ticks,
     plt,
-    register_overview,
     run_parameters,
     wrap_title,
 )
@@ -25,7 +24,6 @@ def _clearances(ds: xr.Dataset) -> dict[str, float]:
     return get_model("ninebar").clearances(run_parameters(ds))
 
 
-@register_overview("ninebar")
 def ninebar_overview(ds: xr.Dataset) -> plt.Figure:
     """Journal orbits in units of c beside the time series of forces, torques and slider
     (legends beside the panels, values in readable units, a failed run's status in the

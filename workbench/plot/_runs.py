@@ -10,7 +10,6 @@ import numpy as np
 import xarray as xr
 
 from workbench.archive import SERIES_DIMS, save_figure
-from workbench.plot import _ninebar, _slider_crank  # noqa: F401 (they register their overviews)
 from workbench.plot._base import (
     axis_label,
     display_unit,

@@ -12,7 +12,6 @@ from workbench.plot._base import (
     display_values,
     plain_ticks,
     plt,
-    register_overview,
     run_parameters,
     wrap_title,
 )
@@ -24,7 +23,6 @@ def crank_angle_deg(ds: xr.Dataset, params: dict[str, float]) -> np.ndarray:
     return np.degrees(params["theta10"] + params["omega"] * ds.time.values)
 
 
-@register_overview("slider_crank")
 def slider_crank_overview(ds: xr.Dataset) -> plt.Figure:
     """Slider acceleration and crank moment against crank angle; the journal orbit (x/c, y/c)."""
     params = run_parameters(ds)

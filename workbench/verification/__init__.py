@@ -6,6 +6,6 @@
 
 from workbench.verification._compare import STATISTICS, verify
 from workbench.verification._exudyn import run_exudyn
-from workbench.verification._mechanisms import MECHANISMS
+from workbench.verification._mechanisms import verifiable_models
 
-__all__ = ["MECHANISMS", "STATISTICS", "run_exudyn", "verify"]
+__all__ = ["STATISTICS", "run_exudyn", "verifiable_models", "verify"]

@@ -40,7 +40,7 @@ import xarray as xr
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS
 from workbench.scene import Scene
-from workbench.verification._mechanisms import MECHANISMS, Mechanism, Point, check_scene
+from workbench.verification._mechanisms import Mechanism, Point, build_mechanism, check_scene
 
 __all__ = ["run_exudyn"]
 
@@ -204,7 +204,7 @@ class _Build:
 def _build(exu, it, scene: Scene) -> tuple[_Build, dict[str, Any]]:
     """The scene's mechanism assembled in exudyn, and its sensors."""
     params = scene.resolved_parameters
-    mech = MECHANISMS[scene.model](scene)
+    mech = build_mechanism(scene)
     b = _Build(exu, it, mech, params, params["gravity"] if scene.effects["gravity"] else 0.0)
     for b0, b1, point in mech.revolutes:
         b.revolute(b0, b1, point)
@@ -336,7 +336,8 @@ def run_exudyn(
     Parameters
     ----------
     scene : Scene
-        A scene of a model in :data:`MECHANISMS` (``ninebar``, ``slider_crank``): its
+        A scene of a model that exudyn rebuilds
+        (:func:`workbench.verification.verifiable_models`: ``ninebar``, ``slider_crank``): its
         parameters, clearance joints, gravity and friction ("none" or "coulomb") are rebuilt in
         exudyn; the run and record tables are not used.
     t_end : float

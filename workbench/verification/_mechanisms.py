@@ -1,6 +1,7 @@
 """The mechanisms as an independent multibody engine sees them: bodies with their initial
-placement, ideal joints, clearance joints, drives and the slider (:class:`Mechanism`), one
-description per model, and which scenes can be rebuilt at all.
+placement, ideal joints, clearance joints, drives and the slider (:class:`Mechanism`), the
+builders of the built-in mechanisms (each model names its own:
+:attr:`workbench.models.Model.verification`), and which scenes can be rebuilt at all.
 
 Only the initial placement and velocities come from the workbench's kinematics; the engine then
 holds the bodies to its own constraints. The nine-bar's placement is its public
@@ -15,10 +16,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workbench.models import get_model, joint_stiffness
+from workbench.models import available_models, get_model, joint_stiffness
 from workbench.scene import Scene, SceneError
 
-__all__ = ["MECHANISMS", "Body", "Mechanism", "Point", "check_scene"]
+__all__ = [
+    "Body",
+    "Mechanism",
+    "Point",
+    "build_mechanism",
+    "check_scene",
+    "verifiable_models",
+]
 
 Point = tuple[float, float]
 
@@ -136,19 +144,26 @@ def slider_crank_mechanism(scene: Scene) -> Mechanism:
     )
 
 
-MECHANISMS: dict[str, Callable[[Scene], Mechanism]] = {
-    "ninebar": ninebar_mechanism,
-    "slider_crank": slider_crank_mechanism,
-}
+def verifiable_models() -> tuple[str, ...]:
+    """The models that exudyn can rebuild: those that declare their ``verification`` builder
+    (:attr:`workbench.models.Model.verification`)."""
+    return tuple(m for m in available_models() if get_model(m).verification is not None)
+
+
+def build_mechanism(scene: Scene) -> Mechanism:
+    """The scene's mechanism at t = 0 as exudyn sees it, from the builder its model declares
+    (:attr:`workbench.models.Model.verification`); call :func:`check_scene` first."""
+    return get_model(scene.model).plugin("verification")(scene)
 
 
 def check_scene(scene: Scene) -> None:
     """Raise SceneError (naming the key) unless exudyn can rebuild this scene (model and
     friction law)."""
-    if scene.model not in MECHANISMS:
+    if get_model(scene.model).verification is None:
         raise SceneError(
             "model.name",
-            f"exudyn verification knows the models {sorted(MECHANISMS)}; got {scene.model!r}",
+            f"exudyn verification knows the models {sorted(verifiable_models())}; got "
+            f"{scene.model!r}",
         )
     if scene.effects["friction"] == "lugre":
         raise SceneError(

@@ -37,12 +37,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from workbench.models._base import EVENT_INSIDE_STEP
-from workbench.models._contact_events import contact_event, contact_event_values
 from workbench.models._layout import layout
+from workbench.models._mechanism_hooks import mechanism_hooks
 from workbench.models._mechanism_layouts import (
     CODE_ASSEMBLY,
     CODE_NONFINITE,
@@ -55,7 +54,7 @@ from workbench.models._mechanism_layouts import (
     record_fields,
     work_fields,
 )
-from workbench.models._record import evaluate_mechanism, kinematic_arrays, rates_from_record
+from workbench.models._record import evaluate_mechanism, kinematic_arrays
 from workbench.models._record_types import MechanismLayout, Slider
 from workbench.models._reduced import (
     column_force,
@@ -166,26 +165,10 @@ def evaluate(t, y, p, ip, aux, work):
     return evaluate_mechanism(y, p, ip, aux, work, MECHANISM, kin, slider)
 
 
-@njit(cache=True)
-def rhs_reference(t, y, p, ip, aux, work, dydt):
-    """The right-hand side that :func:`evaluate` gives (the hook protocol of :func:`rhs`): the
-    reference of the tests and the benchmark's "before"."""
-    code = evaluate(t, y, p, ip, aux, work)
-    if code != 0:
-        return code
-    return rates_from_record(y, ip, aux, work, dydt, MECHANISM)
-
-
-@njit(cache=True)
-def evaluate_many(t, Y, p, ip, AUX, ws):
-    """`evaluate` at every record (rows of Y and AUX) into ws[i, :RECORD.size]; returns the
-    failure code per record."""
-    codes = np.zeros(t.size, np.int64)
-    work = np.zeros(WORK_SIZE)
-    for i in range(t.size):
-        codes[i] = evaluate(t[i], Y[i], p, ip, AUX[i], work)
-        ws[i, :] = work[: RECORD.size]
-    return codes
+# the hooks every mechanism shares, compiled as functions of this module
+evaluate_many, rhs_reference, event_values, apply_event = mechanism_hooks(
+    __name__, evaluate, MECHANISM
+)
 
 
 # ================================================================================================
@@ -360,17 +343,3 @@ def rhs(t, y, p, ip, aux, work, dydt):
     if (da > 0.0 and onset_a == 0.0) or (db > 0.0 and onset_b == 0.0):
         return EVENT_INSIDE_STEP  # in contact, with no onset velocity held (see held_onset)
     return 0
-
-
-@njit(cache=True)
-def event_values(t, y, p, ip, aux, work, g):
-    """Penetration e - c (m) of each joint with a clearance, twice: its contact onset (rising
-    zero) and end (falling zero); see
-    :func:`workbench.models._contact_events.contact_event_values`."""
-    contact_event_values(y, p, ip, g, P, IP, N_JOINTS)
-
-
-@njit(cache=True)
-def apply_event(k, t, y, p, ip, aux, work):
-    """Contact onset: hold the normal velocity (LN) and reset the LuGre bristles; end: clear it."""
-    return contact_event(k, y, ip, aux, IP, N_JOINTS)

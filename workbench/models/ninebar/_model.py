@@ -115,6 +115,8 @@ class NineBar(Mechanism):
     slider = "slider displacement S9"
     assembly = "the mechanism cannot be assembled at this configuration (a loop does not close)"
     dynamics = dyn
+    overview_figure = "workbench.plot._ninebar:ninebar_overview"
+    verification = "workbench.verification._mechanisms:ninebar_mechanism"
 
     # -- declarations -------------------------------------------------------------------------
     def variables(self, effects):

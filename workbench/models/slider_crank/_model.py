@@ -94,6 +94,8 @@ class SliderCrank(Mechanism):
     slider = "slider position s (pin B on the x axis)"
     assembly = "the rod cannot reach the slider guide (|y - L1 sin theta1| >= L2)"
     dynamics = dyn
+    overview_figure = "workbench.plot._slider_crank:slider_crank_overview"
+    verification = "workbench.verification._mechanisms:slider_crank_mechanism"
 
     def clearances(self, params) -> dict[str, float]:
         """Clearance of each joint, m."""
