@@ -95,6 +95,7 @@ chaos-maps: $(STAMP)
 		cp $(OUT)/chaos_maps/$$m.png docs/figures/chaos-map-$$m.png || exit 1; \
 	done
 	$(PY) data/regenerate.py --periodic-end
+	$(PY) data/regenerate.py --periodic-end-hunt-crossley
 
 # The small archives the notebooks open (tests/test_data.py fails when they are stale), and the
 # notebooks executed in place on them (committed with their outputs: the site shows them).

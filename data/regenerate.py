@@ -36,6 +36,9 @@ code writes.
   ``studies/periodic_end.toml`` (omega 1.75-2 pi in steps of 0.01 pi, up and down, at the
   maps' clearances) and its cost; ``python data/regenerate.py --periodic-end`` (``make
   chaos-maps`` runs it; minutes on 2 workers).
+- ``periodic_end_hunt_crossley.nc``: the same for ``studies/periodic_end_hunt_crossley.toml``
+  (c = 100 um under the Hunt-Crossley law); ``python data/regenerate.py
+  --periodic-end-hunt-crossley`` (minutes on 2 workers).
 """
 
 from __future__ import annotations
@@ -187,11 +190,11 @@ KEPT = (
 )
 
 
-def periodic_end(target: Path, workers: int = 2) -> Path:
-    """The continued sweep of studies/periodic_end.toml (up and down over omega, per clearance)
-    reduced to the strobe period of every point (:func:`workbench.continuation.strobe_period`
-    of its clearance coordinates at A and B), with the sweep's cost as attributes, written to
-    ``target``."""
+def periodic_end(target: Path, workers: int = 2, study: str = "periodic_end") -> Path:
+    """The continued sweep of studies/<study>.toml (up and down over omega, per clearance where
+    it sweeps the clearance) reduced to the strobe period of every point
+    (:func:`workbench.continuation.strobe_period` of its clearance coordinates at A and B), with
+    the sweep's cost as attributes, written to ``target``."""
     import tempfile
 
     import numpy as np
@@ -199,10 +202,10 @@ def periodic_end(target: Path, workers: int = 2) -> Path:
 
     from workbench.continuation import continued_sweep, strobe_period
 
-    scene = workbench.load_scene(ROOT / "studies" / "periodic_end.toml")
+    scene = workbench.load_scene(ROOT / "studies" / f"{study}.toml")
     with tempfile.TemporaryDirectory() as tmp:
         ds = continued_sweep(scene, Path(tmp) / "sweep.nc", workers=workers, progress=False)
-    dims = ("direction", "omega", "clearance")
+    dims = tuple(d for d in ("direction", "omega", "clearance") if d in ds.dims)
     samples = xr.concat([ds.clearance_x, ds.clearance_y], "variable")
     samples = samples.transpose(*dims, RECORD_DIM, "joint", "variable")  # each point's times
     period = np.zeros([ds.sizes[d] for d in dims], dtype=np.int8)
@@ -237,6 +240,9 @@ def periodic_end(target: Path, workers: int = 2) -> Path:
 if __name__ == "__main__":
     if sys.argv[1:2] == ["--periodic-end"]:
         print(periodic_end(DATA / "periodic_end.nc"))
+    elif sys.argv[1:2] == ["--periodic-end-hunt-crossley"]:
+        study = "periodic_end_hunt_crossley"
+        print(periodic_end(DATA / f"{study}.nc", study=study))
     elif sys.argv[1:2] == ["--upgrade"]:
         for archive in sorted(DATA.glob("*.nc")):
             print(upgrade(archive))

@@ -235,3 +235,32 @@ def test_the_end_of_the_periodic_motion_the_docs_quote():
     wall, workers = a["measured_wall_time"] / 60, a["measured_workers"]
     assert f"took {wall:.0f} min wall on {workers} workers" in section
     assert f"{a['measured_worker_time'] / 60:.0f} min of the workers' CPU" in section
+
+
+def test_the_end_under_hunt_crossley_the_docs_quote():
+    """data/periodic_end_hunt_crossley.nc is studies/periodic_end_hunt_crossley.toml's continued
+    sweep reduced to strobe periods (``python data/regenerate.py --periodic-end-hunt-crossley``);
+    docs/continuation.md quotes where its periodic motion ends both ways, against LN's end at the
+    same clearance (data/periodic_end.nc), and the sweep's cost."""
+    hc = workbench.open_run(DATA / "periodic_end_hunt_crossley.nc")
+    scene = workbench.load_scene(DATA.parent / "studies" / "periodic_end_hunt_crossley.toml")
+    assert workbench.scene_from_toml(hc.attrs["scene"]).to_toml() == scene.to_toml()
+    assert scene.effects["contact"] == "hunt_crossley" and (hc.status.values == 0).all()
+    omega = np.round(hc.omega.values / np.pi, 2)
+    up, down = (hc.strobe_period.sel(direction=d).values for d in ("up", "down"))
+    np.testing.assert_array_equal(up, down)
+    first_not = float(omega[np.argmax(up != 1)])
+    last_periodic = float(omega[np.flatnonzero(up == 1)[-1]])
+    assert (up[omega > last_periodic] == 0).all()
+    ln = workbench.open_run(DATA / "periodic_end.nc").strobe_period.sel(
+        direction="up", clearance=1e-4
+    )
+    ln_last = float(np.round(ln.omega.values / np.pi, 2)[np.flatnonzero(ln.values == 1)[-1]])
+    assert last_periodic == ln_last  # "the end lies in the same 0.01 pi step as under LN"
+    text = " ".join((DATA.parent / "docs" / "continuation.md").read_text().split())
+    section = text[text.index("`periodic_end_hunt_crossley`") :][:1200]
+    before = float(omega[np.argmax(up != 1) - 1])
+    assert f"period-1 up to {before:.2f} pi, has no period at {first_not:.2f} pi" in section
+    assert f"period-1 again at {last_periodic:.2f} pi" in section
+    assert f"no period from {last_periodic + 0.01:.2f} pi on" in section
+    assert f"{hc.attrs['measured_worker_time'] / 60:.0f} min of the workers' CPU" in section
