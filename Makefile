@@ -42,7 +42,7 @@ format: $(STAMP)
 	$(VENV)/bin/ruff check --fix workbench tests benchmarks studies docs/hooks.py
 
 # What CI runs: ruff, the whole suite (hard cases and exudyn included), the package's doctests,
-# every python block of README.md and of the docs' pages (tests/test_readme.py, test_docs.py),
+# every python block of README.md and of the docs' pages (tests/docs/test_readme.py, test_docs.py),
 # the docs site built with warnings as errors, and the notebooks checked against the code; then
 # the chaotic and statistical tests once more as another processor would (test-generic).
 # The suite's files are shared among TEST_WORKERS processes (pytest-xdist; one file stays in
@@ -79,7 +79,7 @@ studies: $(STAMP)
 # the strobe period, 0-1 K and largest exponent (what their corner points cost: `python
 # benchmarks/continuation.py --parts chaos_maps`, recorded in benchmarks/RESULTS.md). Each map
 # runs under GNU time (its CPU, with the load before and after) and its indicators go to
-# data/<map>_map.nc (docs/continuation.md quotes them; tests/test_data.py checks the quotes),
+# data/<map>_map.nc (docs/continuation.md quotes them; tests/records/test_data.py checks the quotes),
 # its figure to docs/figures/chaos-map-<map>.png (shown on the site). Then the end of the
 # periodic motion per clearance, in steps of 0.01 pi up and down (data/periodic_end.nc).
 MAPS := omega_clearance clearance_friction
@@ -97,7 +97,7 @@ chaos-maps: $(STAMP)
 	$(PY) data/regenerate.py --periodic-end
 	$(PY) data/regenerate.py --periodic-end-hunt-crossley
 
-# The small archives the notebooks open (tests/test_data.py fails when they are stale), and the
+# The small archives the notebooks open (tests/records/test_data.py fails when they are stale), and the
 # notebooks executed in place on them (committed with their outputs: the site shows them).
 data: $(STAMP)
 	$(PY) data/regenerate.py

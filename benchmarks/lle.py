@@ -7,7 +7,8 @@ defaults, and ``nolds.lyap_r`` tuned (emb_dim 5, lag 16, min_tsep 100, fit over 
 100-400), all in the same run: wall time (an untraced call), peak memory (tracemalloc: Python
 allocations, numpy included; a second call) and the error against 0.9056 1/s. Target: under
 0.5 s for 10 000 points, under 100 MB for 20 000, at least 10x faster than nolds. (The error
-against the exponent of each window is what tests/test_wolf_heldout.py judges; a 100-s window's
+against the exponent of each window is what tests/analysis/test_wolf_heldout.py judges; a
+100-s window's
 own exponent scatters by several % about 0.9056.) Then wolf_lle's verdict on the same run
 sampled every 20th point (dt = 0.2 s): flagged.
 

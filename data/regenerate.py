@@ -8,7 +8,7 @@
   c_f = 0.01), 20 transient + 30 stroboscopic samples per point.
 
 Run: ``python data/regenerate.py`` (``make data``; a few minutes on 2 cores), then
-``make notebooks``. ``tests/test_data.py`` fails when the archives no longer match what the
+``make notebooks``. ``tests/records/test_data.py`` fails when the archives no longer match what the
 code writes.
 
 - ``--upgrade``: where only how the archives are written changed (the archive format, the
@@ -28,7 +28,7 @@ code writes.
   and convergence flags), the points' status and solver statistics, and the cost of the run
   from its log (attributes ``measured_*``: the workers' time, the wall time of GNU
   ``time -v``, the 1-minute load before and after from ``uptime``). docs/continuation.md
-  quotes them and ``tests/test_data.py`` checks those numbers against them. Run after
+  quotes them and ``tests/records/test_data.py`` checks those numbers against them. Run after
   ``make chaos-maps`` under ``/usr/bin/time -v`` with ``uptime`` before and after in LOG:
   ``python data/regenerate.py --chaos-map out/chaos_maps/clearance_friction.nc LOG`` (the
   archive is named after the map: ``data/<map>_map.nc``).

@@ -1,4 +1,4 @@
-"""The public API's docstrings validated with numpydoc (``make lint``; tests/test_docs.py).
+"""The public API's docstrings validated with numpydoc (``make lint``; tests/docs/test_docs.py).
 
 The public API is what the API reference renders: the packages its pages under
 ``docs/reference/`` name (``::: workbench.archive``), each package's ``__all__``, and the

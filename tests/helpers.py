@@ -1,8 +1,18 @@
-"""What several test modules share: the mechanisms' energy balance and the spec's numbers."""
+"""What several test modules share: the mechanisms' energy balance, the spec's numbers and the
+flow map's derivative two ways (tangent system, copies)."""
 
+import contextlib
 import math
+import subprocess
+from pathlib import Path
 
+import numpy as np
+import pytest
 import xarray as xr
+
+from workbench.solver import integrate
+from workbench.solver._copies import copies_problem, split_copies
+from workbench.solver._tangent import state_scale, tangent_columns, tangent_problem
 
 # the energy quadratures and energies a mechanism records for its balance
 ENERGY = ["driver_work", "dissipated_energy", "kinetic_energy", "potential_energy"]
@@ -39,3 +49,47 @@ def agrees(value: float, error: float, quoted: float, quoted_error: float) -> bo
     against the figure a page quotes, which another processor computed (its rounding sends a
     chaotic trajectory elsewhere within a few periods: the digits differ, the value does not)."""
     return abs(value - quoted) <= AGREE_SIGMAS * math.hypot(error, quoted_error)
+
+
+def flow_map_tangent(pb, t1, rtol):
+    """d y(t1) / d y(t0) from the tangent system (columns: unit perturbations of each state)."""
+    n, na = pb.y0.size, pb.aux0.size
+    s = state_scale(pb)
+    V = np.zeros((n + na, n))
+    V[:n] = np.diag(s)
+    res = integrate(tangent_problem(pb, V), np.array([t1]), rtol=rtol, atol=rtol)
+    _, V, log_det = tangent_columns(res.Y[-1], n, na, n)
+    return V[:n] / s[None, :], log_det, res.stats["events"]
+
+
+def flow_map_copies(pb, t1, rtol, h=1e-6):
+    """d y(t1) / d y(t0) by central differences of copies integrated side by side (one step
+    sequence, so that their integration errors cancel in the differences)."""
+    n = pb.y0.size
+    s = state_scale(pb)
+    Y = np.repeat(pb.y0[None, :], 2 * n, axis=0)
+    for j in range(n):
+        Y[2 * j, j] += h * s[j]
+        Y[2 * j + 1, j] -= h * s[j]
+    AUX = np.repeat(pb.aux0[None, :], 2 * n, axis=0)
+    res = integrate(copies_problem(pb, Y, AUX), np.array([t1]), rtol=rtol, atol=rtol)
+    Yt, _, _, _ = split_copies(res.Y[-1], res.AUX[-1], 2 * n)
+    return np.column_stack([(Yt[2 * j] - Yt[2 * j + 1]) / (2 * h * s[j]) for j in range(n)])
+
+
+@contextlib.contextmanager
+def tiny_tmpfs(path: Path, size: str = "1m"):
+    path.mkdir()
+    try:
+        done = subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],
+            capture_output=True,
+        )
+    except OSError:
+        done = None
+    if done is None or done.returncode != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", "-l", str(path)], check=False)

@@ -10,7 +10,8 @@ solver; :mod:`workbench.analysis` identifies chaos in them; runs are archived as
 True
 
 Layers, lowest first (each imports only those before it; :data:`workbench._layers.LAYERS`,
-checked by ``tests/test_layers.py``): solver -> models -> scene -> run -> archive -> precision
+checked by ``tests/package/test_layers.py``): solver -> models -> scene -> run -> archive ->
+precision
 (``accuracy``) -> analysis -> plot -> campaign -> continuation -> verification (``verify``) ->
 study -> cli. Every public name loads on first use (``verify`` needs the optional extra exudyn
 when called): ``import workbench`` alone imports none of numba, xarray, dask or matplotlib.

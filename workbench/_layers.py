@@ -1,5 +1,6 @@
 """The layers of the package, lowest first: each module imports only modules of its own layer or
-of a layer before it (``tests/test_layers.py`` checks every import, at module level or inside a
+of a layer before it (``tests/package/test_layers.py`` checks every import, at module level or
+inside a
 function, and that the imports form no cycle).
 
 A module belongs to the layer of the longest prefix below that names it. The package's own
@@ -15,6 +16,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     (
         "base",
         (
+            "workbench._attributes",
             "workbench._cache",
             "workbench._errors",
             "workbench._layers",

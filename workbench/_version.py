@@ -1,6 +1,7 @@
 """The version of workbench and of the archives it writes, and the rule that moves them.
 
-``__version__`` (also the ``version`` of pyproject.toml; ``tests/test_version.py`` holds them
+``__version__`` (also the ``version`` of pyproject.toml; ``tests/package/test_version.py`` holds
+them
 equal) is ``0.MINOR.PATCH`` while the package is young: MINOR goes up when the archive format
 or the results change (a scene gives other numbers than rounding explains: a default, a model,
 a solver, an estimator), PATCH for any other release (documentation, speed at identical

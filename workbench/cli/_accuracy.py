@@ -88,7 +88,8 @@ def register_cli(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="netCDF file (the figure goes beside it)")
     p.add_argument(
         "--methods",
-        # workbench.precision's DEFAULT_METHODS (tests/test_public_surfaces.py), not imported
+        # workbench.precision's DEFAULT_METHODS (tests/package/test_public_surfaces.py), not
+        # imported
         # here: `workbench --help` loads no numerical library
         help="comma-separated methods (default: dop853,dopri5,scipy:DOP853,scipy:Radau,"
         "scipy:LSODA)",

@@ -188,7 +188,8 @@ def register_cli(sub) -> None:
         "--max-points",
         type=positive_int,
         metavar="N",
-        # the default is workbench.campaign's MAX_POINTS (tests/test_public_surfaces.py), not
+        # the default is workbench.campaign's MAX_POINTS
+        # (tests/package/test_public_surfaces.py), not
         # imported here: `workbench --help` loads no numerical library
         help="refuse a [sweep] grid of more than N points, before any work (default 1000000; "
         "not with [sweep] continuation)",

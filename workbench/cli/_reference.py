@@ -1,7 +1,7 @@
 """The command-line reference page, ``docs/cli.md``, written from the argument parsers
 (:func:`workbench.cli.build_parser`): every command's description, usage and arguments, as
 ``workbench COMMAND --help`` shows them. ``python -m workbench.cli._reference`` rewrites the
-page; ``tests/test_cli.py`` holds the committed page to what the parsers say now.
+page; ``tests/cli/test_cli.py`` holds the committed page to what the parsers say now.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ def reference_page(parser: argparse.ArgumentParser | None = None) -> str:
         "# Command line",
         "",
         "<!-- Written by `python -m workbench.cli._reference` from the argument parsers; do not",
-        "edit by hand: tests/test_cli.py fails when this page and the parsers differ. -->",
+        "edit by hand: tests/cli/test_cli.py fails when this page and the parsers differ. -->",
         "",
         _cell(parser.description or ""),
         "",

@@ -1,0 +1,428 @@
+"""The numbers docs/analysis.md, docs/continuation.md and docs/robustness.md quote from benchmark
+records, from tests and from the code (the project's rule: the docs quote only what the code
+produces now, and a test checks each number; docstrings describe and quote none). Each test
+reads the page and the records it names (benchmarks/records/: one JSON file per run,
+benchmarks/_results.py), the measurement made by hand (benchmarks/NOTES.md) or the test that
+asserts the figure, and asserts that they agree: a current figure is the newest record of its
+benchmark (and window), a "before" figure the record the page names, a tested figure the value
+its test asserts. A record's numbers are formatted as the benchmark prints them (and the page
+quotes them)."""
+
+import json
+import math
+import re
+from pathlib import Path
+
+from _records import NOTES, ROOT, records
+
+#: `benchmarks/lle.py` records made before the copies were renormalised on shrinkage as well
+#: (25aee46), which docs/analysis.md quotes as "before": the separation scans and the default call
+BEFORE_SHRINK_SCANS = ("d99dfdb", "968e2fe", "968e2fe-dirty")
+BEFORE_SHRINK_CHAOS = "be0fa29"
+
+
+def _page(name: str) -> str:
+    """A page of docs/ with its whitespace collapsed."""
+    return " ".join((ROOT / "docs" / name).read_text().split())
+
+
+def _test_file(name: str):
+    """The test file called ``name`` (a basename: test files are unique by name under tests/)."""
+    (path,) = (ROOT / "tests").rglob(name)
+    return path
+
+
+def _test_source(path: str, name: str) -> str:
+    """The source of one test function of the test file ``path`` (up to the next top-level def)."""
+    source = _test_file(path).read_text()
+    return re.split(r"\n(?:@|def )", source.split(f"def {name}(")[1])[0]
+
+
+def _contracting_orbit_test() -> tuple[str, str]:
+    """The two-trajectory and variational exponents of the nine-bar's stable orbit (omega =
+    0.5 pi, c = 20 um, one cycle) that tests/analysis/test_lyapunov.py asserts, as it writes
+    them."""
+    test = _test_source(
+        "test_lyapunov.py", "test_contracting_nine_bar_orbit_reads_a_negative_exponent"
+    )
+    assert "with_parameters(omega=0.5 * math.pi, clearance=2e-5)" in test
+    return re.search(
+        r"assert abs\(float\(r\.lle\) - (-[\d.]+)\) < [\d.]+ and "
+        r"abs\(float\(r\.lle_variational\) - (-[\d.]+)\) < [\d.]+",
+        test,
+    ).groups()
+
+
+def _floquet_bound_test() -> str:
+    """The upper bound of that orbit's Floquet exponent that tests/continuation/test_continuation.py
+    asserts."""
+    test = _test_source(
+        "test_continuation.py",
+        "test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate",
+    )
+    assert "with_parameters(omega=0.5 * math.pi, clearance=2e-5)" in test
+    return re.search(r"assert abs\(float\(ind\.lle\) - (-[\d.]+)\) <", test)[1]
+
+
+def _and(items) -> str:
+    items = list(items)
+    return ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _n(token: str) -> str:
+    """A count as the pages write it: 840832 -> "840 832"."""
+    return f"{int(token):,}".replace(",", " ") if token.isdigit() else token
+
+
+def _e(token: str) -> str:
+    """A relative difference as the pages write it: 0.00029 -> "2.9e-4"."""
+    mantissa, exponent = f"{float(token):.1e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+#: the hand-written section of benchmarks/NOTES.md on the tangent's re-orthonormalisation
+DEFECT_SECTION = "The tangent system re-orthonormalised at step ends"
+
+
+def defect_record() -> tuple[str, str, str, str]:
+    """That section's title, the commit it was measured at, and the steps per cycle it gives
+    for ``defect`` 10 and 1 (8 exponents over 0.1 cycle)."""
+    text = " ".join(NOTES.read_text().split())
+    found = re.search(rf"## {DEFECT_SECTION} .*? runs were measured at (\w+),", text)
+    d10, d1 = re.search(
+        r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
+        r"D = 1 ([\d.e]+) and",
+        text,
+    ).groups()
+    return DEFECT_SECTION, found.group(1), d10, d1
+
+
+# -- benchmarks/tangent_speed.py ------------------------------------------------------------------
+#: the columns of a run's row as the script prints them (figure, format): CPU s/cyc, x plain,
+#: steps/cyc, rej/cyc, evals/cyc, events/cyc, QR/cyc, sum, volume rate, rel
+COLUMNS = (
+    ("cpu_s_per_cycle", ".4g"),
+    ("times_plain", ".4g"),
+    ("steps_per_cycle", ".6g"),
+    ("rejected_per_cycle", ".6g"),
+    ("evaluations_per_cycle", ".6g"),
+    ("events_per_cycle", ".6g"),
+    ("reorthonormalisations_per_cycle", ".6g"),
+    ("exponent_sum", ".6g"),
+    ("volume_rate", ".6g"),
+    ("sum_check", ".2g"),
+)
+CPU, RATIO, STEPS, EVENTS, QR, REL = 0, 1, 2, 5, 6, 9
+
+
+def _tangent_records() -> list[dict]:
+    """Every ``tangent_speed.py`` record, oldest first: its file, commit, note, window (as the
+    script prints it) and each run's row of columns (as printed)."""
+    found = []
+    for r in records("tangent_speed.py"):
+        f = r["figures"]
+        rows = {
+            run: [format(values[k], spec) for k, spec in COLUMNS if k in values]
+            for run, values in f["runs"].items()
+        }
+        window = {"cycles": f"{f['cycles']:g}", "t0": f"{f['t0']:.3f}", "rtol": f"{f['rtol']:g}"}
+        found.append(
+            {"file": r["file"], "commit": r["commit"], "note": r.get("note", ""), "rows": rows}
+            | window
+            | {"defect": f"{f['defect']:g}"}
+        )
+    return found
+
+
+def test_the_analysis_page_names_where_the_tangent_records_are():
+    """docs/analysis.md names the folder of the tangent_speed records, which holds them all."""
+    found = _tangent_records()
+    assert len(found) >= 11 and {Path(r["file"]).parent.name for r in found} == {"tangent_speed"}
+    assert "its records are in `benchmarks/records/tangent_speed/`" in _page("analysis.md")
+
+
+def _newest(records: list[dict], cycles: str, rtol: str, defect: str, run: str) -> dict:
+    """The newest record of a window (cycles, rtol, defect) that has the row ``run``."""
+    return [
+        r
+        for r in records
+        if (r["cycles"], r["rtol"], r["defect"]) == (cycles, rtol, defect) and run in r["rows"]
+    ][-1]
+
+
+def test_the_tangent_cost_is_the_newest_tangent_speed_record():
+    """docs/analysis.md, "What the tangent system costs": the newest record with 1, 4 and 8
+    exponents at the scene's rtol and the default defect; the 2-cycle steps from the newest
+    records of that window; the defect of 1 from the hand-written measurement it names; the
+    located-event "before" from the record that says so."""
+    page = _page("analysis.md")
+    records = _tangent_records()
+    runs = ("m = 1", "m = 4", "m = 8")
+    full = [
+        r
+        for r in records
+        if {"plain", *runs} <= r["rows"].keys() and (r["rtol"], r["defect"]) == ("1e-06", "10")
+    ][-1]
+    plain, rows = full["rows"]["plain"], [full["rows"][run] for run in runs]
+    assert float(full["t0"]) == 20.0  # after the scene's 20 transient cycles of 1 s
+    assert f"at rtol 1e-6, {full['cycles']} cycles after the 20 transient cycles" in page
+    assert f"with 1, 4 and 8 exponents, at {full['commit']} in `{full['file']}`;" in page
+    assert f"the model alone takes {plain[CPU]} s and {_n(plain[STEPS])} steps per cycle" in page
+    assert (
+        f"the tangent run with 1, 4 and 8 exponents {_and(r[CPU] for r in rows)} s per cycle "
+        f"({_and(_n(r[RATIO]) for r in rows)} times the model) and "
+        f"{_and(_n(r[STEPS]) for r in rows)} steps, with {_and(_n(r[QR]) for r in rows)} "
+        "re-orthonormalisations per cycle"
+    ) in page
+
+    two = {run: _newest(records, "2", "1e-06", "10", run) for run in ("plain", *runs)}
+    assert {r["t0"] for r in two.values()} == {full["t0"]}  # the same start
+    events = (two["plain"]["rows"]["plain"][EVENTS], plain[EVENTS])
+    assert f"(the model's events: {_n(events[0])} per cycle against {_n(events[1])})" in page
+    steps = _and(_n(two[run]["rows"][run][STEPS]) for run in runs)
+    assert f"exponents took {steps} steps per cycle" in page
+    assert two["m = 4"]["commit"] == two["m = 8"]["commit"]
+    assert (
+        f"(the newest records of that window: 1 exponent at {two['m = 1']['commit']}, 4 and 8 "
+        f"at {two['m = 8']['commit']})"
+    ) in page
+
+    section, measured_at, d10, d1 = defect_record()
+    assert (
+        f"a `defect` of 1 took {d1} steps per cycle against {d10} at 10, with 8 exponents over "
+        f'0.1 cycle, measured at {measured_at}: `benchmarks/RESULTS.md`, "{section}")'
+    ) in page
+
+    (before,) = [r for r in records if "re-orthonormalisation by a located event" in r["note"]]
+    assert before["cycles"] == "2" and (before["rtol"], before["defect"]) == ("1e-06", "10")
+    old, new = before["rows"]["m = 8"], two["m = 8"]["rows"]["m = 8"]
+    assert (
+        f"8 exponents over the 2 cycles took {old[CPU]} s and {_n(old[STEPS])} steps per cycle "
+        f"(the record at {before['commit']} in `{before['file']}`), against {new[CPU]} s and "
+        f"{_n(new[STEPS])} steps "
+        f"at step ends (at {two['m = 8']['commit']})"
+    ) in page
+
+
+def test_the_sum_checks_are_the_newest_tangent_speed_records():
+    """docs/analysis.md, "The sum check": each window's sum check, re-orthonormalisations and
+    steps from the newest record of that window, and the commits it names."""
+    page = _page("analysis.md")
+    records = _tangent_records()
+
+    def rel(r, run="m = 4"):
+        return _e(r["rows"][run][REL])
+
+    short = _newest(records, "0.05", "1e-06", "10", "m = 8")
+    half, two = (_newest(records, c, "1e-06", "10", "m = 8") for c in ("0.5", "2"))
+    # the 0.05-cycle window is
+    # tests/analysis/test_lyapunov.py::test_ninebar_spectrum_sum_check_closes's
+    assert (
+        f"close to {rel(short, 'm = 8')} over 0.05 cycles (`tests/analysis/test_lyapunov.py`)"
+        in page
+    )
+    assert f"to {rel(half, 'm = 8')} over 0.5 cycles and to {rel(two, 'm = 8')} over 2" in page
+    assert f"the newest records of those windows, at {half['commit']} and {two['commit']};" in page
+
+    a = _newest(records, "2", "1e-06", "10", "m = 4")
+    b = _newest(records, "2", "1e-08", "10", "m = 4")
+    c = _newest(records, "0.5", "1e-06", "10", "m = 4")
+    assert (
+        f"same 2 cycles {rel(a)} at rtol 1e-6 and {rel(b)} at 1e-8 (at {a['commit']} and "
+        f"{b['commit']}), over the 0.5 cycles {rel(c)} at rtol 1e-6"
+    ) in page
+    qr = [r["rows"]["m = 4"][QR] for r in (a, b, c)]
+    assert (
+        f"re-orthonormalised only {qr[0]} and {qr[1]} times per cycle over the 2 cycles, "
+        f"{qr[2]} over the 0.5"
+    ) in page
+
+    d = _newest(records, "0.5", "1e-06", "3", "m = 4")
+    e = _newest(records, "0.5", "1e-08", "3", "m = 4")
+    assert d["commit"] == e["commit"]
+    assert f"close to {rel(d)} at rtol 1e-6 and {rel(e)} at 1e-8 (at {d['commit']}:" in page
+    steps = (d["rows"]["m = 4"][STEPS], c["rows"]["m = 4"][STEPS])
+    assert (
+        f"for {_n(steps[0])} steps per cycle at rtol 1e-6 against {_n(steps[1])} with the "
+        "default defect"
+    ) in page
+
+
+# -- benchmarks/lle.py ---------------------------------------------------------------------------
+def chaos_records() -> list[dict]:
+    """The ``benchmarks/lle.py --chaos`` records, oldest first."""
+    return [
+        r for r in records("lle.py") if r["command"].startswith("python benchmarks/lle.py --chaos")
+    ]
+
+
+def _chaos_numbers(record: dict) -> tuple[str, ...]:
+    """An ``lle.py --chaos`` record's call at rtol 1e-6: the estimate and its error, the
+    variational exponent, their difference and its error, as the benchmark prints them."""
+    f = record["figures"]["1e-06"]
+    return (
+        f"{f['lle']:.2f}",
+        f"{f['stderr']:.2f}",
+        f"{f['lle_variational']:.2f}",
+        f"{f['difference']:+.3f}",
+        f"{f['stderr_difference']:.3f}",
+    )
+
+
+def scan_means(record: dict, d0: float) -> dict[str, float]:
+    """An ``lle.py --scan`` record's mean difference at separation ``d0``, per tolerance (the
+    key its scan has: "1e-06", or "1e-06, max_step 0.0001 s" with the step capped)."""
+    return {
+        key: scan["mean_difference"][[f"{d:.0e}" for d in scan["separations"]].index(f"{d0:.0e}")]
+        for key, scan in record["figures"].items()
+    }
+
+
+def test_the_chaos_case_before_and_now_are_the_lle_records():
+    """docs/analysis.md, "Contracting orbits": the default call on the chaos case before the
+    copies were renormalised on shrinkage (the record it names) and now (the newest)."""
+    page = _page("analysis.md")
+    chaos = chaos_records()
+    (before,) = [r for r in chaos if r["commit"] == BEFORE_SHRINK_CHAOS]
+    b, n = _chaos_numbers(before), _chaos_numbers(chaos[-1])
+    assert (
+        f"before (the `benchmarks/lle.py --chaos` record at {BEFORE_SHRINK_CHAOS} in "
+        f"`benchmarks/RESULTS.md`), {b[0]} +/- {b[1]} 1/s at rtol 1e-6 and the variational "
+        f"exponent on the same trajectories {b[2]} (difference {b[3]} +/- {b[4]}), now (the "
+        f"newest record, at {chaos[-1]['commit']}) {n[0]} +/- {n[1]} and {n[2]} ({n[3]} +/- "
+        f"{n[4]})"
+    ) in page
+
+
+def test_the_noise_floor_before_and_now_are_the_scans():
+    """docs/analysis.md, "One answer from both methods": the noise floor at d0 = 1e-10 and
+    1e-9 over every run of the separation scan (benchmarks/results/lle_separation_scan.json,
+    the newest scans), and before the shrink renormalisation (the ``--scan`` records it names)."""
+    page = _page("analysis.md")
+    scan = json.loads((ROOT / "benchmarks/results/lle_separation_scan.json").read_text())["scan"]
+    at = {
+        d0: [e["mean_difference"][e["separations"].index(d0)] for e in scan.values()]
+        for d0 in (1e-10, 1e-9)
+    }
+    lo, hi = min(at[1e-10]), max(at[1e-10])
+    assert f"a noise floor lifts the estimate by {lo:.0f}-{hi:.0f} 1/s at every tolerance" in page
+    lo, hi = min(at[1e-9]), max(at[1e-9])
+    assert f"at 1e-9 what is left of it is +{lo:.1f}-{hi:.1f} 1/s" in page
+
+    before = [r for r in records("lle.py") if r["commit"] in BEFORE_SHRINK_SCANS]
+    before = [r for r in before if "--scan" in r["command"]]
+    floor = {d0: [m for r in before for m in scan_means(r, d0).values()] for d0 in (1e-10, 1e-9)}
+    assert len(floor[1e-10]) == 4  # rtol 1e-6 with the step free and capped, 1e-8, 1e-10
+    assert f"the `--scan` records at {_and(BEFORE_SHRINK_SCANS)} in `benchmarks/RESULTS.md`" in page
+    (free,) = [scan_means(r, 1e-8)["1e-06"] for r in before if "1e-06" in r["figures"]]
+    assert (
+        f"(+{min(floor[1e-10]):.1f}-{max(floor[1e-10]):.1f} 1/s at 1e-10 and "
+        f"+{min(floor[1e-9]):.1f}-{max(floor[1e-9]):.1f} at 1e-9 in every run, "
+        f"+{free:.1f} at 1e-8 at rtol 1e-6 with the step free)"
+    ) in page
+
+
+def test_the_decorrelation_time_and_the_shrinkages_are_the_newest_chaos_record():
+    """docs/analysis.md: the time after which the starts' windows are independent, ln(1/1e-9) /
+    λ at the newest ``--chaos`` record's exponent, and the shrinkages among that record's
+    renormalisations at rtol 1e-6."""
+    page = _page("analysis.md")
+    newest = chaos_records()[-1]
+    lle = _chaos_numbers(newest)[0]
+    assert (
+        f"after ln(1/1e-9) / λ: {math.log(1e9) / float(lle):.1f} s on the chaos case at its "
+        f"λ = {lle} 1/s, the newest `benchmarks/lle.py --chaos` record, at {newest['commit']}, "
+        "rtol 1e-6)"
+    ) in page
+    call = newest["figures"]["1e-06"]
+    assert (call["starts"], call["cycles_per_start"], call["converged"]) == (4, 20, True)
+    total, shrunk = call["renormalisations"][0], call["shrink_renormalisations"][0]
+    assert (
+        f"at rtol 1e-6, {shrunk} of the estimate's {total} renormalisations over 4 x 20 cycles "
+        "were shrinkages (`benchmarks/lle.py --chaos 1e-6`)"
+    ) in page
+
+
+# -- figures of docs/analysis.md and docs/continuation.md that tests assert ----------------------
+def test_the_contracting_orbit_figures_are_the_tests():
+    """The nine-bar's stable orbit at omega = 0.5 pi, c = 20 um: the two-trajectory and
+    variational exponents tests/analysis/test_lyapunov.py asserts and the Floquet bound
+    tests/continuation/test_continuation.py asserts, as docs/analysis.md and docs/continuation.md
+    quote them;
+    the "before" (copies renormalised on growth alone) from the oldest ``benchmarks/
+    continuation.py --parts chaos_maps`` record, which docs/continuation.md names."""
+    copies, variational = _contracting_orbit_test()
+    bound = _floquet_bound_test()
+    assert (
+        f"| nine-bar, omega = 0.5 pi, c = 20 um (A+B, Coulomb c_f = 0.01), 1 x 1 cycle | {copies} "
+        f"| {variational} (variational, same trajectory); a stable period-1 orbit, Floquet "
+        f"exponent below the bound {bound} (`tests/continuation/test_continuation.py`) |"
+    ) in _page("analysis.md")
+
+    page = _page("continuation.md")
+    assert (
+        f"and there they now read {copies} 1/s over one cycle, "
+        f"{(float(copies) / float(variational) - 1) * -100:.0f} % above the variational "
+        f"exponent on the same trajectory ({variational}; `tests/analysis/test_lyapunov.py`"
+    ) in page
+    assert f"such an orbit: the bound is {bound} 1/s" in page
+    # the "before": the oldest chaos_maps record (later ones give the orbit's Floquet bound)
+    oldest = next(r for r in records("continuation.py") if "--parts chaos_maps" in r["command"])
+    corner = oldest["figures"]["chaos_map_corners"][
+        "omega_clearance at omega=1.571, clearance=2e-05"
+    ]
+    mantissa, exponent = f"{corner['lle']:.3g}".split("e")
+    assert (
+        f"at omega = 0.5 pi, c = 20 um {mantissa}e{int(exponent)} +- {corner['lle_stderr']:.2g} "
+        f"1/s, the `benchmarks/continuation.py --parts chaos_maps` record at {oldest['commit']})"
+    ) in page
+
+
+def test_the_short_chaos_window_is_the_test_s():
+    """docs/analysis.md, "When an exponent has converged": the chaos case over 3 cycles as
+    tests/analysis/test_lyapunov.py asserts it."""
+    test = _test_source("test_lyapunov.py", "test_chaos_case_two_trajectory_and_variational_agree")
+    assert '"cycles": 3' in test
+    short, err = re.search(
+        r"assert agrees\(float\(r\.lle\), float\(r\.stderr\), ([\d.]+), ([\d.]+)\)", test
+    ).groups()
+    assert f"(over 3 cycles the chaos case read {short} +/- {err} 1/s" in _page("analysis.md")
+
+
+def test_the_fnn_plateau_figure_is_the_heldout_test_s():
+    """docs/analysis.md, the Wolf estimate's embedding: the bound
+    tests/analysis/test_wolf_heldout.py holds a Duffing section's estimate to in the plateau's
+    first dimension."""
+    test = _test_source("test_wolf_heldout.py", "test_heldout_duffing_section")
+    assert "assert float(r.lle) == pytest.approx(per_period, rel=FLOW_GROSS)" in test
+    source = _test_file("test_wolf_heldout.py").read_text()
+    rel = float(
+        re.search(r"^FLOW_BOUND, FLOW_GROSS, FLOW_MISSES = [\d.]+, ([\d.]+),", source, re.M)[1]
+    )
+    assert (
+        f"in the plateau's first dimension a Duffing section's estimate is within "
+        f"{rel * 100:.0f} % of the exponent: `tests/analysis/test_wolf_heldout.py`"
+    ) in _page("analysis.md")
+
+
+# -- docs/robustness.md ---------------------------------------------------------------------------
+def test_the_interrupt_figures_are_the_code_s_and_its_test_s():
+    """docs/robustness.md, "Interrupts": the pause is the solver's constant, and the latency it
+    quotes for ``workbench run -q`` is the bound tests/run/test_faults_run.py asserts."""
+    from workbench.solver import PAUSE_SECONDS
+
+    page = _page("robustness.md")
+    assert f"`workbench.solver.PAUSE_SECONDS` = {PAUSE_SECONDS:g} s of wall time" in page
+    source = _test_file("test_faults_run.py").read_text()
+    test = source.split("def test_cli_run_quiet_stops_on_a_signal_in_one_line")[1]
+    bound = float(re.search(r"assert latency < ([\d.]+)", test).group(1))
+    assert f"`workbench run: interrupted` within the {bound:g} s from the signal that" in page
+
+
+def test_the_models_page_quotes_the_lugre_damping_record():
+    """docs/models.md: the paper's constant bristle damping takes |F_t|/F_n to the peak that the
+    hand-written ``lugre_damping.py`` section of benchmarks/NOTES.md records."""
+    record = " ".join(NOTES.read_text().split())
+    peak = re.search(r"constant damping \(316\.2 s/m\) reaches ([\d.]+),", record).group(1)
+    assert f"|F_t|/F_n to tens ({peak} on the paper's Sec. 4.2 case" in _page("models.md")
+    assert 10 <= float(peak) < 100  # "tens"
