@@ -123,3 +123,22 @@ def test_the_solver_knows_neither_scenes_nor_models():
                 name,
                 targets,
             )
+
+
+#: test folders that are not a layer of the package: its top-level modules, security, what the
+#: docs and data quote, and the docs themselves
+TEST_FOLDERS_BESIDE_LAYERS = {"package", "security", "records", "docs"}
+
+
+def test_tests_are_arranged_like_the_package():
+    """Every test file lies in ``tests/<layer>/`` (a layer's last name: solver, models, ...) or a
+    folder of TEST_FOLDERS_BESIDE_LAYERS; none in tests/ itself, which holds shared helpers."""
+    tests = Path(__file__).resolve().parents[1]
+    layers = {m.rsplit(".", 1)[-1] for _, modules in LAYERS[1:] for m in modules}
+    allowed = layers | TEST_FOLDERS_BESIDE_LAYERS
+    misplaced = [
+        str(p.relative_to(tests))
+        for p in tests.rglob("test_*.py")
+        if len(p.relative_to(tests).parts) != 2 or p.parent.name not in allowed
+    ]
+    assert misplaced == [], f"test files outside tests/<layer>/ ({sorted(allowed)}): {misplaced}"
