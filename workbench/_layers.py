@@ -15,6 +15,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     (
         "base",
         (
+            "workbench._attributes",
             "workbench._cache",
             "workbench._errors",
             "workbench._layers",

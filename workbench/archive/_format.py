@@ -38,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_names
 from workbench._version import FORMAT_VERSION, __version__
 from workbench.archive._integrity import ArchiveError
 from workbench.solver import Status
@@ -203,7 +204,7 @@ def _upgrade_from_1(ds: xr.Dataset, path: str) -> xr.Dataset:
     if ds.attrs.get("run_status") == "done":
         ds.attrs["run_status"] = Status.OK.label
     for name, var in ds.variables.items():
-        meanings = str(var.attrs.get("flag_meanings", "")).split()
+        meanings = flag_names(var)
         if not meanings or not set(meanings) <= set(FORMAT1_STATUS):
             continue
         old = dict(zip(np.asarray(var.attrs["flag_values"]).tolist(), meanings, strict=True))
