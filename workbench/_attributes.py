@@ -25,7 +25,7 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 import xarray as xr
 
-__all__ = ["flag_meaning", "flag_names", "flags", "variable"]
+__all__ = ["flag_meaning", "flag_names", "flags", "named", "variable"]
 
 
 def variable(long_name: str, units: str = "1", /, **extra: object) -> dict:
@@ -37,6 +37,12 @@ def variable(long_name: str, units: str = "1", /, **extra: object) -> dict:
             f"dimensionless number), got {units!r}"
         )
     return {"long_name": long_name, "units": units, **extra}
+
+
+def named(long_name: str, /, **extra: object) -> dict:
+    """The attributes of a stored variable that carries no ``units``: text (a message, a note)
+    or a variable whose archives have never carried them; ``long_name``, then ``extra``."""
+    return {"long_name": long_name, **extra}
 
 
 def flags(

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from workbench._attributes import flag_meaning, flag_names, flags, variable
+from workbench._attributes import flag_meaning, flag_names, flags, named, variable
 
 
 def test_a_variable_carries_its_name_and_units_first():
@@ -37,3 +37,10 @@ def test_flags_are_cf_pairs_from_a_sequence_or_a_mapping():
 def test_repeated_flag_meanings_are_refused():
     with pytest.raises(ValueError, match="distinct"):
         flags("outcome", ["ok", "ok"])
+
+
+def test_a_variable_without_units_carries_only_its_name():
+    assert named("failure message", comment="empty when ok") == {
+        "long_name": "failure message",
+        "comment": "empty when ok",
+    }

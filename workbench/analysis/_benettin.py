@@ -17,6 +17,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import named, variable
 from workbench.analysis._convergence import TARGET, agree, batch_error, judge, pooled
 from workbench.analysis._copies_run import follow_copies, joined
 from workbench.analysis._window import (
@@ -365,40 +366,40 @@ def _dataset(
     s, e = "s-1", "standard error"
     out = xr.Dataset(
         {
-            "lle": ((), est["value"], {"units": s, "long_name": "largest Lyapunov exponent"}),
-            "converged": ((), info["converged"], {"long_name": "every condition holds"}),
-            "stderr": ((), est["stderr"], {"units": s, "long_name": f"{e}, pooled"}),
-            "stderr_starts": ((), est["stderr_starts"], {"units": s, "long_name": "spread"}),
-            "stderr_batches": ((), est["stderr_batches"], {"units": s, "long_name": "batches"}),
-            "start_lle": ("start", est["starts"], {"units": s, "long_name": "estimate"}),
-            "start_stderr": ("start", est["start_errors"], {"units": s, "long_name": e}),
-            "spread": ((), spread, {"units": "1", "long_name": "largest relative deviation"}),
-            "estimate": ("variant", estimates, {"units": s, "long_name": "estimate"}),
-            "separation": ("variant", seps, {"units": "1", "long_name": "scaled separation"}),
-            "growth": ("variant", grow, {"units": "1", "long_name": "log growth per renorm."}),
+            "lle": ((), est["value"], variable("largest Lyapunov exponent", s)),
+            "converged": ((), info["converged"], named("every condition holds")),
+            "stderr": ((), est["stderr"], variable(f"{e}, pooled", s)),
+            "stderr_starts": ((), est["stderr_starts"], variable("spread", s)),
+            "stderr_batches": ((), est["stderr_batches"], variable("batches", s)),
+            "start_lle": ("start", est["starts"], variable("estimate", s)),
+            "start_stderr": ("start", est["start_errors"], variable(e, s)),
+            "spread": ((), spread, variable("largest relative deviation")),
+            "estimate": ("variant", estimates, variable("estimate", s)),
+            "separation": ("variant", seps, variable("scaled separation")),
+            "growth": ("variant", grow, variable("log growth per renorm.")),
             "attempt_rtol": ("attempt", [a[0] for a in tried], {"units": "1"}),
             "attempt_lle": ("attempt", [a[1] for a in tried], {"units": s}),
             "attempt_spread": ("attempt", [a[2] for a in tried], {"units": "1"}),
             "renormalisations": (
                 "variant",
                 np.sum([r["renormalisations"] for r in runs], axis=0),
-                {"units": "1", "long_name": "number of renormalisations, all starts"},
+                variable("number of renormalisations, all starts"),
             ),
             "shrink_renormalisations": (
                 "variant",
                 np.sum([r["shrinkages"] for r in runs], axis=0),
-                {"units": "1", "long_name": "number of renormalisations on shrinkage, all starts"},
+                variable("number of renormalisations on shrinkage, all starts"),
             ),
             "running": (
                 "elapsed",
                 running,
-                {"units": s, "long_name": "running estimate, mean over the starts"},
+                variable("running estimate, mean over the starts", s),
             ),
         },
         coords={
             "variant": ("variant", info["names"]),
-            "start": ("start", np.arange(len(runs)), {"long_name": "start (realisation offset)"}),
-            "elapsed": ("elapsed", elapsed, {"units": "s", "long_name": "time followed"}),
+            "start": ("start", np.arange(len(runs)), named("start (realisation offset)")),
+            "elapsed": ("elapsed", elapsed, variable("time followed", "s")),
         },
         attrs={
             "method": "fiducial trajectory and copies in one step sequence, renormalised on "
@@ -414,38 +415,38 @@ def _dataset(
         },
     )
     if tight is not None:
-        out["lle_tight"] = ((), tight["value"], {"units": s, "long_name": "at rtol / 100"})
-        out["stderr_tight"] = ((), tight["stderr"], {"units": s, "long_name": e})
+        out["lle_tight"] = ((), tight["value"], variable("at rtol / 100", s))
+        out["stderr_tight"] = ((), tight["stderr"], variable(e, s))
     if var is not None:
         lv = var["value"]
         out["lle_variational"] = (
             (),
             lv,
-            {"units": s, "long_name": "LLE of the variational equations, same trajectories"},
+            variable("LLE of the variational equations, same trajectories", s),
         )
-        out["stderr_variational"] = ((), var["stderr"], {"units": s, "long_name": e})
+        out["stderr_variational"] = ((), var["stderr"], variable(e, s))
         out["start_variational"] = ("start", var["starts"], {"units": s})
         out["running_variational"] = (
             "elapsed",
             np.mean([r["variational"][1:] for r in runs], axis=0) / elapsed,
-            {"units": s, "long_name": "running variational estimate, mean over the starts"},
+            variable("running variational estimate, mean over the starts", s),
         )
         out["difference"] = (
             (),
             diff["value"],
-            {"units": s, "long_name": "two trajectories minus variational, same trajectories"},
+            variable("two trajectories minus variational, same trajectories", s),
         )
-        out["stderr_difference"] = ((), diff["stderr"], {"units": s, "long_name": e})
+        out["stderr_difference"] = ((), diff["stderr"], variable(e, s))
         out["method_difference"] = (
             (),
             abs(diff["value"]) / max(abs(lv), 1e-300),
-            {"units": "1", "long_name": "relative difference, two trajectories vs variational"},
+            variable("relative difference, two trajectories vs variational"),
         )
     if prep.period is not None:
         out["lle_per_period"] = (
             (),
             est["value"] * prep.period,
-            {"units": "1", "long_name": "LLE per forcing period"},
+            variable("LLE per forcing period"),
         )
         out.attrs["forcing_period"] = prep.period
     return out

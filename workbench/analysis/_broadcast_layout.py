@@ -10,6 +10,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
+
 __all__ = ["COMPLETE", "ERROR", "Layout", "all_failed"]
 
 ERROR = "analysis_error"
@@ -104,7 +106,7 @@ class Layout:
                     self._attr_name(k),
                     (),
                     np.dtype(object),
-                    {"long_name": f"attribute {k!r} of each point's result", "units": "1"},
+                    variable(f"attribute {k!r} of each point's result"),
                 )
             )
         for name, k in self.point_var_attrs:
@@ -113,7 +115,7 @@ class Layout:
                     f"{name}_{k}",
                     (),
                     np.dtype(object),
-                    {"long_name": f"attribute {k!r} of {name!r} at each point", "units": "1"},
+                    variable(f"attribute {k!r} of {name!r} at each point"),
                 )
             )
         outputs.append(
@@ -121,10 +123,7 @@ class Layout:
                 ERROR,
                 (),
                 np.dtype(object),
-                {
-                    "long_name": "why the estimator failed at the point (empty when it did not)",
-                    "units": "1",
-                },
+                variable("why the estimator failed at the point (empty when it did not)"),
             )
         )
         outputs.append(
@@ -132,12 +131,10 @@ class Layout:
                 COMPLETE,
                 (),
                 np.dtype(np.int8),
-                {
-                    "long_name": "every evidence variable of the point fits the result's layout",
-                    "units": "1",
-                    "flag_values": np.array([0, 1], np.int8),
-                    "flag_meanings": "cut_or_missing complete",
-                },
+                flags(
+                    "every evidence variable of the point fits the result's layout",
+                    ["cut_or_missing", "complete"],
+                ),
             )
         )
         if lazy:
@@ -146,11 +143,10 @@ class Layout:
                     OTHER,
                     (),
                     np.dtype(object),
-                    {
-                        "long_name": "attributes of the point's result that differ from the "
-                        "result's own (JSON; empty when none)",
-                        "units": "1",
-                    },
+                    variable(
+                        "attributes of the point's result that differ from the "
+                        "result's own (JSON; empty when none)"
+                    ),
                 )
             )
         self.outputs = outputs
@@ -270,7 +266,7 @@ def all_failed(x, loop, results, shape) -> xr.Dataset:
             ERROR: (
                 loop,
                 errors,
-                {"long_name": "why the estimator failed at the point", "units": "1"},
+                variable("why the estimator failed at the point"),
             )
         },
         coords=coords,

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.analysis._series import as_series, require_samples
 
 __all__ = ["MIN_ACF_SAMPLES", "delay_ami", "delay_acf", "mutual_information"]
@@ -113,12 +114,12 @@ def delay_ami(
     lags = np.arange(ami.size)
     return xr.Dataset(
         {
-            "delay": ((), delay, {"units": "1", "long_name": "embedding delay (samples)"}),
-            "delay_time": ((), delay * s.dt, {"units": s.time_units, "long_name": "delay"}),
-            "ami": ("lag", ami, {"units": "nat", "long_name": "average mutual information"}),
-            "found": ((), int(found), {"units": "1", "long_name": "a first minimum was found"}),
+            "delay": ((), delay, variable("embedding delay (samples)")),
+            "delay_time": ((), delay * s.dt, variable("delay", s.time_units)),
+            "ami": ("lag", ami, variable("average mutual information", "nat")),
+            "found": ((), int(found), variable("a first minimum was found")),
         },
-        coords={"lag": ("lag", lags, {"units": "1", "long_name": "lag (samples)"})},
+        coords={"lag": ("lag", lags, variable("lag (samples)"))},
         attrs={"method": "first minimum of AMI (Fraser & Swinney 1986)", "bins": bins},
     )
 
@@ -179,10 +180,10 @@ def delay_acf(x, *, dt: float | None = None, rule: str = "1/e", max_lag: int | N
     delay = int(below[0]) if below.size else int(max_lag)
     return xr.Dataset(
         {
-            "delay": ((), delay, {"units": "1", "long_name": "embedding delay (samples)"}),
-            "delay_time": ((), delay * s.dt, {"units": s.time_units, "long_name": "delay"}),
-            "acf": ("lag", acf, {"units": "1", "long_name": "autocorrelation"}),
+            "delay": ((), delay, variable("embedding delay (samples)")),
+            "delay_time": ((), delay * s.dt, variable("delay", s.time_units)),
+            "acf": ("lag", acf, variable("autocorrelation")),
         },
-        coords={"lag": ("lag", np.arange(max_lag + 1), {"units": "1", "long_name": "lag"})},
+        coords={"lag": ("lag", np.arange(max_lag + 1), variable("lag"))},
         attrs={"method": f"autocorrelation below {rule}"},
     )

@@ -7,6 +7,7 @@ import numpy as np
 import xarray as xr
 from scipy.spatial import cKDTree
 
+from workbench._attributes import variable
 from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._series import as_series, require_samples
 
@@ -171,14 +172,14 @@ def embedding_fnn(
     dim = int(dims[below[0]])
     return xr.Dataset(
         {
-            "dim": ((), dim, {"units": "1", "long_name": "embedding dimension"}),
+            "dim": ((), dim, variable("embedding dimension")),
             "fnn_fraction": (
                 "dimension",
                 fractions,
-                {"units": "1", "long_name": "fraction of false nearest neighbours"},
+                variable("fraction of false nearest neighbours"),
             ),
         },
-        coords={"dimension": ("dimension", dims, {"units": "1", "long_name": "dimension"})},
+        coords={"dimension": ("dimension", dims, variable("dimension"))},
         attrs={
             "method": "false nearest neighbours (Kennel et al. 1992)",
             "delay": delay,
@@ -254,11 +255,11 @@ def embedding_cao(
     dim = int(dims[sat[0]]) if sat.size else int(max_dim)
     return xr.Dataset(
         {
-            "dim": ((), dim, {"units": "1", "long_name": "embedding dimension"}),
-            "E1": ("dimension", E1, {"units": "1", "long_name": "Cao E1(d) = E(d+1)/E(d)"}),
-            "E2": ("dimension", E2, {"units": "1", "long_name": "Cao E2(d) = E*(d+1)/E*(d)"}),
+            "dim": ((), dim, variable("embedding dimension")),
+            "E1": ("dimension", E1, variable("Cao E1(d) = E(d+1)/E(d)")),
+            "E2": ("dimension", E2, variable("Cao E2(d) = E*(d+1)/E*(d)")),
         },
-        coords={"dimension": ("dimension", dims, {"units": "1", "long_name": "dimension d"})},
+        coords={"dimension": ("dimension", dims, variable("dimension d"))},
         attrs={
             "method": "Cao (1997)",
             "delay": delay,

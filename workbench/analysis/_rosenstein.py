@@ -9,6 +9,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._delay import delay_ami
 from workbench.analysis._embedding import embedding_fnn
@@ -81,16 +82,16 @@ def rosenstein_lle(
     t_units = "s-1" if s.time_units == "s" else "1/sample"
     return xr.Dataset(
         {
-            "lle": ((), slope / s.dt, {"units": t_units, "long_name": "largest Lyapunov exponent"}),
-            "divergence": ("k", div, {"units": "1", "long_name": "mean log divergence"}),
-            "fit_start": ((), ks[lo], {"units": "1", "long_name": "first k of the fit"}),
-            "fit_stop": ((), ks[hi], {"units": "1", "long_name": "last k of the fit"}),
-            "dim": ((), dim, {"units": "1", "long_name": "embedding dimension"}),
-            "delay": ((), delay, {"units": "1", "long_name": "delay (samples)"}),
-            "theiler": ((), theiler, {"units": "1", "long_name": "Theiler window (samples)"}),
-            "points": ((), v.size, {"units": "1", "long_name": "samples used"}),
+            "lle": ((), slope / s.dt, variable("largest Lyapunov exponent", t_units)),
+            "divergence": ("k", div, variable("mean log divergence")),
+            "fit_start": ((), ks[lo], variable("first k of the fit")),
+            "fit_stop": ((), ks[hi], variable("last k of the fit")),
+            "dim": ((), dim, variable("embedding dimension")),
+            "delay": ((), delay, variable("delay (samples)")),
+            "theiler": ((), theiler, variable("Theiler window (samples)")),
+            "points": ((), v.size, variable("samples used")),
         },
-        coords={"k": ("k", ks, {"units": "1", "long_name": "steps after the start (samples)"})},
+        coords={"k": ("k", ks, variable("steps after the start (samples)"))},
         attrs={"method": "Rosenstein et al. (1993) via nolds.lyap_r; automatic linear fit"},
     )
 

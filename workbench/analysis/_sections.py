@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.analysis._series import time_record
 from workbench.archive import RECORD_DIM, RECORD_TIME
 
@@ -111,7 +112,7 @@ def poincare_section(
     out = ds if var is None else ds[[var]]
     rdim = RECORD_DIM if RECORD_DIM in out.dims else "time"  # each point's times, or shared
     out = out.isel({rdim: slice(None, None, int(round(step)))})
-    strobe_attrs = {"units": "s", "long_name": "strobe time"}
+    strobe_attrs = variable("strobe time", "s")
     if rdim == RECORD_DIM:
         times = out[RECORD_TIME].variable if RECORD_TIME in out.coords else None
         out = out.drop_vars(RECORD_TIME, errors="ignore").rename({RECORD_DIM: "strobe"})
@@ -126,9 +127,7 @@ def poincare_section(
         out = out.drop_vars("time", errors="ignore").assign_coords(
             strobe_time=("strobe", times, strobe_attrs)
         )
-    return out.assign_coords(
-        strobe=("strobe", np.arange(out.sizes["strobe"]), {"units": "1", "long_name": "period"})
-    )
+    return out.assign_coords(strobe=("strobe", np.arange(out.sizes["strobe"]), variable("period")))
 
 
 def crossing_section(ds: xr.Dataset, var: str, level: float, *, direction: int = 1) -> xr.Dataset:
@@ -160,11 +159,11 @@ def crossing_section(ds: xr.Dataset, var: str, level: float, *, direction: int =
     return xr.Dataset(
         data,
         coords={
-            "crossing": ("crossing", np.arange(i.size), {"units": "1", "long_name": "crossing"}),
+            "crossing": ("crossing", np.arange(i.size), variable("crossing")),
             "crossing_time": (
                 "crossing",
                 t[i] + w * (t[i + 1] - t[i]),
-                {"units": "s", "long_name": "crossing time"},
+                variable("crossing time", "s"),
             ),
         },
         attrs={"section": f"{var} = {level!r}, direction {direction}"},

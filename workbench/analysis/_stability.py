@@ -20,6 +20,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import named, variable
 from workbench.analysis._window import EXPLICIT_METHODS, Window, measurement_window
 from workbench.run import integrate as integrate_scene
 from workbench.run import prepare
@@ -154,34 +155,34 @@ def jacobian_spectrum(
         "eigenvalue_real": (
             ("time", "eigen"),
             lam.real,
-            {"units": "s-1", "long_name": "real part of an eigenvalue of the Jacobian"},
+            variable("real part of an eigenvalue of the Jacobian", "s-1"),
         ),
         "eigenvalue_imag": (
             ("time", "eigen"),
             lam.imag,
-            {"units": "rad s-1", "long_name": "imaginary part of an eigenvalue of the Jacobian"},
+            variable("imaginary part of an eigenvalue of the Jacobian", "rad s-1"),
         ),
-        "mode": ("time", mode, {"units": "1", "long_name": "mode index (see modes)"}),
+        "mode": ("time", mode, variable("mode index (see modes)")),
         "largest_real": (
             "time",
             top.real,
-            {"units": "s-1", "long_name": "largest real part of the Jacobian's eigenvalues"},
+            variable("largest real part of the Jacobian's eigenvalues", "s-1"),
         ),
         "frequency": (
             "time",
             np.abs(top.imag) / (2 * np.pi),
-            {"units": "Hz", "long_name": "frequency of the eigenvalue with the largest real part"},
+            variable("frequency of the eigenvalue with the largest real part", "Hz"),
         ),
     }
     for key, values in per_mode.items():
         units, long_name = attrs[key]
-        data[key] = ("modes", values, {"units": units, "long_name": long_name})
+        data[key] = ("modes", values, variable(long_name, units))
     return xr.Dataset(
         data,
         coords={
-            "time": ("time", res.t, {"units": "s", "long_name": "time"}),
-            "eigen": ("eigen", np.arange(n), {"long_name": "eigenvalue index"}),
-            "modes": ("modes", kinds, {"long_name": "mode of the records"}),
+            "time": ("time", res.t, variable("time", "s")),
+            "eigen": ("eigen", np.arange(n), named("eigenvalue index")),
+            "modes": ("modes", kinds, named("mode of the records")),
         },
         attrs={
             "method": "analytic Jacobian"
@@ -301,21 +302,21 @@ def floquet(
     names = [q.name for q in pb.states]
     return xr.Dataset(
         {
-            "multiplier_real": ("multiplier", mu.real, {"units": "1", "long_name": "real part"}),
+            "multiplier_real": ("multiplier", mu.real, variable("real part")),
             "multiplier_imag": (
                 "multiplier",
                 mu.imag,
-                {"units": "1", "long_name": "imaginary part"},
+                variable("imaginary part"),
             ),
-            "modulus": ("multiplier", modulus, {"units": "1", "long_name": "|multiplier|"}),
-            "orbit_state": ("state", x, {"long_name": "state on the orbit at the strobe time"}),
+            "modulus": ("multiplier", modulus, variable("|multiplier|")),
+            "orbit_state": ("state", x, named("state on the orbit at the strobe time")),
             "residual": (
                 (),
                 residual,
-                {"units": "1", "long_name": "scaled |P^k(x) - x| of the orbit state"},
+                variable("scaled |P^k(x) - x| of the orbit state"),
             ),
-            "stable": ((), stable, {"long_name": "all multipliers inside the unit circle"}),
-            "loss": ((), loss, {"long_name": "how the largest multiplier leaves the unit circle"}),
+            "stable": ((), stable, named("all multipliers inside the unit circle")),
+            "loss": ((), loss, named("how the largest multiplier leaves the unit circle")),
         },
         coords={
             "multiplier": ("multiplier", np.arange(mu.size)),
@@ -389,7 +390,7 @@ def floquet_sweep(
         from workbench.models import get_model
 
         p = get_model(base.model).parameter(parameter)
-        attrs = {"units": p.units, "long_name": p.long_name}
+        attrs = variable(p.long_name, p.units)
     ds = ds.assign_coords({parameter: (parameter, values, attrs)})
     top = ds.modulus.isel(multiplier=0).values
     first = np.flatnonzero(top >= 1 + UNIT_CIRCLE_TOLERANCE)

@@ -17,6 +17,7 @@ import numpy as np
 import xarray as xr
 from scipy.fft import irfft, prev_fast_len, rfft
 
+from workbench._attributes import variable
 from workbench.analysis._embedding import embed, nearest_neighbours
 from workbench.analysis._series import as_series, require_samples
 
@@ -182,26 +183,26 @@ def surrogate_test(
     deterministic = bool(np.isfinite(e0) and np.all(es > e0))
     return xr.Dataset(
         {
-            "error": ((), e0, {"units": "1", "long_name": "normalised prediction error"}),
+            "error": ((), e0, variable("normalised prediction error")),
             "surrogate_error": (
                 "surrogate",
                 es,
-                {"units": "1", "long_name": "normalised prediction error of a surrogate"},
+                variable("normalised prediction error of a surrogate"),
             ),
             "p_value": (
                 (),
                 p,
-                {"units": "1", "long_name": "rank p-value (one-sided: series predicted best)"},
+                variable("rank p-value (one-sided: series predicted best)"),
             ),
             "deterministic": (
                 (),
                 np.int8(deterministic),
-                {"units": "1", "long_name": "predicted better than every surrogate"},
+                variable("predicted better than every surrogate"),
             ),
             "stochastic": (
                 (),
                 np.int8(not deterministic),
-                {"units": "1", "long_name": "not distinguished from linear correlated noise"},
+                variable("not distinguished from linear correlated noise"),
             ),
         },
         coords={"surrogate": ("surrogate", np.arange(surrogates), {"units": "1"})},

@@ -19,6 +19,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
 from workbench.analysis._degenerate import series_without_dynamics
 from workbench.analysis._series import Series, as_series, require_samples
 from workbench.analysis._surrogate import SURROGATES
@@ -285,102 +286,99 @@ def _result(
     fnn_curve[:m] = fnn.fnn_fraction.values[:m]
     out = xr.Dataset(
         {
-            "lle": ((), lle, {"units": t_units, "long_name": "largest Lyapunov exponent" + per}),
+            "lle": ((), lle, variable("largest Lyapunov exponent" + per, t_units)),
             "lle_per_sample": (
                 (),
                 per_sample,
-                {"units": "1", "long_name": "largest Lyapunov exponent per sample (lambda dt)"},
+                variable("largest Lyapunov exponent per sample (lambda dt)"),
             ),
             "running": (
                 "elapsed",
                 running_per_sample / s.dt,
-                {"units": t_units, "long_name": "running estimate of the LLE" + per},
+                variable("running estimate of the LLE" + per, t_units),
             ),
             "reliable": (
                 (),
                 np.int8(reliable),
-                {
-                    "units": "1",
-                    "long_name": "estimate not flagged by the sampling, length and noise checks",
-                    "flag_values": np.array([0, 1], dtype=np.int8),
-                    "flag_meanings": "flagged reliable",
-                    "message": message,
-                    "reasons": "\n".join(verdict.reasons),
-                },
+                flags(
+                    "estimate not flagged by the sampling, length and noise checks",
+                    ["flagged", "reliable"],
+                    message=message,
+                    reasons="\n".join(verdict.reasons),
+                ),
             ),
             "smoothness": (
                 (),
                 smooth,
-                {
-                    "units": "1",
-                    "long_name": "lag-1 autocorrelation of successive differences (map/flow)",
-                    "resolved_flow_threshold": FLOW_SMOOTHNESS,
-                    "flow_threshold": FLOW_MIN_SMOOTHNESS,
-                },
+                variable(
+                    "lag-1 autocorrelation of successive differences (map/flow)",
+                    resolved_flow_threshold=FLOW_SMOOTHNESS,
+                    flow_threshold=FLOW_MIN_SMOOTHNESS,
+                ),
             ),
             "samples_per_period": (
                 (),
                 spp,
-                {"units": "1", "long_name": "samples per mean period (mean frequency)"},
+                variable("samples per mean period (mean frequency)"),
             ),
             "flow": (
                 (),
                 np.int8(flow),
-                {"units": "1", "long_name": "sampled flow (1; flow direction projected out)"},
+                variable("sampled flow (1; flow direction projected out)"),
             ),
             "ami": (
                 "lag",
                 ami.ami.values,
-                {"units": "nat", "long_name": "average mutual information"},
+                variable("average mutual information", "nat"),
             ),
             "fnn_fraction": (
                 "dimension",
                 fnn_curve,
-                {"units": "1", "long_name": "fraction of false nearest neighbours"},
+                variable("fraction of false nearest neighbours"),
             ),
-            "cao_E1": ("dimension", cao.E1.values, {"units": "1", "long_name": "Cao E1(d)"}),
-            "cao_E2": ("dimension", cao.E2.values, {"units": "1", "long_name": "Cao E2(d)"}),
-            "cao_dim": ((), int(cao.dim), {"units": "1", "long_name": "dimension by Cao E1"}),
+            "cao_E1": ("dimension", cao.E1.values, variable("Cao E1(d)")),
+            "cao_E2": ("dimension", cao.E2.values, variable("Cao E2(d)")),
+            "cao_dim": ((), int(cao.dim), variable("dimension by Cao E1")),
             "stochastic": (
                 (),
                 np.int8(stochastic),
-                {"units": "1", "long_name": "Cao's E2 within 0.1 of 1 for d = 1..4 (noise)"},
+                variable("Cao's E2 within 0.1 of 1 for d = 1..4 (noise)"),
             ),
-            "dim": ((), dim, {"units": "1", "long_name": "embedding dimension"}),
-            "delay": ((), delay, {"units": "1", "long_name": "delay (samples)"}),
-            "evolve": ((), evolve, {"units": "1", "long_name": "evolution time (samples)"}),
-            "theiler": ((), theiler, {"units": "1", "long_name": "Theiler window (samples)"}),
-            "scale_min": ((), scale_min, {"units": s.units, "long_name": "smallest separation"}),
-            "scale_max": ((), scale_max, {"units": s.units, "long_name": "largest separation"}),
+            "dim": ((), dim, variable("embedding dimension")),
+            "delay": ((), delay, variable("delay (samples)")),
+            "evolve": ((), evolve, variable("evolution time (samples)")),
+            "theiler": ((), theiler, variable("Theiler window (samples)")),
+            "scale_min": ((), scale_min, variable("smallest separation", s.units)),
+            "scale_max": ((), scale_max, variable("largest separation", s.units)),
             "max_angle": (
                 (),
                 max_angle,
-                {"units": "rad", "long_name": "largest angle (orientation, either sense)"},
+                variable("largest angle (orientation, either sense)", "rad"),
             ),
-            "replacements": ((), replacements, {"units": "1", "long_name": "replacements"}),
-            "kept": ((), kept, {"units": "1", "long_name": "old neighbour kept (none found)"}),
-            "steps": ((), logs.size, {"units": "1", "long_name": "evolution steps"}),
-            "points": ((), n, {"units": "1", "long_name": "embedded points"}),
+            "replacements": ((), replacements, variable("replacements")),
+            "kept": ((), kept, variable("old neighbour kept (none found)")),
+            "steps": ((), logs.size, variable("evolution steps")),
+            "points": ((), n, variable("embedded points")),
             "correlation_dimension": (
                 (),
                 d2,
-                {"units": "1", "long_name": "correlation dimension at the neighbours' scales"},
+                variable("correlation dimension at the neighbours' scales"),
             ),
-            "min_points": ((), min_points, {"units": "1", "long_name": "10^D points"}),
+            "min_points": ((), min_points, variable("10^D points")),
             **_surrogate_variables(verdict.surrogate),
         },
         coords={
             "elapsed": (
                 "elapsed",
                 elapsed_samples * s.dt,
-                {"units": s.time_units, "long_name": "time followed"},
+                variable("time followed", s.time_units),
             ),
-            "lag": ("lag", ami.lag.values, {"units": "1", "long_name": "lag (samples)"}),
-            "dimension": ("dimension", dims, {"units": "1", "long_name": "embedding dimension"}),
+            "lag": ("lag", ami.lag.values, variable("lag (samples)")),
+            "dimension": ("dimension", dims, variable("embedding dimension")),
             "surrogate": (
                 "surrogate",
                 np.arange(0 if verdict.surrogate is None else verdict.surrogate.sizes["surrogate"]),
-                {"units": "1", "long_name": "IAAFT surrogate"},
+                variable("IAAFT surrogate"),
             ),
         },
         attrs={
@@ -395,7 +393,7 @@ def _result(
         out["lle_per_period"] = (
             (),
             lle * period,
-            {"units": "1", "long_name": "largest Lyapunov exponent per forcing period"},
+            variable("largest Lyapunov exponent per forcing period"),
         )
     return out
 
@@ -412,21 +410,19 @@ def _surrogate_variables(test: xr.Dataset | None) -> dict:
         "prediction_error": (
             (),
             error,
-            {"units": "1", "long_name": "normalised nonlinear prediction error of the series"},
+            variable("normalised nonlinear prediction error of the series"),
         ),
         "surrogate_error": (
             "surrogate",
             curve,
-            {"units": "1", "long_name": "normalised nonlinear prediction error of a surrogate"},
+            variable("normalised nonlinear prediction error of a surrogate"),
         ),
         "surrogate_stochastic": (
             (),
             np.int8(flag),
-            {
-                "units": "1",
-                "long_name": "not told from linear correlated noise by IAAFT surrogates",
-                "flag_values": np.array([-1, 0, 1], dtype=np.int8),
-                "flag_meanings": "not_tested deterministic stochastic",
-            },
+            flags(
+                "not told from linear correlated noise by IAAFT surrogates",
+                {-1: "not_tested", 0: "deterministic", 1: "stochastic"},
+            ),
         ),
     }

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.analysis._series import as_series
 
 __all__ = ["zero_one_test"]
@@ -51,9 +52,9 @@ def zero_one_test(x, *, n_c: int = 100, seed: int = 0) -> xr.Dataset:
         Ks[i] = np.corrcoef(lags, D)[0, 1]
     return xr.Dataset(
         {
-            "K": ((), float(np.median(Ks)), {"units": "1", "long_name": "0-1 test statistic K"}),
-            "K_c": ("c", Ks, {"units": "1", "long_name": "K for each c"}),
+            "K": ((), float(np.median(Ks)), variable("0-1 test statistic K")),
+            "K_c": ("c", Ks, variable("K for each c")),
         },
-        coords={"c": ("c", cs, {"units": "rad", "long_name": "frequency c"})},
+        coords={"c": ("c", cs, variable("frequency c", "rad"))},
         attrs={"method": "0-1 test, correlation method (Gottwald & Melbourne 2009)"},
     )

@@ -38,8 +38,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_names
 from workbench._version import FORMAT_VERSION, __version__
 from workbench.archive._integrity import ArchiveError
+from workbench.run import status_attrs
 from workbench.solver import Status
 
 __all__ = [
@@ -203,7 +205,7 @@ def _upgrade_from_1(ds: xr.Dataset, path: str) -> xr.Dataset:
     if ds.attrs.get("run_status") == "done":
         ds.attrs["run_status"] = Status.OK.label
     for name, var in ds.variables.items():
-        meanings = str(var.attrs.get("flag_meanings", "")).split()
+        meanings = flag_names(var)
         if not meanings or not set(meanings) <= set(FORMAT1_STATUS):
             continue
         old = dict(zip(np.asarray(var.attrs["flag_values"]).tolist(), meanings, strict=True))
@@ -223,12 +225,10 @@ def _upgrade_from_1(ds: xr.Dataset, path: str) -> xr.Dataset:
                     "campaign with --restart, or 'make data' for the shipped archives)"
                 )
             new_values[hit] = FORMAT2_EXTRA_FLAGS.get(new, None) or int(Status.from_label(new))
-        flags = {int(s): s.label for s in Status}
-        if "invalid_parameters" in meanings:
-            flags |= {v: k for k, v in FORMAT2_EXTRA_FLAGS.items()}
+        extra = {v: k for k, v in FORMAT2_EXTRA_FLAGS.items()}
+        cf = status_attrs(name, extra if "invalid_parameters" in meanings else None)
         attrs = {k: v for k, v in var.attrs.items() if k != "comment"}
-        attrs["flag_values"] = np.array(list(flags), dtype=np.int8)
-        attrs["flag_meanings"] = " ".join(flags.values())
+        attrs["flag_values"], attrs["flag_meanings"] = cf["flag_values"], cf["flag_meanings"]
         attrs["comment"] = (
             f"upgraded from archive format 1: {' '.join(meanings)} -> the codes of "
             "workbench.Status (terminated_early -> terminated)"

@@ -226,12 +226,11 @@ def _curve(args, branch, start, stop, curve_range, maps) -> int:
         f"{curve.sizes['curve_point']} points from {ends}, {a['map_evaluations']} map "
         f"evaluations, {a['wall_time']:.3g} s wall; ended: {a['curve_ended']} -> {out}"
     )
-    names = curve.label.attrs["flag_meanings"].split()
+    from workbench._attributes import flag_meaning
+
     for i in curve.special_index.values:
-        print(
-            f"  {names[int(curve.label.values[i])]} at {P} = {float(curve[P][i]):.8g}, "
-            f"{Q} = {float(curve[Q][i]):.8g}"
-        )
+        label = flag_meaning(curve.label, curve.label.values[i])
+        print(f"  {label} at {P} = {float(curve[P][i]):.8g}, {Q} = {float(curve[Q][i]):.8g}")
     if a["curve_unresolved"] != "none":
         print(f"  not resolved: {a['curve_unresolved']}")
     if args.figure:

@@ -73,8 +73,9 @@ from itertools import combinations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_meaning, flags, variable
 from workbench.continuation._newton import NewtonFailure, next_step, orbit_at
-from workbench.continuation._orbits import _attrs, _guess
+from workbench.continuation._orbits import _guess
 from workbench.continuation._report import RangeProgress
 from workbench.continuation._strobe import MapValue, StrobeMap, _event_values
 from workbench.models import get_model
@@ -826,11 +827,6 @@ class _Start:
     source: str = ""
 
 
-def _flag_names(da: xr.DataArray) -> dict[int, str]:
-    values = np.atleast_1d(da.attrs["flag_values"]).tolist()
-    return dict(zip(values, da.attrs["flag_meanings"].split(), strict=True))
-
-
 def _from_branch(branch: xr.Dataset, kind: str | None, bifurcation: int | None) -> _Start:
     """The labelled point of a branch of :func:`continue_orbit` to start from: number
     ``bifurcation`` of its ``bifurcation`` dim, else the first of ``kind``, else the first
@@ -842,8 +838,7 @@ def _from_branch(branch: xr.Dataset, kind: str | None, bifurcation: int | None) 
                 "workbench.continuation.continue_orbit (or a scene with parameter and value)"
             )
     P = branch.attrs["continuation_parameter"]
-    names = _flag_names(branch.bifurcation_label)
-    found = [names[int(c)] for c in branch.bifurcation_label.values]
+    found = [flag_meaning(branch.bifurcation_label, c) for c in branch.bifurcation_label.values]
     if "bifurcation_resolved" in branch:  # an unresolved bifurcation is no start
         found = [
             k if ok else "unresolved"
@@ -976,30 +971,30 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
         data[name] = (
             "curve_point",
             values,
-            _attrs(par.long_name, par.units, comment=f"the curve's {which} parameter"),
+            variable(par.long_name, par.units, comment=f"the curve's {which} parameter"),
         )
     for q in states:
         y = np.array([pt.ev.y[index[q.name]] for pt in tr_points])
         data[f"orbit_{q.name}"] = (
             "curve_point",
             y,
-            _attrs(f"{q.long_name} on the orbit at the strobe time", q.units),
+            variable(f"{q.long_name} on the orbit at the strobe time", q.units),
         )
     na = pb.aux0.size
     if na:
         data["orbit_discrete_state"] = (
             ("curve_point", "discrete_state"),
             np.array([pt.ev.aux for pt in tr_points]).reshape(n, na),
-            _attrs(
+            variable(
                 "the model's discrete state on the orbit at the strobe time (the mechanisms: "
                 "each joint's contact onset velocity)",
                 model.discrete_state_units,
             ),
         )
     cm = ("curve_point", "multiplier")
-    data["multiplier_real"] = (cm, mu.real, _attrs("real part of a Floquet multiplier"))
-    data["multiplier_imag"] = (cm, mu.imag, _attrs("imaginary part of a Floquet multiplier"))
-    data["multiplier_modulus"] = (cm, np.abs(mu), _attrs("modulus of a Floquet multiplier"))
+    data["multiplier_real"] = (cm, mu.real, variable("real part of a Floquet multiplier"))
+    data["multiplier_imag"] = (cm, mu.imag, variable("imaginary part of a Floquet multiplier"))
+    data["multiplier_modulus"] = (cm, np.abs(mu), variable("modulus of a Floquet multiplier"))
     crit = np.full(n, np.nan + 0j)
     kinds = np.empty(n, np.int8)
     for i, x in enumerate(mus):
@@ -1009,15 +1004,14 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
         kinds[i] = CURVE_KINDS[_point_kind(kind, x)]
     long_name = "part of the critical multiplier (+1 fold, -1 period doubling, e^(i theta) "
     long_name += "Neimark-Sacker with theta >= 0; none for grazing)"
-    data["critical_real"] = ("curve_point", crit.real, _attrs(f"real {long_name}"))
-    data["critical_imag"] = ("curve_point", crit.imag, _attrs(f"imaginary {long_name}"))
+    data["critical_real"] = ("curve_point", crit.real, variable(f"real {long_name}"))
+    data["critical_imag"] = ("curve_point", crit.imag, variable(f"imaginary {long_name}"))
     data["kind"] = (
         "curve_point",
         kinds,
-        _attrs(
+        flags(
             "kind of the bifurcation at the curve point",
-            flag_values=np.array(list(CURVE_KINDS.values()), np.int8),
-            flag_meanings=" ".join(CURVE_KINDS),
+            {v: k for k, v in CURVE_KINDS.items()},
             comment="fold: a multiplier +1; period_doubling: -1; neimark_sacker: a complex "
             "pair on the unit circle; grazing: the orbit touches an event surface; "
             "neutral_saddle: on a Neimark-Sacker curve, a real pair mu, 1/mu (no bifurcation)",
@@ -1026,10 +1020,9 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
     data["label"] = (
         "curve_point",
         np.array([CURVE_LABELS[lab] for lab in tr_labels], np.int8),
-        _attrs(
+        flags(
             "kind of the curve point",
-            flag_values=np.array(list(CURVE_LABELS.values()), np.int8),
-            flag_meanings=" ".join(CURVE_LABELS),
+            {v: k for k, v in CURVE_LABELS.items()},
             comment="codimension-two points where a test function changes sign (located); "
             + "; ".join(f"{k}: {v}" for k, v in TEST_MEANINGS.items()),
         ),
@@ -1038,17 +1031,17 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
         data[f"test_{name}"] = (
             "curve_point",
             np.array([pt.tests.get(name, np.nan) for pt in tr_points]),
-            _attrs(TEST_MEANINGS[name]),
+            variable(TEST_MEANINGS[name]),
         )
     data["newton_iterations"] = (
         "curve_point",
         np.array([pt.iterations for pt in tr_points], np.int32),
-        _attrs("Newton iterations of the point"),
+        variable("Newton iterations of the point"),
     )
     data["residual"] = (
         "curve_point",
         np.array([pt.residual for pt in tr_points]),
-        _attrs("largest scaled residual of the orbit and defining conditions"),
+        variable("largest scaled residual of the orbit and defining conditions"),
     )
     if kind == "grazing":
         span = np.array([fam.span(pt.ev.p, pt.ev.q) for pt in tr_points])
@@ -1056,13 +1049,13 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
         data["touch_time"] = (
             "curve_point",
             theta * span,
-            _attrs("time of the touch after the strobe time", "s"),
+            variable("time of the touch after the strobe time", "s"),
         )
         for q in states:
             data[f"touch_{q.name}"] = (
                 "curve_point",
                 np.array([pt.ev.ctx["z"][index[q.name]] for pt in tr_points]),
-                _attrs(f"{q.long_name} where the orbit touches the event surface", q.units),
+                variable(f"{q.long_name} where the orbit touches the event surface", q.units),
             )
     special = [i for i, lab in enumerate(tr_labels) if lab not in ("regular", "start", "end")]
     data["special_label"] = (
@@ -1073,19 +1066,19 @@ def _dataset(tr_points, tr_labels, curve: _Curve, start: _Start, q_name, meta) -
     data["special_index"] = (
         "special_point",
         np.array(special, np.int32),
-        _attrs("index of the point along the curve"),
+        variable("index of the point along the curve"),
     )
     coords = {
-        "curve_point": ("curve_point", np.arange(n), _attrs("index along the curve")),
-        "multiplier": ("multiplier", np.arange(m), _attrs("multiplier (largest modulus first)")),
+        "curve_point": ("curve_point", np.arange(n), variable("index along the curve")),
+        "multiplier": ("multiplier", np.arange(m), variable("multiplier (largest modulus first)")),
         "special_point": (
             "special_point",
             np.arange(len(special)),
-            _attrs("located codimension-two point"),
+            variable("located codimension-two point"),
         ),
     }
     if na:
-        coords["discrete_state"] = ("discrete_state", np.arange(na), _attrs("discrete state"))
+        coords["discrete_state"] = ("discrete_state", np.arange(na), variable("discrete state"))
     ds = xr.Dataset(data, coords=coords)
     scene = fam.scene.with_parameters(**{start.parameter: start.p})
     ds.attrs.update(provenance(scene, by="workbench.continuation.continue_curve"))

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_meaning, flags, variable
 from workbench.continuation._branch import (
     LABELS,
     MARGIN_TOLERANCE,
@@ -32,12 +34,10 @@ from workbench.scene import SceneSource, load_scene
 
 __all__ = ["continue_orbit", "periodic_orbit"]
 
-LABEL_ATTRS = {
-    "long_name": "kind of the branch point",
-    "units": "1",
-    "flag_values": np.array(list(LABELS.values()), np.int8),
-    "flag_meanings": " ".join(LABELS),
-    "comment": "fold: a real multiplier through +1 where the parameter turns back; "
+LABEL_ATTRS = flags(
+    "kind of the branch point",
+    {v: k for k, v in LABELS.items()},
+    comment="fold: a real multiplier through +1 where the parameter turns back; "
     "branch_point: through +1 without a turn; period_doubling: a real multiplier through -1; "
     "neimark_sacker: a complex pair leaves the unit circle; grazing: a local extremum of an "
     "event function along the orbit through zero (a contact appears or vanishes); "
@@ -47,7 +47,7 @@ LABEL_ATTRS = {
     f"extremum within {MARGIN_TOLERANCE:g} of its event function's range); unresolved: a "
     "bifurcation bracketed but not confirmed (its suspected kind and bracket in the "
     "bifurcation_* variables)",
-}
+)
 
 
 def _guess(smap: StrobeMap, p: float, state, aux, transient: int | None):
@@ -142,7 +142,7 @@ def periodic_orbit(
     pt = start_point(smap, y, aux, math.nan, cfg, max_iterations=int(max_iterations))
     tr = Traced(smap, [pt], ["start"], [complex(np.nan, np.nan)], "one orbit", pt.evaluations)
     tr.wall_time = time.perf_counter() - t0
-    return _dataset([tr], None, tolerance, max_iterations=int(max_iterations))
+    return _labelled(_computed([tr]), None, tolerance, max_iterations=int(max_iterations))
 
 
 def continue_orbit(
@@ -275,7 +275,7 @@ def continue_orbit(
             branches.append(trace(double, pt, away, cfg, label="start", report=report))
         finally:
             report.close()
-    ds = _dataset(branches, parameter, cfg.tolerance, max_points=max_points)
+    ds = _labelled(_computed(branches), parameter, cfg.tolerance, max_points=max_points)
     ds.attrs["wall_time"] = time.perf_counter() - t0
     ds.attrs["tolerance_requested"] = tolerance
     ds.attrs["map_noise"] = noise
@@ -285,11 +285,6 @@ def continue_orbit(
 #: flags of ``bifurcation_transition``
 TRANSITION_FLAGS = {"not_a_grazing": 0} | {t: i + 1 for i, t in enumerate(TRANSITIONS)}
 
-
-def _attrs(long_name: str, units: str = "1", **extra) -> dict:
-    return {"long_name": long_name, "units": units, **extra}
-
-
 METHOD = (
     "shooting on the stroboscopic map (Newton), monodromy matrix from the tangent system with "
     "saltation at events, pseudo-arclength continuation; bifurcations from the Floquet "
@@ -298,144 +293,104 @@ METHOD = (
 )
 
 
-def _dataset(
-    branches: list[Traced],
-    parameter: str | None,
-    tolerance: float,
-    *,
-    max_points: int | None = None,
-    max_iterations: int | None = None,
-) -> xr.Dataset:
-    """The branches as one dataset (layout: :func:`continue_orbit`); the attributes
-    ``max_points`` (of a branch) and ``max_iterations`` (of one orbit) where given."""
+@dataclass
+class BranchNumbers:
+    """The numbers of continued branches, computed and not yet labelled: arrays per point
+    (``points``: first axis along the points of all branches, special points in their place),
+    per point and event function (``contacts``; empty for a model without events) and per
+    located bifurcation (``bifurcations``), each keyed by the name it is stored under
+    (``parameter``: the continued parameter's values); the map of the first branch, the
+    problem's public states and what each branch cost and why it ended.
+
+    :func:`_computed` fills it (integrating the orbits again for their strobe samples and
+    contact sequences); :func:`_labelled` names it."""
+
+    smap: StrobeMap
+    states: list
+    points: dict[str, np.ndarray]
+    contacts: dict[str, np.ndarray]
+    bifurcations: dict[str, np.ndarray]
+    evaluations: int
+    wall_times: list[float]
+    ended: list[str]
+    notes: list[str]
+
+
+def _computed(branches: list[Traced]) -> BranchNumbers:
+    """The numbers of ``branches`` (:class:`BranchNumbers`)."""
     smap = branches[0].smap
     pb = smap.prepared(smap.value).problem
     states = [q for q in pb.states if not q.name.startswith("_")]
     index = {q.name: i for i, q in enumerate(pb.states)}
     rows = [
-        (b, pt, lab, crit)
+        (b, pt, lab)
         for b, tr in enumerate(branches)
-        for pt, lab, crit in zip(tr.points, tr.labels, tr.critical, strict=True)
+        for pt, lab, _ in zip(tr.points, tr.labels, tr.critical, strict=True)
     ]
     n = len(rows)
-    m = max(pt.value.M.shape[0] for _, pt, _, _ in rows)
+    m = max(pt.value.M.shape[0] for _, pt, _ in rows)
     kmax = max(tr.smap.periods for tr in branches)
     mu = np.full((n, m), np.nan + 0j)
     strobe = {q.name: np.full((n, kmax), np.nan) for q in states}
-    for i, (b, pt, _, _) in enumerate(rows):
+    for i, (b, pt, _) in enumerate(rows):
         mult = pt.multipliers
         mu[i, : mult.size] = mult
         samples = branches[b].smap.orbit_samples(pt.y, pt.aux, pt.p)
         for q in states:
             strobe[q.name][i, : samples.shape[0]] = samples[:, index[q.name]]
     modulus = np.abs(mu)
-    periods = np.array([branches[b].smap.periods for b, _, _, _ in rows], np.int32)
-    model = get_model(smap.scene.model)
-    data: dict = {}
+    periods = np.array([branches[b].smap.periods for b, _, _ in rows], np.int32)
+    points: dict[str, np.ndarray] = {}
     na, ne = pb.aux0.size, pb.event_direction.size
     if na:
-        held = np.array([r[1].aux for r in rows], dtype=float).reshape(n, na)
-        data["orbit_discrete_state"] = (
-            ("point", "discrete_state"),
-            held,
-            _attrs(
-                "the model's discrete state on the orbit at the strobe time (the mechanisms: "
-                "each joint's contact onset velocity, held through a lasting contact: a "
-                "constant of such an orbit that sets its contact damping)",
-                model.discrete_state_units,
-            ),
-        )
-    if ne:
-        seqs = [sequence_of(branches[b].smap, pt) for b, pt, _, _ in rows]
-        data.update(_sequence_variables(seqs, ne, model.event_units))
-    if parameter is not None:
-        par = get_model(smap.scene.model).parameter(parameter)
-        p_attrs = _attrs(par.long_name, par.units)
-        data[parameter] = ("point", np.array([r[1].p for r in rows]), p_attrs)
+        points["orbit_discrete_state"] = np.array([r[1].aux for r in rows], float).reshape(n, na)
+    seqs = [sequence_of(branches[b].smap, pt) for b, pt, _ in rows] if ne else []
+    points["parameter"] = np.array([r[1].p for r in rows])
     for q in states:
-        y = np.array([r[1].y[index[q.name]] for r in rows])
-        long_name = f"{q.long_name} on the orbit at the strobe time"
-        data[f"orbit_{q.name}"] = ("point", y, _attrs(long_name, q.units))
-        long_name = f"{q.long_name} at the orbit's strobe times"
-        data[f"strobe_{q.name}"] = (("point", "sample"), strobe[q.name], _attrs(long_name, q.units))
-    branch = np.array([r[0] for r in rows], np.int32)
-    data["branch"] = ("point", branch, _attrs("branch index (b + 1 switched from b)"))
-    data["periods"] = ("point", periods, _attrs("period of the orbit in forcing periods"))
-    pm = ("point", "multiplier")
-    data["multiplier_real"] = (pm, mu.real, _attrs("real part of a Floquet multiplier"))
-    data["multiplier_imag"] = (pm, mu.imag, _attrs("imaginary part of a Floquet multiplier"))
-    data["multiplier_modulus"] = (pm, modulus, _attrs("modulus of a Floquet multiplier"))
-    stable = (np.nanmax(modulus, axis=1) < 1.0).astype(np.int8)
-    data["stable"] = (
-        "point",
-        stable,
-        _attrs(
-            "all Floquet multipliers inside the unit circle",
-            flag_values=np.array([0, 1], np.int8),
-            flag_meanings="unstable stable",
-        ),
-    )
-    events = np.array([r[1].value.events for r in rows]) / periods
-    data["events_per_period"] = (
-        "point",
-        events,
-        _attrs("events located per forcing period (the mechanisms: contact onsets and ends)"),
-    )
-    data["label"] = ("point", np.array([LABELS[r[2]] for r in rows], np.int8), LABEL_ATTRS)
-    iterations = np.array([r[1].iterations for r in rows], np.int32)
-    data["newton_iterations"] = ("point", iterations, _attrs("Newton iterations of the point"))
-    residual = np.array([r[1].residual for r in rows])
-    data["residual"] = ("point", residual, _attrs("scaled residual max |P^k(x) - x| / s"))
+        points[f"orbit_{q.name}"] = np.array([r[1].y[index[q.name]] for r in rows])
+        points[f"strobe_{q.name}"] = strobe[q.name]
+    points["branch"] = np.array([r[0] for r in rows], np.int32)
+    points["periods"] = periods
+    points["multiplier_real"] = mu.real
+    points["multiplier_imag"] = mu.imag
+    points["multiplier_modulus"] = modulus
+    points["stable"] = (np.nanmax(modulus, axis=1) < 1.0).astype(np.int8)
+    points["events_per_period"] = np.array([r[1].value.events for r in rows]) / periods
+    points["label"] = np.array([LABELS[r[2]] for r in rows], np.int8)
+    points["newton_iterations"] = np.array([r[1].iterations for r in rows], np.int32)
+    points["residual"] = np.array([r[1].residual for r in rows])
     specials = [(b, sp) for b, tr in enumerate(branches) for sp in tr.specials]
-    row_of = {(b, id(pt)): i for i, (b, pt, _, _) in enumerate(rows)}
-    data.update(_special_variables(specials, parameter, p_attrs if parameter else None, model))
-    data["bifurcation_point"] = (
-        "bifurcation",
-        np.array([row_of.get((b, id(sp.point)), -1) for b, sp in specials], np.int32),
-        _attrs("index along point of the bifurcation's located orbit"),
-    )
-    coords = {
-        "point": ("point", np.arange(n), _attrs("index along the branches")),
-        "multiplier": ("multiplier", np.arange(m), _attrs("multiplier (largest modulus first)")),
-        "sample": ("sample", np.arange(kmax), _attrs("strobe sample of the orbit (k T on)")),
-        "bifurcation": ("bifurcation", np.arange(len(specials)), _attrs("located bifurcation")),
+    row_of = {(b, id(pt)): i for i, (b, pt, _) in enumerate(rows)}
+    crit = np.array([sp.critical for _, sp in specials], complex)
+    transitions = [TRANSITION_FLAGS[sp.transition or "not_a_grazing"] for _, sp in specials]
+    bifurcations = {
+        "bifurcation_label": np.array([LABELS[sp.kind] for _, sp in specials], np.int8),
+        "bifurcation_resolved": np.array([sp.resolved for _, sp in specials], np.int8),
+        "bifurcation_branch": np.array([b for b, _ in specials], np.int32),
+        "critical_real": crit.real,
+        "critical_imag": crit.imag,
+        "bifurcation_test": np.array([sp.test for _, sp in specials], float),
+        "bifurcation_event": np.array([sp.event for _, sp in specials], np.int32),
+        "bifurcation_phase": np.array([sp.phase for _, sp in specials], float),
+        "bifurcation_transition": np.array(transitions, np.int8),
+        "bifurcation_parameter": np.array([sp.point.p for _, sp in specials]),
+        "bifurcation_lower": np.array([sp.lower for _, sp in specials]),
+        "bifurcation_upper": np.array([sp.upper for _, sp in specials]),
+        "bifurcation_point": np.array(
+            [row_of.get((b, id(sp.point)), -1) for b, sp in specials], np.int32
+        ),
     }
-    if na:
-        coords["discrete_state"] = ("discrete_state", np.arange(na), _attrs("discrete state"))
-    if ne:
-        coords["event"] = ("event", np.arange(ne), _attrs("event function"))
-        coords["extremum"] = (
-            "extremum",
-            np.arange(data["extremum_value"][1].shape[2]),
-            _attrs("local extremum of an event function along the orbit, in order of phase"),
-        )
-        coords["crossing"] = (
-            "crossing",
-            np.arange(data["crossing_phase"][1].shape[2]),
-            _attrs("crossing of an event function in its direction, in order of phase"),
-        )
-    ds = xr.Dataset(data, coords=coords)
-    ds.attrs.update(provenance(smap.scene, by="workbench.continuation.continue_orbit"))
-    title = f"periodic orbits of model {smap.scene.model}"
-    ds.attrs.update(
-        title=title + (f" continued over {parameter}" if parameter else ""),
-        continuation_parameter=parameter or "",
-        method=METHOD,
-        monodromy=smap.monodromy,
-        integration_method=smap.method,
-        scene_method=smap.scene_method,
-        rtol=smap.rtol,
-        tolerance=tolerance,
-        map_evaluations=int(sum(tr.evaluations for tr in branches)),
-        branch_wall_time=" ".join(f"{tr.wall_time:.6g}" for tr in branches),
-        branch_ended=" | ".join(tr.ended or "-" for tr in branches),
-        bifurcation_notes=" | ".join(sp.note or "-" for tr in branches for sp in tr.specials),
+    return BranchNumbers(
+        smap=smap,
+        states=states,
+        points=points,
+        contacts=_contact_arrays(seqs, ne) if ne else {},
+        bifurcations=bifurcations,
+        evaluations=int(sum(tr.evaluations for tr in branches)),
+        wall_times=[tr.wall_time for tr in branches],
+        ended=[tr.ended for tr in branches],
+        notes=[sp.note for tr in branches for sp in tr.specials],
     )
-    if max_points is not None:
-        ds.attrs["max_points"] = max_points
-    if max_iterations is not None:
-        ds.attrs["max_iterations"] = max_iterations
-    return ds
 
 
 def _padded(arrays: list[list[np.ndarray]], column: int) -> np.ndarray:
@@ -455,36 +410,161 @@ def _extreme_of(a: np.ndarray, pick) -> np.ndarray:
     return np.where(np.isinf(out), np.nan, out)
 
 
-def _sequence_variables(seqs: list, ne: int, units: str) -> dict:
-    """The contact sequence of every orbit (:mod:`workbench.continuation._contacts`)."""
+def _contact_arrays(seqs: list, ne: int) -> dict[str, np.ndarray]:
+    """The contact sequence of every orbit (:mod:`workbench.continuation._contacts`) as arrays
+    (point, event[, crossing or extremum])."""
     extrema = [list(q.extrema) for q in seqs]
     crossings = [list(q.crossings) for q in seqs]
     value = _padded(extrema, 1)
     kind = _padded(extrema, 2)
-    pe, pex, pc = ("point", "event"), ("point", "event", "extremum"), ("point", "event", "crossing")
     return {
+        "crossings_per_orbit": np.array([q.counts for q in seqs], np.int32).reshape(len(seqs), ne),
+        "crossing_phase": _padded(crossings, 0),
+        "extremum_phase": _padded(extrema, 0),
+        "extremum_value": value,
+        "extremum_kind": kind,
+        "event_max": _extreme_of(np.where(kind == 1.0, value, np.nan), np.max),
+        "event_min": _extreme_of(np.where(kind == -1.0, value, np.nan), np.min),
+    }
+
+
+def _labelled(
+    numbers: BranchNumbers,
+    parameter: str | None,
+    tolerance: float,
+    *,
+    max_points: int | None = None,
+    max_iterations: int | None = None,
+) -> xr.Dataset:
+    """The branches' numbers as one dataset (layout: :func:`continue_orbit`); the attributes
+    ``max_points`` (of a branch) and ``max_iterations`` (of one orbit) where given."""
+    smap, points, bif = numbers.smap, numbers.points, numbers.bifurcations
+    model = get_model(smap.scene.model)
+    data: dict = {}
+    if "orbit_discrete_state" in points:
+        data["orbit_discrete_state"] = (
+            ("point", "discrete_state"),
+            points["orbit_discrete_state"],
+            variable(
+                "the model's discrete state on the orbit at the strobe time (the mechanisms: "
+                "each joint's contact onset velocity, held through a lasting contact: a "
+                "constant of such an orbit that sets its contact damping)",
+                model.discrete_state_units,
+            ),
+        )
+    data.update(_contact_variables(numbers.contacts, model.event_units))
+    if parameter is not None:
+        par = model.parameter(parameter)
+        p_attrs = variable(par.long_name, par.units)
+        data[parameter] = ("point", points["parameter"], p_attrs)
+    for q in numbers.states:
+        long_name = f"{q.long_name} on the orbit at the strobe time"
+        data[f"orbit_{q.name}"] = ("point", points[f"orbit_{q.name}"], variable(long_name, q.units))
+        long_name = f"{q.long_name} at the orbit's strobe times"
+        name = f"strobe_{q.name}"
+        data[name] = (("point", "sample"), points[name], variable(long_name, q.units))
+    pm = ("point", "multiplier")
+    labels = {
+        "branch": ("point", variable("branch index (b + 1 switched from b)")),
+        "periods": ("point", variable("period of the orbit in forcing periods")),
+        "multiplier_real": (pm, variable("real part of a Floquet multiplier")),
+        "multiplier_imag": (pm, variable("imaginary part of a Floquet multiplier")),
+        "multiplier_modulus": (pm, variable("modulus of a Floquet multiplier")),
+        "stable": (
+            "point",
+            flags("all Floquet multipliers inside the unit circle", ["unstable", "stable"]),
+        ),
+        "events_per_period": (
+            "point",
+            variable("events located per forcing period (the mechanisms: contact onsets and ends)"),
+        ),
+        "label": ("point", LABEL_ATTRS),
+        "newton_iterations": ("point", variable("Newton iterations of the point")),
+        "residual": ("point", variable("scaled residual max |P^k(x) - x| / s")),
+    }
+    for name, (dims, attrs) in labels.items():
+        data[name] = (dims, points[name], attrs)
+    for name, attrs in _bifurcation_attrs(model, p_attrs if parameter else None).items():
+        data[name] = ("bifurcation", bif[name], attrs)
+    n, m = points["multiplier_real"].shape
+    coords = {
+        "point": ("point", np.arange(n), variable("index along the branches")),
+        "multiplier": ("multiplier", np.arange(m), variable("multiplier (largest modulus first)")),
+        "sample": (
+            "sample",
+            np.arange(int(points["periods"].max())),
+            variable("strobe sample of the orbit (k T on)"),
+        ),
+        "bifurcation": (
+            "bifurcation",
+            np.arange(bif["bifurcation_label"].size),
+            variable("located bifurcation"),
+        ),
+    }
+    if "orbit_discrete_state" in points:
+        na = points["orbit_discrete_state"].shape[1]
+        coords["discrete_state"] = ("discrete_state", np.arange(na), variable("discrete state"))
+    if numbers.contacts:
+        ne = numbers.contacts["crossings_per_orbit"].shape[1]
+        coords["event"] = ("event", np.arange(ne), variable("event function"))
+        coords["extremum"] = (
+            "extremum",
+            np.arange(numbers.contacts["extremum_value"].shape[2]),
+            variable("local extremum of an event function along the orbit, in order of phase"),
+        )
+        coords["crossing"] = (
+            "crossing",
+            np.arange(numbers.contacts["crossing_phase"].shape[2]),
+            variable("crossing of an event function in its direction, in order of phase"),
+        )
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update(provenance(smap.scene, by="workbench.continuation.continue_orbit"))
+    title = f"periodic orbits of model {smap.scene.model}"
+    ds.attrs.update(
+        title=title + (f" continued over {parameter}" if parameter else ""),
+        continuation_parameter=parameter or "",
+        method=METHOD,
+        monodromy=smap.monodromy,
+        integration_method=smap.method,
+        scene_method=smap.scene_method,
+        rtol=smap.rtol,
+        tolerance=tolerance,
+        map_evaluations=numbers.evaluations,
+        branch_wall_time=" ".join(f"{t:.6g}" for t in numbers.wall_times),
+        branch_ended=" | ".join(e or "-" for e in numbers.ended),
+        bifurcation_notes=" | ".join(note or "-" for note in numbers.notes),
+    )
+    if max_points is not None:
+        ds.attrs["max_points"] = max_points
+    if max_iterations is not None:
+        ds.attrs["max_iterations"] = max_iterations
+    return ds
+
+
+def _contact_variables(contacts: dict[str, np.ndarray], units: str) -> dict:
+    """The contact sequences' arrays (:func:`_contact_arrays`) labelled; ``units`` those of the
+    event functions."""
+    if not contacts:
+        return {}
+    pe, pex, pc = ("point", "event"), ("point", "event", "extremum"), ("point", "event", "crossing")
+    labels = {
         "crossings_per_orbit": (
             pe,
-            np.array([q.counts for q in seqs], np.int32).reshape(len(seqs), ne),
-            _attrs(
+            variable(
                 "crossings of each event function in its direction along the orbit (the "
                 "mechanisms: contact onsets for events 2i, ends for events 2i + 1)"
             ),
         ),
-        "crossing_phase": (
-            pc,
-            _padded(crossings, 0),
-            _attrs("time of each crossing after the strobe time", "s"),
-        ),
+        "crossing_phase": (pc, variable("time of each crossing after the strobe time", "s")),
         "extremum_phase": (
             pex,
-            _padded(extrema, 0),
-            _attrs("time of each local extremum of the event function after the strobe time", "s"),
+            variable(
+                "time of each local extremum of the event function after the strobe time", "s"
+            ),
         ),
         "extremum_value": (
             pex,
-            value,
-            _attrs(
+            variable(
                 "value of the event function at each of its local extrema: the margin to the "
                 "next grazing (a maximum below 0: a free flight that misses the surface by so "
                 "much; a minimum above 0: a lasting contact that stays on by so much)",
@@ -493,17 +573,11 @@ def _sequence_variables(seqs: list, ne: int, units: str) -> dict:
         ),
         "extremum_kind": (
             pex,
-            kind,
-            _attrs(
-                "kind of the local extremum",
-                flag_values=np.array([-1.0, 1.0]),
-                flag_meanings="minimum maximum",
-            ),
+            flags("kind of the local extremum", {-1.0: "minimum", 1.0: "maximum"}, dtype=float),
         ),
         "event_max": (
             pe,
-            _extreme_of(np.where(kind == 1.0, value, np.nan), np.max),
-            _attrs(
+            variable(
                 "largest value of each event function along the orbit (crosses 0 where a contact "
                 "appears: grazing); the mechanisms: a joint's penetration, events 2i and 2i + 1 "
                 "of its i-th clearance joint",
@@ -512,90 +586,53 @@ def _sequence_variables(seqs: list, ne: int, units: str) -> dict:
         ),
         "event_min": (
             pe,
-            _extreme_of(np.where(kind == -1.0, value, np.nan), np.min),
-            _attrs(
+            variable(
                 "smallest value of each event function along the orbit (crosses 0 where a "
                 "lasting contact lifts off)",
                 units,
             ),
         ),
     }
+    return {name: (dims, contacts[name], attrs) for name, (dims, attrs) in labels.items()}
 
 
-def _special_variables(specials: list, parameter: str | None, p_attrs, model) -> dict:
-    """The bifurcations of the branches, each with its bracket and the quantity that confirms
-    it (dim ``bifurcation``)."""
-    kinds = np.array([LABELS[sp.kind] for _, sp in specials], np.int8)
-    crit = np.array([sp.critical for _, sp in specials], complex)
+def _bifurcation_attrs(model, p_attrs: dict | None) -> dict[str, dict]:
+    """The attributes of the bifurcations' variables (dim ``bifurcation``), each with its
+    bracket and the quantity that confirms it; the parameter's (``p_attrs``) when continued
+    over one."""
     long_name = "part of the multiplier that crossed the unit circle"
     out = {
-        "bifurcation_label": (
-            "bifurcation",
-            kinds,
-            dict(LABEL_ATTRS, long_name="kind of the bifurcation (suspected, where unresolved)"),
+        "bifurcation_label": dict(
+            LABEL_ATTRS, long_name="kind of the bifurcation (suspected, where unresolved)"
         ),
-        "bifurcation_resolved": (
-            "bifurcation",
-            np.array([sp.resolved for _, sp in specials], np.int8),
-            _attrs(
-                "located and confirmed by its defining quantity (1), or only bracketed (0)",
-                flag_values=np.array([0, 1], np.int8),
-                flag_meanings="unresolved resolved",
-            ),
+        "bifurcation_resolved": flags(
+            "located and confirmed by its defining quantity (1), or only bracketed (0)",
+            ["unresolved", "resolved"],
         ),
-        "bifurcation_branch": (
-            "bifurcation",
-            np.array([b for b, _ in specials], np.int32),
-            _attrs("branch index of the bifurcation"),
+        "bifurcation_branch": variable("branch index of the bifurcation"),
+        "critical_real": variable(f"real {long_name}"),
+        "critical_imag": variable(f"imaginary {long_name}"),
+        "bifurcation_test": variable(
+            "the defining quantity at the located point: the critical multiplier's "
+            "distance from +1, -1 or the unit circle (1); for a grazing the extremum's "
+            f"value ({model.event_units})"
         ),
-        "critical_real": ("bifurcation", crit.real, _attrs(f"real {long_name}")),
-        "critical_imag": ("bifurcation", crit.imag, _attrs(f"imaginary {long_name}")),
-        "bifurcation_test": (
-            "bifurcation",
-            np.array([sp.test for _, sp in specials], float),
-            _attrs(
-                "the defining quantity at the located point: the critical multiplier's "
-                "distance from +1, -1 or the unit circle (1); for a grazing the extremum's "
-                f"value ({model.event_units})"
-            ),
-        ),
-        "bifurcation_event": (
-            "bifurcation",
-            np.array([sp.event for _, sp in specials], np.int32),
-            _attrs("event function of a grazing (-1: not a grazing)"),
-        ),
-        "bifurcation_phase": (
-            "bifurcation",
-            np.array([sp.phase for _, sp in specials], float),
-            _attrs("time after the strobe time of a grazing's extremum", "s"),
-        ),
-        "bifurcation_transition": (
-            "bifurcation",
-            np.array(
-                [TRANSITION_FLAGS[sp.transition or "not_a_grazing"] for _, sp in specials],
-                np.int8,
-            ),
-            _attrs(
-                "how the orbit passes a grazing: persistent (it crosses with the new contact), "
-                "nonsmooth_fold (the branch turns at it), border_collision (no orbit of the "
-                "branch's period past it: the period there in the note), not_typed",
-                flag_values=np.array(list(TRANSITION_FLAGS.values()), np.int8),
-                flag_meanings=" ".join(TRANSITION_FLAGS),
-            ),
+        "bifurcation_event": variable("event function of a grazing (-1: not a grazing)"),
+        "bifurcation_phase": variable("time after the strobe time of a grazing's extremum", "s"),
+        "bifurcation_transition": flags(
+            "how the orbit passes a grazing: persistent (it crosses with the new contact), "
+            "nonsmooth_fold (the branch turns at it), border_collision (no orbit of the "
+            "branch's period past it: the period there in the note), not_typed",
+            {v: k for k, v in TRANSITION_FLAGS.items()},
         ),
     }
-    if parameter is not None:
-        out["bifurcation_parameter"] = (
-            "bifurcation",
-            np.array([sp.point.p for _, sp in specials]),
-            dict(p_attrs),
-        )
-        for name, pick in (("lower", lambda sp: sp.lower), ("upper", lambda sp: sp.upper)):
-            out[f"bifurcation_{name}"] = (
-                "bifurcation",
-                np.array([pick(sp) for _, sp in specials]),
-                dict(p_attrs, long_name=f"{p_attrs['long_name']} at the {name} end of the bracket"),
+    if p_attrs is not None:
+        out["bifurcation_parameter"] = dict(p_attrs)
+        for name in ("lower", "upper"):
+            out[f"bifurcation_{name}"] = dict(
+                p_attrs, long_name=f"{p_attrs['long_name']} at the {name} end of the bracket"
             )
+    out["bifurcation_point"] = variable("index along point of the bifurcation's located orbit")
     return out
 
 
@@ -606,18 +643,16 @@ def branch_bifurcations(branch: xr.Dataset, parameter: str) -> list[dict]:
     ``index`` (the branch point nearest to it), ``resolved`` (False: only bracketed, the
     defining quantity did not confirm the kind) and, for a grazing, ``transition`` (how the
     orbit passes it, a key of ``TRANSITION_FLAGS``; ``"not_a_grazing"`` for the others)."""
-    names = branch.label.attrs["flag_meanings"].split()
     values = branch[parameter].values
     count = branch.sizes.get("bifurcation", 0)
     if "bifurcation_transition" in branch:
-        kinds = branch.bifurcation_transition.attrs["flag_meanings"].split()
-        codes = list(branch.bifurcation_transition.attrs["flag_values"])
-        transitions = [kinds[codes.index(int(c))] for c in branch.bifurcation_transition.values]
+        transition = branch.bifurcation_transition
+        transitions = [flag_meaning(transition, c) for c in transition.values]
     else:  # an archive written before transitions were typed
         transitions = ["not_typed"] * count
     return [
         {
-            "type": names[int(k)],
+            "type": flag_meaning(branch.label, k),
             "value": float(p),
             "critical": complex(re, im),
             "index": int(np.argmin(np.abs(values - p))),

@@ -14,6 +14,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from workbench._attributes import variable
 from workbench.models._base import Model, Parameter, Problem, Quantity
 from workbench.models._clearance import (
     ENERGY_STATES,
@@ -81,8 +82,8 @@ class Mechanism(Model):
 
     def coords(self, effects):
         return {
-            "joint": (list(effects["clearance"]), {"long_name": "clearance joint", "units": "1"}),
-            "crank": (list(self.cranks), {"long_name": "driven crank", "units": "1"}),
+            "joint": (list(effects["clearance"]), variable("clearance joint")),
+            "crank": (list(self.cranks), variable("driven crank")),
         }
 
     def forcing_period(self, params):

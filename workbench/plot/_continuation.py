@@ -9,6 +9,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_meaning, flag_names
 from workbench.plot._base import axis_label, display_unit, display_values, plt, units_label
 
 __all__ = [
@@ -60,7 +61,7 @@ _DIRECTION_COLOURS = {"up": "tab:blue", "down": "tab:orange"}
 
 
 def _label_names(ds: xr.Dataset, var: str = "label") -> list[str]:
-    return ds[var].attrs["flag_meanings"].split()
+    return flag_names(ds[var])
 
 
 def _diagram(ax, diagram: xr.Dataset, param: str, scale: float) -> None:
@@ -321,8 +322,7 @@ def curve_overlay(
 
 def _flag(da: xr.DataArray, code: int) -> str:
     """The flag meaning of ``code`` in a CF-flagged variable."""
-    values = np.atleast_1d(da.attrs["flag_values"]).tolist()
-    return da.attrs["flag_meanings"].split()[values.index(code)]
+    return flag_meaning(da, code)
 
 
 def curve_figure(

@@ -14,6 +14,7 @@ from collections import Counter
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_names
 from workbench.archive import status_flags
 from workbench.plot._base import display_unit
 from workbench.solver import Status
@@ -28,7 +29,7 @@ FAILED_STYLE = {"marker": "x", "color": "tab:red", "ms": 7, "mew": 1.6, "ls": "n
 def _meanings(status: xr.DataArray) -> dict[int, str]:
     """Flag value -> meaning: the variable's CF flags, else the statuses' own labels."""
     values = np.atleast_1d(status.attrs.get("flag_values", []))
-    names = str(status.attrs.get("flag_meanings", "")).split()
+    names = flag_names(status)
     if len(values) and len(values) == len(names):
         return {int(v): n for v, n in zip(values, names, strict=True)}
     return {int(s): s.label for s in Status}

@@ -38,6 +38,7 @@ from functools import partial
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import named, variable
 from workbench._progress import TimeLeft
 from workbench.precision._measures import (
     ERRORS,
@@ -399,28 +400,24 @@ def _dataset(methods, tolerances, out, status, failures, solver_warnings, limite
         "the reference spread",
     }
     dims = ("solver_method", "rtol")
-    data = {
-        k: (dims, v, {"units": units.get(k, "1"), "long_name": long_names[k]})
-        for k, v in out.items()
-    }
+    data = {k: (dims, v, variable(long_names[k], units.get(k, "1"))) for k, v in out.items()}
     data["at_reference_limit"] = (
         dims,
         limited,
-        {
-            "long_name": "errors that lie at the reference's own limit (not resolved)",
-            "units": "1",
-            "flag_masks": np.array(list(LIMIT_BITS.values()), np.int8),
-            "flag_meanings": " ".join(f"{k}_at_reference_limit" for k in LIMIT_BITS),
-            "comment": f"set where the error is within {LIMIT_FACTOR:g}x the reference's own "
+        variable(
+            "errors that lie at the reference's own limit (not resolved)",
+            flag_masks=np.array(list(LIMIT_BITS.values()), np.int8),
+            flag_meanings=" ".join(f"{k}_at_reference_limit" for k in LIMIT_BITS),
+            comment=f"set where the error is within {LIMIT_FACTOR:g}x the reference's own "
             "error (reference_error); recommend() does not use such errors",
-        },
+        ),
     )
     data["status"] = (dims, status, status_attrs("outcome of the setting's runs"))
-    data["failure"] = (dims, failures.astype(str), {"long_name": "failure message"})
+    data["failure"] = (dims, failures.astype(str), named("failure message"))
     data["solver_warnings"] = (
         dims,
         solver_warnings.astype(str),
-        {"long_name": "warnings raised by the setting's runs (with counts)", "units": "1"},
+        variable("warnings raised by the setting's runs (with counts)"),
     )
     return xr.Dataset(
         data,
@@ -428,12 +425,12 @@ def _dataset(methods, tolerances, out, status, failures, solver_warnings, limite
             "solver_method": (
                 "solver_method",
                 list(methods),
-                {"long_name": "solver method", "units": "1"},
+                variable("solver method"),
             ),
             "rtol": (
                 "rtol",
                 np.asarray(tolerances, float),
-                {"long_name": "rtol = atol", "units": "1"},
+                variable("rtol = atol"),
             ),
         },
     )

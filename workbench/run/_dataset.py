@@ -11,6 +11,7 @@ from importlib.metadata import PackageNotFoundError, version
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
 from workbench._processor import processor_attrs
 from workbench._sources import code_digest
 from workbench._version import FORMAT_VERSION, __version__
@@ -33,7 +34,7 @@ __all__ = [
 ]
 
 _PACKAGES = ("workbench", "numpy", "scipy", "numba", "xarray", "netCDF4", "dask")
-TIME_ATTRS = {"units": "s", "long_name": "time", "standard_name": "time"}
+TIME_ATTRS = variable("time", "s", standard_name="time")
 
 
 def derive(prepared: Prepared, result: RunResult) -> tuple[dict[str, np.ndarray], RunResult]:
@@ -102,7 +103,7 @@ def to_dataset(prepared: Prepared, result: RunResult, derived: dict[str, np.ndar
     for name in prepared.variables:
         q = declared[name]
         values = result.Y[:, state_index[name]] if name in state_index else derived[name]
-        attrs = {"units": q.units, "long_name": q.long_name}
+        attrs = variable(q.long_name, q.units)
         if q.rate in prepared.variables:
             attrs["rate_variable"] = q.rate
         data_vars[name] = (("time",) + q.dims, values, attrs)
@@ -149,13 +150,7 @@ def end_state_attrs(prepared: Prepared, result: RunResult) -> dict:
 def status_attrs(long_name: str, extra: dict[int, str] | None = None) -> dict:
     """Attributes of an int8 variable of :class:`Status` flags (CF ``flag_values`` and
     ``flag_meanings``), with ``extra`` flags (value -> meaning) after the statuses."""
-    flags = {int(s): s.label for s in Status} | (extra or {})
-    return {
-        "long_name": long_name,
-        "units": "1",
-        "flag_values": np.array(list(flags), dtype=np.int8),
-        "flag_meanings": " ".join(flags.values()),
-    }
+    return flags(long_name, {int(s): s.label for s in Status} | (extra or {}))
 
 
 def run_status(ds: xr.Dataset) -> Status:

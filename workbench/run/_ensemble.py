@@ -33,6 +33,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from workbench._attributes import variable
 from workbench.solver import Problem
 
 __all__ = [
@@ -43,12 +44,11 @@ __all__ = [
 ]
 
 DEFAULT_PERTURBATION = 1e-9
-REALISATION_ATTRS = {
-    "standard_name": "realization",  # CF: "labelling members of a model ensemble"
-    "units": "1",
-    "long_name": "realisation of the ensemble (0: unperturbed initial state; k > 0: initial "
+REALISATION_ATTRS = variable(
+    "realisation of the ensemble (0: unperturbed initial state; k > 0: initial "
     "state perturbed by perturbation * atol_scale * N(0, 1), generator seeded by k)",
-}
+    standard_name="realization",
+)
 
 
 def perturb_initial_state(

@@ -20,6 +20,7 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
+from workbench._attributes import variable
 from workbench.models import Model
 
 __all__ = ["PARAMETERS_ATTR", "parameter_coords"]
@@ -68,7 +69,7 @@ def parameter_coords(
     for p in model.parameters:
         if p.name in skip or p.name not in parameters:
             continue
-        attrs = {"units": p.units, "long_name": p.long_name, "comment": _COMMENT}
+        attrs = variable(p.long_name, p.units, comment=_COMMENT)
         name = p.name
         if name in taken:
             name = f"parameter_{p.name}"

@@ -19,6 +19,7 @@ import numpy as np
 import xarray as xr
 
 from workbench import analysis
+from workbench._attributes import named, variable
 from workbench.run import simulate
 from workbench.scene import Scene
 
@@ -137,47 +138,47 @@ def exponent_table(
     lle = np.array([r["lle"] for r in rows])
     return xr.Dataset(
         {
-            "lle": ("method", lle, {"units": "s-1", "long_name": "largest Lyapunov exponent"}),
+            "lle": ("method", lle, variable("largest Lyapunov exponent", "s-1")),
             "lle_per_cycle": (
                 "method",
                 lle * period,
-                {"units": "1", "long_name": "largest Lyapunov exponent per crank cycle"},
+                variable("largest Lyapunov exponent per crank cycle"),
             ),
             "stderr": (
                 "method",
                 [r["stderr"] for r in rows],
-                {"units": "s-1", "long_name": "standard error of the finite window"},
+                variable("standard error of the finite window", "s-1"),
             ),
             "trusted": (
                 "method",
                 [r["trusted"] for r in rows],
-                {"long_name": "converged (equations) or reliable (Wolf)"},
+                named("converged (equations) or reliable (Wolf)"),
             ),
-            "note": ("method", [r["note"] for r in rows], {"long_name": "evidence"}),
+            "note": ("method", [r["note"] for r in rows], named("evidence")),
             "wall_time": (
                 "method",
                 [r["wall_time"] for r in rows],
-                {"units": "s", "long_name": "wall time of the estimate"},
+                variable("wall time of the estimate", "s"),
             ),
             "spectrum": (
                 "index",
                 spectrum.exponent.values,
-                {"units": "s-1", "long_name": "largest Lyapunov exponents (variational equations)"},
+                variable("largest Lyapunov exponents (variational equations)", "s-1"),
             ),
             "spectrum_stderr": (
                 "index",
                 spectrum.stderr.values,
-                {"units": "s-1", "long_name": "their standard errors (batch means)"},
+                variable("their standard errors (batch means)", "s-1"),
             ),
             "spectrum_trusted": (
                 "index",
                 spectrum.trusted.values,
-                {"long_name": "converged, agrees at rtol/100, standard error <= 20 %"},
+                named("converged, agrees at rtol/100, standard error <= 20 %"),
             ),
         },
         coords={
             "method": ("method", [r["method"] for r in rows]),
-            "index": ("index", spectrum.index.values, {"long_name": "exponent index"}),
+            "index": ("index", spectrum.index.values, named("exponent index")),
         },
         attrs={
             "forcing_period": period,

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.archive import SERIES_DIMS
 from workbench.models import get_model
 from workbench.scene import Scene
@@ -137,7 +138,7 @@ def contact_fraction(force: xr.DataArray) -> xr.DataArray:
     valid = np.isfinite(force)
     rdim = record_dim(force)
     out = (force > 0).where(valid).sum(rdim) / valid.sum(rdim)
-    return out.assign_attrs(units="1", long_name="fraction of the time in contact")
+    return out.assign_attrs(variable("fraction of the time in contact"))
 
 
 def force_percentiles(force: xr.DataArray, q: tuple[float, ...] = PERCENTILES) -> xr.DataArray:
@@ -145,10 +146,10 @@ def force_percentiles(force: xr.DataArray, q: tuple[float, ...] = PERCENTILES) -
     percentiles over the record (zero while out of contact); new dim ``percentile`` (%)."""
     out = force.quantile(np.asarray(q) / 100.0, dim=record_dim(force), skipna=True)
     out = out.rename(quantile="percentile").assign_coords(
-        percentile=("percentile", np.asarray(q), {"units": "%", "long_name": "percentile"})
+        percentile=("percentile", np.asarray(q), variable("percentile", "%"))
     )
     return out.assign_attrs(
-        units=force.attrs.get("units", "N"), long_name="percentile of the contact force over time"
+        variable("percentile of the contact force over time", force.attrs.get("units", "N"))
     )
 
 
@@ -159,9 +160,8 @@ def energy_per_cycle(ds: xr.Dataset, var: str) -> xr.DataArray:
     t = ds["time"]
     span = (t.isel(time=-1) - t.isel(time=0)) / float(ds.attrs["forcing_period"])
     out = (da.isel(time=-1) - da.isel(time=0)) / span
-    return out.drop_vars("time", errors="ignore").assign_attrs(
-        units="J", long_name=f"{da.attrs.get('long_name', var)}: change per crank cycle"
-    )
+    long_name = f"{da.attrs.get('long_name', var)}: change per crank cycle"
+    return out.drop_vars("time", errors="ignore").assign_attrs(variable(long_name, "J"))
 
 
 def friction_law(ds: xr.Dataset, scene: Scene) -> dict[str, list[float]]:

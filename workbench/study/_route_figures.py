@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from workbench._attributes import flag_names
 from workbench.archive import open_run
 from workbench.plot import LABEL_MARKS, display_unit
 from workbench.plot._base import plt, units_label
@@ -130,7 +131,7 @@ def _branch(ax, branch, param: str, scale: float, state: str, scene, joint: str)
             seg = slice(start, min(i + 1, p.size))
             ax.plot(p[seg], y[seg], "-" if stable[start] else "--", color="k", lw=1.1)
             start = i
-    names = branch.label.attrs["flag_meanings"].split()
+    names = flag_names(branch.label)
     for i in np.flatnonzero(branch.label.values >= 3):
         marker, text, colour = LABEL_MARKS[names[int(branch.label.values[i])]]
         ax.plot(p[i], y[i], marker, mfc="none", mec=colour, ms=7, mew=1.5)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flag_names
 from workbench.archive import save_run
 from workbench.study._measure import CLEARANCE_COORDINATES, clearance_of, select
 
@@ -113,7 +114,7 @@ def branch_summary(
         lowest = np.min(branch.event_min.values, axis=1)
     else:
         lowest = np.full(stable.size, np.nan)
-    names = branch.label.attrs["flag_meanings"].split()
+    names = flag_names(branch.label)
     return {
         "archive": str(path),
         "start": start,

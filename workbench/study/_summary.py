@@ -9,6 +9,7 @@ import re
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import named, variable
 from workbench.run import REALISATION_ATTRS
 from workbench.scene import Scene
 from workbench.study._measure import PEAK_PERIODS
@@ -35,7 +36,7 @@ def summary_dataset(
     names = list(members)
     n_real = study.realisations
     coords = {
-        "member": ("member", names, {"long_name": "case or view of the study", "units": "1"}),
+        "member": ("member", names, variable("case or view of the study")),
         "realisation": ("realisation", np.arange(n_real), dict(REALISATION_ATTRS)),
     }
     data: dict = {}
@@ -52,6 +53,7 @@ def summary_dataset(
             data[var] = (
                 ("member", "realisation"),
                 arr,
+                # by hand: a measure's units may be unknown (""), which variable() refuses
                 {"units": units_of(key), "long_name": long_name.format(key=key)},
             )
 
@@ -97,7 +99,7 @@ def summary_dataset(
         data[f"friction_law_{key}"] = (
             ("member", "realisation"),
             arr,
-            {"units": units, "long_name": long_name},
+            variable(long_name, units),
         )
     for row in paper_rows:
         if row["statistic"] != "peak":
@@ -107,6 +109,7 @@ def summary_dataset(
             data[var] = (
                 ("member",),
                 np.full(len(names), np.nan),
+                # by hand: units may be unknown (""), which variable() refuses
                 {"units": row["units"], "long_name": f"the paper's peak of {row['quantity']}"},
             )
         data[var][1][names.index(row["case"])] = row["paper"]
@@ -115,7 +118,7 @@ def summary_dataset(
         coords["coordinate"] = (
             "coordinate",
             labels,
-            {"long_name": "clearance coordinate (x1, y1: joint A; x2, y2: joint B)", "units": "1"},
+            variable("clearance coordinate (x1, y1: joint A; x2, y2: joint B)"),
         )
         for field, u, long_name in (
             ("wolf_lle", "s-1", "largest Lyapunov exponent (Wolf et al. 1985)"),
@@ -124,21 +127,21 @@ def summary_dataset(
             arr = np.full((len(labels), n_real), np.nan)
             for i, k in enumerate(labels):
                 arr[i, : len(measures[field][k])] = measures[field][k]
-            data[field] = (("coordinate", "realisation"), arr, {"units": u, "long_name": long_name})
+            data[field] = (("coordinate", "realisation"), arr, variable(long_name, u))
     exponents = measures.get("exponents")
     if exponents:
-        coords["method"] = ("method", exponents["method"], {"long_name": "estimator", "units": "1"})
+        coords["method"] = ("method", exponents["method"], variable("estimator"))
         for field, units, long_name in (
             ("lle", "s-1", "largest Lyapunov exponent of realisation 0 by each method"),
             ("lle_per_cycle", "1", "the same per crank cycle"),
             ("stderr", "s-1", "standard error of the finite window"),
         ):
             values = np.array([np.nan if v is None else v for v in exponents[field]], float)
-            data[f"exponent_{field}"] = ("method", values, {"units": units, "long_name": long_name})
+            data[f"exponent_{field}"] = ("method", values, variable(long_name, units))
         data["exponent_trusted"] = (
             "method",
             np.array(exponents["trusted"], bool),
-            {"long_name": "converged (equations) or reliable (Wolf)"},
+            named("converged (equations) or reliable (Wolf)"),
         )
     spread = measures.get("bifurcation_spread")
     if spread:
@@ -155,32 +158,30 @@ def summary_dataset(
             data[f"bifurcation_{field}"] = (
                 (param, "realisation"),
                 arr,
-                {"units": "1", "long_name": long_name},
+                variable(long_name),
             )
     ds = xr.Dataset(data, coords=coords)
     if sweeps:
         stacked = xr.concat(
             [d.expand_dims(sweep_case=[c]) for c, d in sweeps.items()], "sweep_case", join="outer"
         )
-        stacked["sweep_case"].attrs.update(long_name="case of the parameter sweep", units="1")
+        stacked["sweep_case"].attrs.update(variable("case of the parameter sweep"))
         stacked = stacked.assign_coords(
             realisation=ds["realisation"][: stacked.sizes["realisation"]]
         )
         ds = xr.merge([ds, stacked], combine_attrs="drop_conflicts")
     if claims:
-        ds = ds.assign_coords(
-            claim=("claim", np.arange(len(claims)), {"long_name": "claim", "units": "1"})
-        )
+        ds = ds.assign_coords(claim=("claim", np.arange(len(claims)), variable("claim")))
         for field in ("text", "verdict", "evidence", "reason"):
             ds[f"claim_{field}"] = (
                 "claim",
                 np.array([c.get(field, "") for c in claims], dtype=object),
-                {"units": "1", "long_name": f"{field} of the paper's claim"},
+                variable(f"{field} of the paper's claim"),
             )
         ds["claim_p_value"] = (
             "claim",
             np.array([c.get("p_value", math.nan) for c in claims], float),
-            {"units": "1", "long_name": "p-value of the claim's rank test"},
+            variable("p-value of the claim's rank test"),
         )
     ds.attrs.update(
         study=study.name,

@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.run import simulate
 from workbench.scene import SceneError, SceneSource, load_scene
 from workbench.verification._exudyn import run_exudyn
@@ -176,16 +177,16 @@ def verify(
     labels = ["workbench"] + [f"exudyn h={h:g}" for h in steps]
     ds = xr.concat(runs, dim="run", join="inner", combine_attrs="drop")
     ds = ds.assign_coords(
-        run=("run", labels, {"units": "1", "long_name": "run"}),
+        run=("run", labels, variable("run")),
         engine=("run", ["workbench"] + ["exudyn"] * len(steps), {"units": "1"}),
-        step=("run", [np.nan, *steps], {"units": "s", "long_name": "exudyn's fixed step"}),
+        step=("run", [np.nan, *steps], variable("exudyn's fixed step", "s")),
     )
     for v in variables:
         ds[v].attrs = dict(ours[v].attrs)
     ds["wall_time"] = (
         "run",
         [r.attrs["wall_time"] for r in runs],
-        {"units": "s", "long_name": "wall time"},
+        variable("wall time", "s"),
     )
     ref = ds.sel(run="workbench")
     errors = []
@@ -194,27 +195,25 @@ def verify(
         errors.append(diff / float(abs(ref[v]).max()))
     ds["max_relative_error"] = xr.concat(
         errors, dim=xr.DataArray(variables, dims="series")
-    ).assign_attrs(
-        units="1", long_name="largest difference from the workbench over its largest magnitude"
-    )
+    ).assign_attrs(variable("largest difference from the workbench over its largest magnitude"))
     if joints:
         first = [_first_impacts(ds.sel(run=r)) for r in labels]
         ds["first_impact_time"] = (
             ("run", "joint"),
             np.array([f[0] for f in first]),
-            {"units": "s", "long_name": "time of the first contact"},
+            variable("time of the first contact", "s"),
         )
         ds["first_impact_force"] = (
             ("run", "joint"),
             np.array([f[1] for f in first]),
-            {"units": "N", "long_name": "peak normal force of the first contact"},
+            variable("peak normal force of the first contact", "N"),
         )
         stats = [_statistics(ds.sel(run=r)) for r in labels]
         for name, (units, long_name) in STATISTICS.items():
             ds[name] = (
                 ("run", "joint"),
                 np.array([s[name] for s in stats]),
-                {"units": units, "long_name": long_name},
+                variable(long_name, units),
             )
     ds.attrs.update(
         title="workbench against exudyn",

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS
 from workbench.scene import Scene
@@ -315,7 +316,7 @@ def _dataset(scene: Scene, b: _Build, t: np.ndarray, series: dict, attrs: dict) 
         name: (
             ("time",) + declared[name].dims,
             values,
-            {"units": declared[name].units, "long_name": declared[name].long_name},
+            variable(declared[name].long_name, declared[name].units),
         )
         for name, values in series.items()
     }
