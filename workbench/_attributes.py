@@ -40,8 +40,9 @@ def variable(long_name: str, units: str = "1", /, **extra: object) -> dict:
 
 
 def named(long_name: str, /, **extra: object) -> dict:
-    """The attributes of a stored variable that carries no ``units``: text (a message, a note)
-    or a variable whose archives have never carried them; ``long_name``, then ``extra``."""
+    """The attributes of a text variable (a message, a note, a name), which CF gives no
+    ``units``: ``long_name``, then ``extra``. A number, a flag or a boolean takes
+    :func:`variable` (units ``"1"`` when dimensionless)."""
     return {"long_name": long_name, **extra}
 
 

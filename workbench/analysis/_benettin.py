@@ -17,7 +17,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._attributes import named, variable
+from workbench._attributes import variable
 from workbench.analysis._convergence import TARGET, agree, batch_error, judge, pooled
 from workbench.analysis._copies_run import follow_copies, joined
 from workbench.analysis._window import (
@@ -367,7 +367,7 @@ def _dataset(
     out = xr.Dataset(
         {
             "lle": ((), est["value"], variable("largest Lyapunov exponent", s)),
-            "converged": ((), info["converged"], named("every condition holds")),
+            "converged": ((), info["converged"], variable("every condition holds")),
             "stderr": ((), est["stderr"], variable(f"{e}, pooled", s)),
             "stderr_starts": ((), est["stderr_starts"], variable("spread", s)),
             "stderr_batches": ((), est["stderr_batches"], variable("batches", s)),
@@ -398,7 +398,7 @@ def _dataset(
         },
         coords={
             "variant": ("variant", info["names"]),
-            "start": ("start", np.arange(len(runs)), named("start (realisation offset)")),
+            "start": ("start", np.arange(len(runs)), variable("start (realisation offset)")),
             "elapsed": ("elapsed", elapsed, variable("time followed", "s")),
         },
         attrs={

@@ -181,7 +181,7 @@ def jacobian_spectrum(
         data,
         coords={
             "time": ("time", res.t, variable("time", "s")),
-            "eigen": ("eigen", np.arange(n), named("eigenvalue index")),
+            "eigen": ("eigen", np.arange(n), variable("eigenvalue index")),
             "modes": ("modes", kinds, named("mode of the records")),
         },
         attrs={
@@ -309,18 +309,26 @@ def floquet(
                 variable("imaginary part"),
             ),
             "modulus": ("multiplier", modulus, variable("|multiplier|")),
-            "orbit_state": ("state", x, named("state on the orbit at the strobe time")),
+            "orbit_state": (
+                "state",
+                x,
+                named(
+                    "state on the orbit at the strobe time",
+                    comment="each state in its own units: the coordinate state_units",
+                ),
+            ),
             "residual": (
                 (),
                 residual,
                 variable("scaled |P^k(x) - x| of the orbit state"),
             ),
-            "stable": ((), stable, named("all multipliers inside the unit circle")),
+            "stable": ((), stable, variable("all multipliers inside the unit circle")),
             "loss": ((), loss, named("how the largest multiplier leaves the unit circle")),
         },
         coords={
-            "multiplier": ("multiplier", np.arange(mu.size)),
-            "state": ("state", names),
+            "multiplier": ("multiplier", np.arange(mu.size), variable("multiplier index")),
+            "state": ("state", names, named("state variable")),
+            "state_units": ("state", [q.units for q in pb.states], named("units of the state")),
         },
         attrs={
             "periods": periods,

@@ -152,7 +152,7 @@ def exponent_table(
             "trusted": (
                 "method",
                 [r["trusted"] for r in rows],
-                named("converged (equations) or reliable (Wolf)"),
+                variable("converged (equations) or reliable (Wolf)"),
             ),
             "note": ("method", [r["note"] for r in rows], named("evidence")),
             "wall_time": (
@@ -173,12 +173,12 @@ def exponent_table(
             "spectrum_trusted": (
                 "index",
                 spectrum.trusted.values,
-                named("converged, agrees at rtol/100, standard error <= 20 %"),
+                variable("converged, agrees at rtol/100, standard error <= 20 %"),
             ),
         },
         coords={
             "method": ("method", [r["method"] for r in rows]),
-            "index": ("index", spectrum.index.values, named("exponent index")),
+            "index": ("index", spectrum.index.values, variable("exponent index")),
         },
         attrs={
             "forcing_period": period,

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import xarray as xr
 
-from workbench._attributes import named, variable
+from workbench._attributes import variable
 from workbench.run import REALISATION_ATTRS
 from workbench.scene import Scene
 from workbench.study._measure import PEAK_PERIODS
@@ -141,7 +141,7 @@ def summary_dataset(
         data["exponent_trusted"] = (
             "method",
             np.array(exponents["trusted"], bool),
-            named("converged (equations) or reliable (Wolf)"),
+            variable("converged (equations) or reliable (Wolf)"),
         )
     spread = measures.get("bifurcation_spread")
     if spread:
