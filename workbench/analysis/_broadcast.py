@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench.analysis._broadcast_layout import Layout, all_failed
+from workbench.analysis._broadcast_layout import ResultLayout, all_failed
 from workbench.analysis._series import seconds
 from workbench.archive import RECORD_DIM, RECORD_TIME
 
@@ -153,7 +153,7 @@ def broadcast(
             first = next(iter(results.values()), "x has no points")
             raise ValueError(f"the estimator failed at every probed point of x: {first}")
         return all_failed(x, loop, results, shape)
-    layout = Layout(good, loop, evidence_sizes, lazy)
+    layout = ResultLayout(good, loop, evidence_sizes, lazy)
     if not lazy:
         arrays = layout.allocate(shape)
         for i, r in results.items():

@@ -12,7 +12,7 @@ import xarray as xr
 
 from workbench._attributes import flags, variable
 
-__all__ = ["COMPLETE", "ERROR", "Layout", "all_failed"]
+__all__ = ["COMPLETE", "ERROR", "ResultLayout", "all_failed"]
 
 ERROR = "analysis_error"
 COMPLETE = "evidence_complete"
@@ -38,7 +38,7 @@ def _fill_value(dtype: np.dtype):
     return ""
 
 
-class Layout:
+class ResultLayout:
     """The variables of the combined result and their sizes, from the probed points' results."""
 
     def __init__(self, results: list[xr.Dataset], loop: tuple[str, ...], sizes, lazy: bool):

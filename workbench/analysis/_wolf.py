@@ -9,7 +9,8 @@ separates its high-level calls from the low-level ones on an embedded data set:
 1. choose the embedding (:func:`~workbench.analysis._wolf_embedding.choose_embedding` and
    :func:`~workbench.analysis._wolf_embedding.choose_scales`),
 2. evolve (:func:`~workbench.analysis._wolf_follow.follow`, Wolf et al.'s FET program),
-3. judge (:func:`~workbench.analysis._wolf_judge.judge`: the reliability flag and its reasons).
+3. judge (:func:`~workbench.analysis._wolf_judge.wolf_verdict`: the reliability flag and its
+   reasons).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from workbench.analysis._wolf_embedding import (
     smoothness,
 )
 from workbench.analysis._wolf_follow import Followed, follow
-from workbench.analysis._wolf_judge import Verdict, correlation_dimension, judge
+from workbench.analysis._wolf_judge import Verdict, correlation_dimension, wolf_verdict
 
 __all__ = ["wolf_lle", "mean_period", "smoothness", "correlation_dimension"]
 
@@ -249,7 +250,7 @@ def wolf_lle(
     running_per_sample = np.cumsum(followed.logs) / elapsed_samples
     per_sample = float(running_per_sample[-1])
     # 3. judge
-    verdict = judge(s, emb, scales, followed.tree, per_sample, surrogates=int(surrogates))
+    verdict = wolf_verdict(s, emb, scales, followed.tree, per_sample, surrogates=int(surrogates))
     return _result(
         s, emb, scales, followed, verdict, running_per_sample, elapsed_samples, max_angle, period
     )

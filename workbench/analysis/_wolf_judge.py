@@ -27,7 +27,7 @@ from workbench.analysis._wolf_embedding import (
     Scales,
 )
 
-__all__ = ["Verdict", "correlation_dimension", "judge"]
+__all__ = ["Verdict", "correlation_dimension", "wolf_verdict"]
 
 #: largest exponent per sample (lambda dt) at which a sampled flow's separations are resolved:
 #: beyond it a separation grows by more than ~10 % between samples
@@ -119,7 +119,7 @@ def _sampling_messages(s: Series, *, flow, chosen_flow, smooth, per_sample, spp)
     return msgs
 
 
-def judge(
+def wolf_verdict(
     s: Series,
     emb: Embedding,
     scales: Scales,
