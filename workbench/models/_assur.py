@@ -9,8 +9,8 @@ velocity and acceleration routines are a few products each.
 
 Every routine takes and returns scalars (no arrays), and is inlined into its caller
 (``inline="always"``), so that a whole mechanism's pass compiles to straight-line code in
-registers. Used by the ``ninebar`` (two RRR dyads and an RRP dyad) and the ``slider_crank`` (an
-RRP dyad). Units: m, rad, s.
+registers. Used by the ``ninebar`` (two RRR dyads and an RRP dyad), the ``slider_crank`` (an
+RRP dyad) and declared linkages (RRR, RRP and RPR dyads). Units: m, rad, s.
 """
 
 from __future__ import annotations
@@ -25,6 +25,9 @@ __all__ = [
     "rrp_acceleration",
     "rrp_position",
     "rrp_velocity",
+    "rpr_acceleration",
+    "rpr_position",
+    "rpr_velocity",
     "rrr_acceleration",
     "rrr_position",
     "rrr_velocity",
@@ -219,6 +222,98 @@ def rrp_acceleration(c, s, fw, fs, length, ux, uy, w, adx, ady):
     """
     lw2 = length * w * w
     return rrp_velocity(c, s, fw, fs, ux, uy, adx - lw2 * c, ady - lw2 * s)
+
+
+@njit(cache=True, inline="always")
+def rpr_position(x1, y1, x2, y2, offset, side):
+    """RPR dyad, position: a guide link pivoted at P1 whose line passes through the pin P2 of a
+    block that slides along it (the inverted slider-crank, Whitworth's quick return).
+
+    The guide's line lies at the signed distance ``offset`` from P1 along its normal
+    n = perp(u), perp(c, s) = (-s, c): n.(P2 - P1) = offset, an intersection of the line's
+    normal with a circle (Hartenberg & Denavit 1964; Uicker, Pennock & Shigley, the inverted
+    slider-crank). With d = P2 - P1, L = |d| and h = u.d, the closed form is
+    n = (offset d + h perp(d)) / L^2, h = side sqrt(L^2 - offset^2). Also returns the factor
+    that solves the velocity and acceleration equations.
+
+    Parameters
+    ----------
+    x1, y1, x2, y2 : float
+        Pivot P1 of the guide and pin P2 of the block (m).
+    offset : float
+        Signed distance of the guide's line from P1 along n (m); 0 for a line through P1.
+    side : float
+        +1: P2 ahead of the foot of P1 on the line along u (u.d > 0); -1: behind it.
+
+    Returns
+    -------
+    (ok, c, s, h, f) : (bool, float, ...)
+        Unit direction u = (c, s) of the guide's line, h = u.(P2 - P1) (m) and f = 1 / h (m-1).
+        ok is False (the rest zero) where P2 lies within |offset| of P1, or on NaN.
+    """
+    dx = x2 - x1
+    dy = y2 - y1
+    d2 = dx * dx + dy * dy
+    h2 = d2 - offset * offset
+    if not h2 > 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0
+    h = side * math.sqrt(h2)
+    inv_d2 = 1.0 / d2
+    nx = (offset * dx - h * dy) * inv_d2
+    ny = (offset * dy + h * dx) * inv_d2
+    return True, ny, -nx, h, 1.0 / h  # u = -perp(n)
+
+
+@njit(cache=True, inline="always")
+def rpr_velocity(c, s, offset, f, vx, vy):
+    """RPR dyad, velocity: the guide's angular velocity and the block's sliding velocity.
+
+    Differentiates n.d = offset (n' = -w u) and s_P2 = u.d - const (u' = w n), with
+    d' = v_P2 - v_P1: w = f n.d', and the sliding velocity along u, s' = w offset + u.d'.
+
+    Parameters
+    ----------
+    c, s, offset, f : float
+        From :func:`rpr_position` and the line's offset (m).
+    vx, vy : float
+        Relative velocity v_P2 - v_P1 (m s-1).
+
+    Returns
+    -------
+    (w, sdot) : (float, float)
+        Angular velocity of the guide and of the block (rad s-1), sliding velocity of the
+        block along u (m s-1).
+    """
+    w = f * (c * vy - s * vx)  # n = (-s, c)
+    return w, w * offset + c * vx + s * vy
+
+
+@njit(cache=True, inline="always")
+def rpr_acceleration(c, s, offset, f, w, vx, vy, ax, ay):
+    """RPR dyad, acceleration: al h = n.d'' - 2 w u.d' - w^2 offset (the Coriolis term
+    2 w u.d'), s'' = al offset + w n.d' + u.d''.
+
+    Parameters
+    ----------
+    c, s, offset, f : float
+        From :func:`rpr_position` and the line's offset (m).
+    w : float
+        Angular velocity from :func:`rpr_velocity` (rad s-1).
+    vx, vy : float
+        Relative velocity v_P2 - v_P1 (m s-1).
+    ax, ay : float
+        Relative acceleration a_P2 - a_P1 (m s-2).
+
+    Returns
+    -------
+    (al, sddot) : (float, float)
+        Angular acceleration of the guide and of the block (rad s-2), sliding acceleration of
+        the block along u (m s-2).
+    """
+    un = c * vx + s * vy  # u.d'
+    nv = c * vy - s * vx  # n.d'
+    al = f * (c * ay - s * ax - 2.0 * w * un - w * w * offset)
+    return al, al * offset + w * nv + c * ax + s * ay
 
 
 @njit(cache=True, inline="always")
