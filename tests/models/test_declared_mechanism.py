@@ -451,6 +451,12 @@ ERRORS = {
         "mechanism.groups[coupler_rocker]",
         "the loop does not close at crank angle 123.00 deg of crank 'crank'",
     ),
+    "joint_that_no_group_closes": (
+        # the coupler pinned to the ground at O4 as well: a redundant joint, no group closes it
+        _set(("links", 1, "points", "O4"), [0.1, 0.0]),
+        "mechanism.links[coupler]",
+        "'ground' and 'coupler' put their joint 'O4' 0.",
+    ),
     "mass_not_positive": (
         _set(("links", 2, "mass"), 0.0),
         "mechanism.links[rocker].mass",
