@@ -43,7 +43,7 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from workbench._errors import SceneError
 from workbench.models._clearance import contact_parameters, validate_joint
@@ -116,11 +116,31 @@ def _set(obj: Any, **values: Any) -> None:
         object.__setattr__(obj, name, value)
 
 
+class _Part:
+    """What every part of a declaration has: the key of its table in the scene,
+    ``mechanism.<section>[<its name>]``, for the messages that name it."""
+
+    section: ClassVar[str]
+    named_by: ClassVar[str] = "name"
+
+    @property
+    def key(self) -> str:
+        """Where the part's fields are, in the scene."""
+        return f"mechanism.{self.section}[{getattr(self, self.named_by)}]"
+
+    def _named(self) -> str:
+        """Check the part's name; its key."""
+        _name(getattr(self, self.named_by), f"mechanism.{self.section}.{self.named_by}")
+        return self.key
+
+
 # -- the parts -----------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
-class Link:
+class Link(_Part):
     """A rigid link: its points in its own frame (m), mass (kg), moment of inertia about its
     centre of mass (kg m2) and centre of mass in its frame (m)."""
+
+    section = "links"
 
     name: str
     points: Mapping[str, tuple[float, float]]
@@ -128,13 +148,8 @@ class Link:
     inertia: float
     centre_of_mass: tuple[float, float]
 
-    @property
-    def key(self) -> str:
-        """Where the link's fields are, in the scene."""
-        return f"mechanism.links[{self.name}]"
-
     def __post_init__(self) -> None:
-        key = f"mechanism.links[{_name(self.name, 'mechanism.links.name')}]"
+        key = self._named()
         _set(
             self,
             points=_points(self.points, f"{key}.points"),
@@ -145,11 +160,13 @@ class Link:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Slider:
+class Slider(_Part):
     """A body that translates along a fixed guide, the line through the ground point ``guide``
     at the angle ``angle`` (rad); ``pin`` names the point at its frame's origin, ``offset`` (m)
     shifts its position along the guide, ``centre_of_mass`` is in its frame (m, +X along the
     guide)."""
+
+    section = "sliders"
 
     name: str
     pin: str
@@ -160,17 +177,12 @@ class Slider:
     centre_of_mass: tuple[float, float] = (0.0, 0.0)
 
     @property
-    def key(self) -> str:
-        """Where the slider's fields are, in the scene."""
-        return f"mechanism.sliders[{self.name}]"
-
-    @property
     def points(self) -> dict[str, tuple[float, float]]:
         """The slider's one point, its pin, at its frame's origin (m)."""
         return {self.pin: (0.0, 0.0)}
 
     def __post_init__(self) -> None:
-        key = f"mechanism.sliders[{_name(self.name, 'mechanism.sliders.name')}]"
+        key = self._named()
         _set(
             self,
             pin=_name(self.pin, f"{key}.pin"),
@@ -183,22 +195,20 @@ class Slider:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Crank:
+class Crank(_Part):
     """A link driven about the ground point ``pivot`` (one of its points) at the constant speed
     ``omega`` (rad s-1, counter-clockwise positive): its angle is ``angle0 + omega t`` (rad)."""
+
+    section = "cranks"
+    named_by = "link"
 
     link: str
     pivot: str
     omega: float
     angle0: float = 0.0
 
-    @property
-    def key(self) -> str:
-        """Where the crank's fields are, in the scene."""
-        return f"mechanism.cranks[{self.link}]"
-
     def __post_init__(self) -> None:
-        key = f"mechanism.cranks[{_name(self.link, 'mechanism.cranks.link')}]"
+        key = self._named()
         _set(
             self,
             pivot=_name(self.pivot, f"{key}.pivot"),
@@ -210,8 +220,10 @@ class Crank:
 
 
 @dataclass(frozen=True, kw_only=True)
-class RRR:
+class RRR(_Part):
     """RRR dyad: ``links[i]`` runs from the known point ``points[i]`` to the common ``joint``."""
+
+    section = "groups"
 
     name: str
     links: tuple[str, str]
@@ -221,13 +233,8 @@ class RRR:
 
     kind = "RRR"
 
-    @property
-    def key(self) -> str:
-        """Where the group's fields are, in the scene."""
-        return f"mechanism.groups[{self.name}]"
-
     def __post_init__(self) -> None:
-        key = f"mechanism.groups[{_name(self.name, 'mechanism.groups.name')}]"
+        key = self._named()
         _set(
             self,
             links=_names(self.links, f"{key}.links", 2),
@@ -244,14 +251,12 @@ class RRR:
         """The bodies the group solves."""
         return self.links
 
-    def joints(self) -> tuple[tuple[str, str], ...]:
-        """(body, point) pairs it solves that must be points of their bodies."""
-        return tuple((link, self.joint) for link in self.links)
-
 
 @dataclass(frozen=True, kw_only=True)
-class RRP:
+class RRP(_Part):
     """RRP dyad: ``link`` runs from the known ``point`` to the pin of ``slider``."""
+
+    section = "groups"
 
     name: str
     link: str
@@ -261,13 +266,8 @@ class RRP:
 
     kind = "RRP"
 
-    @property
-    def key(self) -> str:
-        """Where the group's fields are, in the scene."""
-        return f"mechanism.groups[{self.name}]"
-
     def __post_init__(self) -> None:
-        key = f"mechanism.groups[{_name(self.name, 'mechanism.groups.name')}]"
+        key = self._named()
         _set(
             self,
             link=_name(self.link, f"{key}.link"),
@@ -284,17 +284,14 @@ class RRP:
         """The bodies the group solves."""
         return (self.link, self.slider)
 
-    def joints(self) -> tuple[tuple[str, str], ...]:
-        """(body, point) pairs it solves that must be points of their bodies: none beyond the
-        slider's pin, which the linkage checks on the link."""
-        return ()
-
 
 @dataclass(frozen=True, kw_only=True)
-class RPR:
+class RPR(_Part):
     """RPR dyad: the link ``guide`` turns about its known point ``pivot``; its line through
     its points ``line[0]`` -> ``line[1]`` passes through the known ``pin`` of the link
     ``block``, which slides along it and turns with it."""
+
+    section = "groups"
 
     name: str
     guide: str
@@ -306,13 +303,8 @@ class RPR:
 
     kind = "RPR"
 
-    @property
-    def key(self) -> str:
-        """Where the group's fields are, in the scene."""
-        return f"mechanism.groups[{self.name}]"
-
     def __post_init__(self) -> None:
-        key = f"mechanism.groups[{_name(self.name, 'mechanism.groups.name')}]"
+        key = self._named()
         _set(
             self,
             guide=_name(self.guide, f"{key}.guide"),
@@ -331,20 +323,19 @@ class RPR:
         """The bodies the group solves."""
         return (self.guide, self.block)
 
-    def joints(self) -> tuple[tuple[str, str], ...]:
-        """(body, point) pairs it solves that must be points of their bodies."""
-        return tuple((self.guide, p) for p in self.line)
-
 
 GROUP_KINDS = {cls.kind: cls for cls in (RRR, RRP, RPR)}
 Group = RRR | RRP | RPR
 
 
 @dataclass(frozen=True, kw_only=True)
-class Clearance:
+class Clearance(_Part):
     """A radial clearance (m) in the revolute joint ``joint`` between the journal's body and
     the bearing's body, with its contact and friction parameters (names, units and bounds of
     the built-in mechanisms: :data:`CONTACT_PARAMETERS`)."""
+
+    section = "clearances"
+    named_by = "joint"
 
     joint: str
     journal: str
@@ -371,17 +362,12 @@ class Clearance:
     lugre_stribeck_velocity: float = _D["lugre_stribeck_velocity"]
     lugre_stribeck_exponent: float = _D["lugre_stribeck_exponent"]
 
-    @property
-    def key(self) -> str:
-        """Where the clearance's fields are, in the scene."""
-        return f"mechanism.clearances[{self.joint}]"
-
     def parameters(self) -> dict[str, float]:
         """The joint's contact and friction parameters by the built-ins' names (SI)."""
         return {name: getattr(self, name) for name in CONTACT_PARAMETERS}
 
     def __post_init__(self) -> None:
-        key = f"mechanism.clearances[{_name(self.joint, 'mechanism.clearances.joint')}]"
+        key = self._named()
         _set(self, journal=_name(self.journal, f"{key}.journal"))
         _set(self, bearing=_name(self.bearing, f"{key}.bearing"))
         for name, p in CONTACT_PARAMETERS.items():
@@ -482,7 +468,7 @@ class Linkage:
         ):
             seen = {GROUND} if what == "links and sliders" else set()
             for part in parts:
-                n = getattr(part, _NAMED_BY.get(type(part), "name"))
+                n = getattr(part, part.named_by)
                 if n in seen:
                     raise SceneError(
                         part.key,
@@ -623,7 +609,6 @@ class Linkage:
 
 # -- tables ----------------------------------------------------------------------------------------
 _PARTS = {"links": Link, "cranks": Crank, "sliders": Slider, "clearances": Clearance}
-_NAMED_BY = {Link: "name", Slider: "name", Crank: "link", Clearance: "joint"}
 
 
 def _build(cls: type, table: Any, key: str) -> Any:
@@ -631,7 +616,7 @@ def _build(cls: type, table: Any, key: str) -> Any:
     if not isinstance(table, Mapping):
         raise SceneError(key, f"got {table!r}; must be a table")
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    named = table.get(_NAMED_BY.get(cls, "name"))
+    named = table.get(cls.named_by)
     key = f"{key}[{named}]" if isinstance(named, str) else key
     for k in table:
         if k not in fields and k != "kind":
