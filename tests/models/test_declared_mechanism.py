@@ -386,6 +386,13 @@ def test_a_declaration_round_trips_through_toml(name):
     assert to_table(again) == written
 
 
+def test_an_rpr_declaration_round_trips_through_toml():
+    linkage = inverted_slider_crank(0.05)
+    written = to_table(linkage)
+    assert written["groups"][0]["kind"] == "RPR" and written["groups"][0]["line"] == ["G0", "G1"]
+    assert from_table(tomllib.loads(tomli_w.dumps({"mechanism": written}))["mechanism"]) == linkage
+
+
 def test_python_builds_the_same_declaration_as_the_file():
     from workbench.models._declaration import RRR, Clearance
 
