@@ -31,10 +31,12 @@ _RUN_ATTRS = (
     "reused_blocks",
     "campaign_wall_time",
     "campaign_compute_wall_time",
+    "campaign_cpu_time",
     "campaign_workers",
     "resume_workers",  # of a call that reused every block
     "resume_compute_wall_time",
     "resume_wall_time",
+    "resume_cpu_time",
     "campaign_chunk",
     "campaign_blocks",
     "campaign_id",

@@ -32,6 +32,7 @@ from workbench.solver import Status
 
 __all__ = [
     "BlockTask",
+    "Task",
     "INVALID",
     "RAISED",
     "STATUS",
@@ -94,14 +95,20 @@ MODEL_ENV = "WORKBENCH_CAMPAIGN_MODEL"  # its model_source(), JSON: imported the
 
 
 @dataclass(frozen=True)
-class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points (``flat``, indices into the
-    grid of the swept values ``axes``), where to write, and the module that defines the
+class Task:
+    """What one task of a campaign needs (the one task type of every plan, see ``_engine``):
+    the campaign scene (TOML), which points (``flat``, indices into the grid of the swept
+    values ``axes``, in the order they run), where to write, and the module that defines the
     scene's model when it is not one of workbench's (a user's model, registered when imported:
     a worker process that did not import it yet does so first), and the function (if any) that
     measures each point's run in the worker (``per_point``, see
     :func:`workbench.run_campaign`). Each point's values are looked up when the block runs
-    (:attr:`values`), not when it is planned."""
+    (:attr:`values`), not when it is planned.
+
+    A continued sweep's segment (:func:`workbench.continuation.continued_sweep`) runs its
+    points in order, each from the state the one before ended in: its first ``own_from``
+    points are seam points (computed only to compare), and ``seed_state`` / ``seed_aux`` (a
+    chained segment) the state its first point starts from."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -114,11 +121,18 @@ class BlockTask:
     model_module: str = ""  # model_source(): the module the user named, imported in the worker
     model_directory: str = ""  # where it lies, for a worker without it on its import path
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None
+    own_from: int = 0  # a segment's first own point (the ones before: seam points)
+    seed_state: tuple[float, ...] | None = None  # a chained segment: the state to start from
+    seed_aux: tuple[float, ...] | None = None  # ... and its discrete state
 
     @property
     def values(self) -> tuple[tuple[float, ...], ...]:
         """The parameter values of each point of the block, in ``dims`` order."""
         return SweepGrid(self.dims, self.axes).rows(self.flat)
+
+
+#: the name of :class:`Task` before the engine had one task type
+BlockTask = Task
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -222,19 +236,19 @@ def task_scene(scene_toml: str, model_module: str = "", model_directory: str = "
     return scene_from_toml(scene_toml)
 
 
-def run_block(task: BlockTask) -> dict:
+def run_block(task: Task) -> dict:
     """Run the points of one block and write them to ``task.path`` (atomically).
 
     Returns a summary: the SHA-256 of the file written, the digest of the code that computed it
     (``code_digest``, also an attribute of the file), block index, number of points, failures
-    ``[(flat, message)]``, wall time of the block and the sum of the solvers' wall times (s),
-    worker process id, and ``dataset``: the block as written (None when larger than
+    ``[(flat, message)]``, wall and CPU time of the block and the sum of the solvers' wall
+    times (s), worker process id, and ``dataset``: the block as written (None when larger than
     RETURN_LIMIT bytes; then read the file).
     """
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
     started = time.time()
-    wall0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     scene = task_scene(task.scene_toml, task.model_module, task.model_directory)
     runs = _points(scene, task)
     ds = block_dataset(scene, task.flat, runs)
@@ -249,10 +263,10 @@ def run_block(task: BlockTask) -> dict:
         block_wall_time=time.perf_counter() - wall0,
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
-    return block_summary(task, ds, runs, code, wall0, keep=ds.nbytes <= RETURN_LIMIT)
+    return block_summary(task, ds, runs, code, wall0, cpu0, keep=ds.nbytes <= RETURN_LIMIT)
 
 
-def _points(scene: Scene, task: BlockTask) -> list[dict]:
+def _points(scene: Scene, task: Task) -> list[dict]:
     """The outcomes of the points of a block (:func:`_point`), each prepared from the scene
     prepared once for them (a scene that cannot be prepared at all: each point's outcome is
     that error)."""
@@ -266,11 +280,12 @@ def _points(scene: Scene, task: BlockTask) -> list[dict]:
     return [_point(base, dict(zip(task.dims, v, strict=True)), task.per_point) for v in task.values]
 
 
-def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: float, *,
-                  keep: bool = True) -> dict:  # fmt: skip
+def block_summary(task: Task, ds: xr.Dataset, runs: list[dict], code: str, wall0: float,
+                  cpu0: float, *, keep: bool = True) -> dict:  # fmt: skip
     """What a worker returns for the block it wrote to ``task.path`` (a campaign's block or a
     continued sweep's segment): see :func:`run_block`; ``keep``: return the dataset itself,
-    ``wall0``: :func:`time.perf_counter` when the block started (s)."""
+    ``wall0`` and ``cpu0``: :func:`time.perf_counter` and :func:`time.process_time` when the
+    block started (s)."""
     return {
         "sha256": sha256_file(task.path),
         "code_digest": code,
@@ -281,6 +296,7 @@ def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: floa
             (f, r["failure"]) for f, r in zip(task.flat, runs, strict=True) if failed(r["status"])
         ],
         "wall": time.perf_counter() - wall0,
+        "cpu": time.process_time() - cpu0,
         "solver_wall": float(np.nansum(ds["solver_wall_time"].values)),
         "pid": os.getpid(),
     }
