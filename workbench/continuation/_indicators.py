@@ -30,6 +30,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags
 from workbench.analysis import poincare_section, zero_one_test
 from workbench.archive import save_run
 from workbench.campaign import expand_sweep, run_campaign
@@ -105,6 +106,14 @@ LLE_UNMET = {
 }
 
 
+LLE_SEEDED = flags(
+    "Newton's periodic orbit started from the previous point's along the map's axis",
+    ["from_run_end", "from_neighbour"],
+    comment="a map that carries state along an axis (chaos_map with along): where the "
+    "previous point was periodic, Newton starts from its orbit at the strobe and keeps the "
+    "orbit it finds there when that is the orbit the point's run ended on (1); else it starts "
+    "from the state the run ended in (0)",
+)
 LLE_FULL_PROTOCOL = {
     "long_name": "the full protocol of the exponent ran at this point too",
     "units": "1",
@@ -152,6 +161,8 @@ def chaos_indicators(
     full_protocol: bool = False,
     target: float = MAP_TARGET,
     sign: float = MAP_SIGN,
+    seed=None,
+    carry: bool = False,
 ) -> xr.Dataset:
     """The chaos indicators of one point (a campaign's ``per_point``): ``strobe_period``,
     ``zero_one_K`` (median over the recorded variables' components) and ``zero_one_K_<var>``
@@ -183,6 +194,13 @@ def chaos_indicators(
     sign : float
         The fast protocol's sign rule: standard errors beyond which the sign is decided
         (default :data:`~workbench.continuation._exponent.MAP_SIGN`, 3).
+    seed : (y, aux), optional
+        A neighbouring point's periodic orbit at the strobe, where Newton starts first
+        (:func:`~workbench.continuation.point_exponent`; from the run's end when it fails).
+    carry : bool
+        A map that carries state along an axis (:func:`chaos_map` with ``along``): add
+        ``lle_seeded`` (1 where Newton's orbit came from ``seed``) and leave this point's
+        periodic orbit (or None) in the attribute ``carry``, the next point's ``seed``.
     """
     section = poincare_section(run)
     out: dict = {}
@@ -229,6 +247,7 @@ def chaos_indicators(
         protocol="fast",
         target=target,
         sign=sign,
+        seed=seed,
     )
     out["lle"] = (
         (),
@@ -273,7 +292,11 @@ def chaos_indicators(
         full.error if full is not None else np.nan,
         {"long_name": "error of lle_full", "units": "s-1"},
     )
-    return xr.Dataset(out, attrs={"lle_detail": exp.detail})
+    attrs = {"lle_detail": exp.detail}
+    if carry:
+        out["lle_seeded"] = ((), np.int8(exp.seeded), LLE_SEEDED)
+        attrs["carry"] = exp.orbit
+    return xr.Dataset(out, attrs=attrs)
 
 
 def run_end(run: xr.Dataset) -> tuple[float, np.ndarray, np.ndarray | None]:
@@ -343,14 +366,33 @@ def full_subset(grid, fraction: float, seed: int) -> tuple[np.ndarray, float]:
     return chosen, float(keys[chosen].max())
 
 
+_GRID = object()  # a grid map's point: no neighbour to carry from
+
+
 def _map_point(
-    scene: Scene, run: xr.Dataset, *, dims: tuple, seed: int, threshold: float, **rule
+    scene: Scene,
+    run: xr.Dataset,
+    *,
+    dims: tuple,
+    subset_seed: int,
+    threshold: float,
+    orbit=_GRID,
+    **rule,
 ) -> xr.Dataset:
     """:func:`chaos_indicators` of one map point, with the full protocol where the point's
-    :func:`subset_key` is at most ``threshold`` (:func:`full_subset`)."""
+    :func:`subset_key` is at most ``threshold`` (:func:`full_subset`); ``orbit``: the
+    previous point's periodic orbit along a continued map's axis (None: none)."""
     values = {d: scene.parameters[d] if d in scene.parameters else scene.run[d] for d in dims}
-    full = subset_key(values, seed) <= threshold
-    return chaos_indicators(scene, run, full_protocol=full, **rule)
+    full = subset_key(values, subset_seed) <= threshold
+    if orbit is _GRID:
+        return chaos_indicators(scene, run, full_protocol=full, **rule)
+    return chaos_indicators(scene, run, full_protocol=full, seed=orbit, carry=True, **rule)
+
+
+def _carried_point(scene: Scene, run: xr.Dataset, *, seed=None, **kw) -> xr.Dataset:
+    """:func:`_map_point` of a map that carries state along an axis (a continued sweep's
+    ``per_point``: ``seed`` is the previous point's orbit)."""
+    return _map_point(scene, run, orbit=seed, **kw)
 
 
 def map_measurement(scene: Scene, fraction: float, seed: int, target: float, sign: float):
@@ -361,8 +403,8 @@ def map_measurement(scene: Scene, fraction: float, seed: int, target: float, sig
     grid = expand_sweep(scene)
     _, threshold = full_subset(grid, fraction, seed)
     fn = functools.partial(
-        _map_point, dims=tuple(scene.sweep), seed=int(seed), threshold=threshold,
-        target=float(target), sign=float(sign),
+        _carried_point if scene.continuation else _map_point, dims=tuple(scene.sweep),
+        subset_seed=int(seed), threshold=threshold, target=float(target), sign=float(sign),
     )  # fmt: skip
     fn.__module__ = __name__
     fn.__qualname__ = (
@@ -412,6 +454,7 @@ def chaos_map(
     full_seed: int = 0,
     target: float = MAP_TARGET,
     sign: float = MAP_SIGN,
+    along: str | None = None,
 ) -> xr.Dataset:
     """A campaign over the scene's ``[sweep]`` that measures the chaos indicators of every
     point in its worker (:func:`chaos_indicators`) and stores them over the parameter dims,
@@ -427,6 +470,13 @@ def chaos_map(
     how the two agree (:func:`subset_agreement`), with ``lle_full_fraction``,
     ``lle_full_seed``, ``lle_target`` and ``lle_sign``.
 
+    With ``along`` (a swept parameter; or a scene whose ``[sweep]`` has a ``continuation``)
+    the map runs as a continued sweep upwards along that axis
+    (:func:`workbench.continuation.continued_sweep`): each point's run starts from the state
+    the previous point's ended in, with the per-point transient, and where the previous
+    point was periodic, Newton starts from its orbit (``lle_seeded``; from the run's end
+    where that fails).
+
     The scene should record per forcing period (``record.samples_per_period = 1``) at least
     100 cycles (the 0-1 test needs 100 samples). Draw the maps with
     :func:`workbench.plot.chaos_map_figure`.
@@ -434,7 +484,8 @@ def chaos_map(
     Parameters
     ----------
     scene : Scene, path or mapping
-        A forced model with a ``[sweep]`` (without ``continuation``).
+        A forced model with a ``[sweep]`` (with a ``continuation``: the map carries state
+        along its axis, as with ``along``).
     store : str or PathLike
         Path of the campaign archive; blocks and manifest go to ``<store>.blocks/``.
     client : dask.distributed.Client, optional
@@ -456,6 +507,9 @@ def chaos_map(
         The fast protocol's relative error target (default 10 %).
     sign : float
         The fast protocol's sign rule, in standard errors (default 3).
+    along : str, optional
+        Carry state along this swept parameter (upwards, in the segments of
+        :func:`~workbench.continuation.continued_sweep`); not with ``chunk``.
 
     Returns
     -------
@@ -472,17 +526,44 @@ def chaos_map(
     scene = load_scene(scene)
     if not scene.sweep:
         raise ValueError("the scene has no [sweep]: a chaos map runs over a campaign's grid")
+    if along is not None:
+        if along not in scene.sweep:
+            raise ValueError(
+                f"along={along!r}: a map carries state along one of its swept parameters "
+                f"{list(scene.sweep)!r}"
+            )
+        scene = scene.replace(
+            sweep={**scene.sweep, "continuation": {"direction": "up", "along": along}}
+        )
     measure = map_measurement(scene, full_fraction, full_seed, target, sign)
-    maps = run_campaign(
-        scene,
-        store,
-        client=client,
-        workers=workers,
-        chunk=chunk,
-        restart=restart,
-        progress=progress,
-        per_point=measure,
-    )
+    if scene.continuation:
+        if chunk is not None:
+            raise ValueError(
+                f"chunk={chunk!r}: a map along an axis runs in the continuation's segments "
+                "(sweep.continuation.segments), not in chunks; drop chunk"
+            )
+        from workbench.continuation._sweep import continued_sweep
+
+        maps = continued_sweep(
+            scene,
+            store,
+            client=client,
+            workers=workers,
+            restart=restart,
+            progress=progress,
+            per_point=measure,
+        )
+    else:
+        maps = run_campaign(
+            scene,
+            store,
+            client=client,
+            workers=workers,
+            chunk=chunk,
+            restart=restart,
+            progress=progress,
+            per_point=measure,
+        )
     attrs = {
         "lle_full_fraction": float(full_fraction),
         "lle_full_seed": int(full_seed),
