@@ -8,6 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench._processor import PROCESSOR_ATTRS
 from workbench.archive import RECORD_DIM, RECORD_TIME
 from workbench.campaign._block import (
@@ -131,7 +132,7 @@ def assemble_blocks(
         data_vars["forcing_period"] = (
             pdims,
             periods,
-            {"units": "s", "long_name": "period of the external forcing"},
+            variable("period of the external forcing", "s"),
         )
     status = gather("status", -1).astype(np.int8)
     data_vars["status"] = (pdims, status, STATUS_ATTRS)
@@ -205,13 +206,13 @@ def _compiled_on(
     var = xr.DataArray(
         index.reshape(shape),
         dims=pdims,
-        attrs={
-            "long_name": "index of the processor and compile target that computed the point",
-            "units": "1",
-            "compile_targets": listing,
-            "comment": "other processors round differently: a chaotic quantity agrees across "
+        attrs=variable(
+            "index of the processor and compile target that computed the point",
+            "1",
+            compile_targets=listing,
+            comment="other processors round differently: a chaotic quantity agrees across "
             "them within its error, not in digits (docs/cluster.md)",
-        },
+        ),
     )
     mixed = "mixed: see the variable compiled_on"
     return var, dict.fromkeys(PROCESSOR_ATTRS, mixed)

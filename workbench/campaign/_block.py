@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench._processor import processor_attrs
 from workbench.archive import RECORD_DIM, RECORD_TIME, save_run, sha256_file
 from workbench.campaign._grid import SweepGrid, code_of, modules_of
@@ -66,7 +67,7 @@ STATUS_ATTRS["comment"] = (
 STATUS = dict(
     zip(STATUS_ATTRS["flag_values"].tolist(), STATUS_ATTRS["flag_meanings"].split(), strict=True)
 )
-FAILURE_ATTRS = {"long_name": "failure message of the point (empty when none)", "units": "1"}
+FAILURE_ATTRS = variable("failure message of the point (empty when none)", "1")
 # name in the dataset -> (attribute of simulate's dataset, dtype, missing value, attrs)
 STATS = {
     "solver_steps": ("solver_steps", np.int64, -1, "accepted solver steps"),
@@ -80,10 +81,7 @@ STATS = {
     "solver_events": ("solver_events", np.int64, -1, "located events"),
     "solver_wall_time": ("solver_wall_time", np.float64, np.nan, "integration wall time"),
 }
-POINT_WALL_ATTRS = {
-    "long_name": "wall time of the point (scene, problem, integration, dataset)",
-    "units": "s",
-}
+POINT_WALL_ATTRS = variable("wall time of the point (scene, problem, integration, dataset)", "s")
 
 _TASKS_IN_PROCESS = 0
 # A block dataset up to this size (bytes) also travels back to the client with the task's
@@ -149,10 +147,11 @@ def worker_start(pids, campaign: int) -> None:
 def stat_attrs(name: str) -> dict:
     _, dtype, missing, long_name = STATS[name]
     units = "s" if dtype is np.float64 else "1"
-    attrs = {"long_name": long_name, "units": units}
     if dtype is np.int64:
-        attrs["comment"] = f"{missing}: not available (the point did not run)"
-    return attrs
+        return variable(
+            long_name, units, comment=f"{missing}: not available (the point did not run)"
+        )
+    return variable(long_name, units)
 
 
 def failed(status: np.ndarray) -> np.ndarray:
@@ -324,7 +323,7 @@ def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
     for name in scene.variables:
         q = declared[name]
         arr = np.full((n, n_time) + tuple(msizes[d] for d in q.dims), np.nan)
-        attrs = {"units": q.units, "long_name": q.long_name}
+        attrs = variable(q.long_name, q.units)
         for i, r in enumerate(runs):
             if r["ds"] is not None and not failed(r["status"]):
                 v = r["ds"][name]
@@ -353,7 +352,7 @@ def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
         "point": (
             "point",
             np.array(flat, np.int64),
-            {"long_name": "flat (C-order) index of the point in the grid", "units": "1"},
+            variable("flat (C-order) index of the point in the grid", "1"),
         )
     }
     for d, (values, attrs) in mcoords.items():

@@ -30,7 +30,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from workbench._attributes import flags
+from workbench._attributes import flags, variable
 from workbench.analysis import poincare_section, zero_one_test
 from workbench.archive import save_run
 from workbench.campaign import expand_sweep, run_campaign
@@ -58,27 +58,21 @@ MAX_PERIOD = 16
 #: two strobe samples are the same point when they differ by less than this fraction of the
 #: largest magnitude of their variable
 PERIOD_TOLERANCE = 1e-4
-LLE_STATUS = {
-    "long_name": "outcome of the exponent's runs",
-    "units": "1",
-    "flag_values": np.array([0, 1, 2], np.int8),
-    "flag_meanings": "ok failed upper_bound",
-    "comment": "upper_bound: lle is an upper bound (the Floquet multipliers are below the noise "
+LLE_STATUS = flags(
+    "outcome of the exponent's runs",
+    ["ok", "failed", "upper_bound"],
+    comment="upper_bound: lle is an upper bound (the Floquet multipliers are below the noise "
     "of the copies' differences; lle_stderr NaN)",
-}
-LLE_METHOD = {
-    "long_name": "how the largest Lyapunov exponent was measured",
-    "units": "1",
-    "flag_values": np.arange(len(METHODS), dtype=np.int8),
-    "flag_meanings": " ".join(METHODS),
+)
+LLE_METHOD = flags(
+    "how the largest Lyapunov exponent was measured",
+    list(METHODS),
     **{f"method_{k}": v for k, v in METHODS.items()},
-}
-LLE_CONVERGED = {
-    "long_name": "the largest Lyapunov exponent converged, and on which rule",
-    "units": "1",
-    "flag_values": np.array([0, 1, 2], np.int8),
-    "flag_meanings": "not_converged converged converged_on_sign",
-    "comment": "nonzero where every convergence condition the map runs holds (lle_unmet = 0). "
+)
+LLE_CONVERGED = flags(
+    "the largest Lyapunov exponent converged, and on which rule",
+    ["not_converged", "converged", "converged_on_sign"],
+    comment="nonzero where every convergence condition the map runs holds (lle_unmet = 0). "
     "Trajectory methods: the window (one start from where the point's run ended, its error "
     "from batch means) grew, doubling, until its standard error was at most the map's target "
     "(lle_target) of the estimate (1: converged) or the sign was decided beyond lle_sign "
@@ -88,13 +82,13 @@ LLE_CONVERGED = {
     "failed run, or a window whose budget ended before either rule held. Not run in a map's "
     "fast protocol (their cost; lle_full_protocol marks the points where the full protocol "
     "ran too): " + "; ".join(f"{m}: {', '.join(c)}" for m, c in FAST_NOT_RUN.items()),
-}
-LLE_UNMET = {
-    "long_name": "the convergence conditions of the largest Lyapunov exponent that failed",
-    "units": "1",
-    "flag_masks": np.array([1 << i for i in range(len(UNMET))], np.int16),
-    "flag_meanings": " ".join(u.replace(" ", "_") for u in UNMET),
-    "comment": "bit field, 0: converged. error_target: after the window's budget the "
+)
+LLE_UNMET = variable(
+    "the convergence conditions of the largest Lyapunov exponent that failed",
+    "1",
+    flag_masks=np.array([1 << i for i in range(len(UNMET))], np.int16),
+    flag_meanings=" ".join(u.replace(" ", "_") for u in UNMET),
+    comment="bit field, 0: converged. error_target: after the window's budget the "
     "standard error is above the target of the estimate (lle_target) and the sign is not "
     "decided beyond lle_sign standard errors (the full protocol: above 3 %, no sign rule); "
     "variants: the two-trajectory separation and growth variants disagree; tolerance_check: "
@@ -103,7 +97,7 @@ LLE_UNMET = {
     "upper_bound: see lle_status; failed: the exponent's runs failed; variational: the "
     "copies' exponent and the variational one on the same trajectories differ; other: a "
     "condition of the estimator not named here",
-}
+)
 
 
 LLE_SEEDED = flags(
@@ -114,17 +108,15 @@ LLE_SEEDED = flags(
     "orbit it finds there when that is the orbit the point's run ended on (1); else it starts "
     "from the state the run ended in (0)",
 )
-LLE_FULL_PROTOCOL = {
-    "long_name": "the full protocol of the exponent ran at this point too",
-    "units": "1",
-    "flag_values": np.array([0, 1], np.int8),
-    "flag_meanings": "fast_only full_protocol",
-    "comment": "1 on the map's random subset (lle_full_fraction of the points, at least 3, "
+LLE_FULL_PROTOCOL = flags(
+    "the full protocol of the exponent ran at this point too",
+    ["fast_only", "full_protocol"],
+    comment="1 on the map's random subset (lle_full_fraction of the points, at least 3, "
     "chosen from the points' parameter values and lle_full_seed): the exponent measured again "
     "by the full protocol (four independent starts after the transient, the separation and "
     "growth variants, a 3 % error target; Newton from the state integrated again) in lle_full "
     "and lle_full_stderr; the map's attributes lle_full_* say how it agrees with lle",
-}
+)
 
 
 def strobe_period(samples: np.ndarray, tolerance: float = PERIOD_TOLERANCE) -> int:
@@ -218,22 +210,22 @@ def chaos_indicators(
         out[f"zero_one_K_{name}"] = (
             tuple(extra),
             np.array(per).reshape(shape),
-            {"long_name": f"0-1 test K of the strobe samples of {name}", "units": "1"},
+            variable(f"0-1 test K of the strobe samples of {name}", "1"),
         )
     period = strobe_period(np.concatenate(columns, axis=1))
     out["strobe_period"] = (
         (),
         np.int16(period),
-        {
-            "long_name": "period of the strobe samples in forcing periods (0: none up to "
+        variable(
+            "period of the strobe samples in forcing periods (0: none up to "
             f"{MAX_PERIOD}: quasi-periodic or chaotic)",
-            "units": "1",
-        },
+            "1",
+        ),
     )
     out["zero_one_K"] = (
         (),
         float(np.nanmedian(ks)) if np.isfinite(ks).any() else np.nan,
-        {"long_name": "0-1 test K, median over the recorded variables", "units": "1"},
+        variable("0-1 test K, median over the recorded variables", "1"),
     )
     period_s = float(run.attrs["forcing_period"])
     t, y, aux = run_end(run)
@@ -252,21 +244,21 @@ def chaos_indicators(
     out["lle"] = (
         (),
         exp.value,
-        {"long_name": "largest Lyapunov exponent", "units": "s-1"},
+        variable("largest Lyapunov exponent", "s-1"),
     )
     out["lle_stderr"] = (
         (),
         exp.error,
-        {
-            "long_name": "error of the largest Lyapunov exponent (batch means; floquet: its "
+        variable(
+            "error of the largest Lyapunov exponent (batch means; floquet: its "
             "change with the copies' step or the tolerance, see lle_method)",
-            "units": "s-1",
-        },
+            "s-1",
+        ),
     )
     out["lle_per_period"] = (
         (),
         exp.value * period_s,
-        {"long_name": "largest Lyapunov exponent per forcing period", "units": "1"},
+        variable("largest Lyapunov exponent per forcing period", "1"),
     )
     out["lle_method"] = ((), np.int8(list(METHODS).index(exp.method)), LLE_METHOD)
     status = 1 if exp.failed else 2 if exp.bound else 0
@@ -285,12 +277,12 @@ def chaos_indicators(
     out["lle_full"] = (
         (),
         full.value if full is not None else np.nan,
-        {"long_name": "largest Lyapunov exponent by the full protocol", "units": "s-1"},
+        variable("largest Lyapunov exponent by the full protocol", "s-1"),
     )
     out["lle_full_stderr"] = (
         (),
         full.error if full is not None else np.nan,
-        {"long_name": "error of lle_full", "units": "s-1"},
+        variable("error of lle_full", "s-1"),
     )
     attrs = {"lle_detail": exp.detail}
     if carry:

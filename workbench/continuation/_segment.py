@@ -18,6 +18,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
 from workbench.archive import RECORD_DIM, save_run
 from workbench.campaign._block import (
     Task,
@@ -37,17 +38,20 @@ __all__ = ["SEED_ATTRS", "SegmentTask", "Starts", "continue_point", "run_segment
 
 #: how a point of a continued sweep started (int8 ``seed``, CF flags)
 CONTINUED, BRUTE_FORCE, CHAINED_START, RESTARTED = 0, 1, 2, 3
-SEED_ATTRS = {
-    "long_name": "how the point's run started",
-    "units": "1",
-    "flag_values": np.array([CONTINUED, BRUTE_FORCE, CHAINED_START, RESTARTED], np.int8),
-    "flag_meanings": "continued brute_force_seed chained_seed restarted_after_failure",
-    "comment": "continued: from the previous point's final state with the per-point transient; "
+SEED_ATTRS = flags(
+    "how the point's run started",
+    {
+        CONTINUED: "continued",
+        BRUTE_FORCE: "brute_force_seed",
+        CHAINED_START: "chained_seed",
+        RESTARTED: "restarted_after_failure",
+    },
+    comment="continued: from the previous point's final state with the per-point transient; "
     "brute_force_seed: from the scene's initial state with the scene's transient (the first "
     "point of a segment); chained_seed: from the final state of the previous segment's last "
     "point (a segment run again after its seam disagreed); restarted_after_failure: from the "
     "scene's initial state because the previous point failed",
-}
+)
 
 
 #: the name of a segment's task before the campaign engine had one task type
@@ -221,17 +225,17 @@ def _finals(scene: Scene, runs: list[dict], seeds: list[int]) -> xr.Dataset:
             y[i], a[i] = r["final"]
     for k, q in enumerate(states):
         if not q.name.startswith("_"):
-            attrs = {"units": q.units, "long_name": f"{q.long_name} at the end of the run"}
+            attrs = variable(f"{q.long_name} at the end of the run", q.units)
             data[f"final_{q.name}"] = ("point", y[:, k], attrs)
     if na:
         data["final_discrete_state"] = (
             ("point", "discrete_state"),
             a,
-            {
-                "long_name": "the model's discrete state at the end of the run (the mechanisms: "
-                "each joint's held contact onset velocity, 0 out of contact)",
-                "units": get_model(scene.model).discrete_state_units,
-            },
+            variable(
+                "the model's discrete state at the end of the run (the mechanisms: each joint's "
+                "held contact onset velocity, 0 out of contact)",
+                get_model(scene.model).discrete_state_units,
+            ),
         )
     return xr.Dataset(data)
 

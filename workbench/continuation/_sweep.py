@@ -9,6 +9,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
 from workbench.archive import RECORD_DIM, RECORD_TIME, open_run
 from workbench.campaign import CampaignError, expand_sweep
 from workbench.campaign._block import Task, model_source
@@ -23,10 +24,7 @@ from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["continued_sweep"]
 
-DIRECTION_ATTRS = {
-    "long_name": "direction of the continuation over the swept parameter",
-    "units": "1",
-}
+DIRECTION_ATTRS = variable("direction of the continuation over the swept parameter", "1")
 
 
 def continued_sweep(
@@ -329,26 +327,24 @@ def _with_seams(ds: xr.Dataset, plan: Plan, seams: dict, d: int) -> xr.Dataset:
     ds["seam_distance"] = (
         dims,
         dist,
-        {
-            "long_name": "mean nearest-record distance at a seam between the two segments' runs",
-            "units": "1",
-            "comment": "in fractions of each recorded variable's range over the line",
-        },
+        variable(
+            "mean nearest-record distance at a seam between the two segments' runs",
+            "1",
+            comment="in fractions of each recorded variable's range over the line",
+        ),
     )
     ds["seam_spread"] = (
         dims,
         spread,
-        {"long_name": "mean nearest-record distance within the two runs at a seam", "units": "1"},
+        variable("mean nearest-record distance within the two runs at a seam", "1"),
     )
     ds["seam_chained"] = (
         dims,
         chained,
-        {
-            "long_name": "whether the later segment was run again from the earlier one's state",
-            "units": "1",
-            "flag_values": np.array([0, 1], np.int8),
-            "flag_meanings": "seam_agreed chained",
-        },
+        flags(
+            "whether the later segment was run again from the earlier one's state",
+            ["seam_agreed", "chained"],
+        ),
     )
-    seam_attrs = {"long_name": "seam before segment j (between segments j-1 and j)", "units": "1"}
+    seam_attrs = variable("seam before segment j (between segments j-1 and j)", "1")
     return ds.assign_coords(seam=("seam", np.arange(1, plan.segments), seam_attrs))
