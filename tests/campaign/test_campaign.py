@@ -31,10 +31,12 @@ _RUN_ATTRS = (
     "reused_blocks",
     "campaign_wall_time",
     "campaign_compute_wall_time",
+    "campaign_cpu_time",
     "campaign_workers",
     "resume_workers",  # of a call that reused every block
     "resume_compute_wall_time",
     "resume_wall_time",
+    "resume_cpu_time",
     "campaign_chunk",
     "campaign_blocks",
     "campaign_id",
@@ -102,6 +104,22 @@ def test_same_numbers_with_one_or_two_workers_and_as_single_runs(scene, one_work
                 assert int(pt[f"solver_{stat}"]) == ref.attrs[f"solver_{stat}"]
             assert int(pt.status) == 0 and str(pt.failure.values) == ""
             assert float(pt.forcing_period) == ref.attrs["forcing_period"]
+
+
+def test_one_engine_records_the_workers_cpu_and_the_package_exports_what_users_call(one_worker):
+    """Issue 41 item 2: the grid campaign runs on the engine the continued sweep runs on (the
+    workers' CPU time, which only the sweep recorded before, and the creating function in
+    the provenance); ``workbench.campaign`` exports the names users call, not the engine's
+    pieces (22 names before)."""
+    import workbench.campaign as campaign
+
+    assert one_worker.attrs["campaign_cpu_time"] > 0
+    assert one_worker.attrs["history"].endswith("created by workbench.run_campaign")
+    assert set(campaign.__all__) == {
+        "DASK_CONFIG", "CampaignError", "CampaignWarning", "SweepGrid", "expand_sweep",
+        "jobqueue_cluster", "local_cluster", "run_campaign", "store_paths", "summary",
+        "warm_kernel",
+    }  # fmt: skip
 
 
 def test_dims_units_and_archive(scene, one_worker):

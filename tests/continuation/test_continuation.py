@@ -280,6 +280,8 @@ def test_continued_sweep_numbers_do_not_depend_on_workers_and_resume(tmp_path):
     a = continued_sweep(scene, tmp_path / "a.nc", workers=1)
     b = continued_sweep(scene, tmp_path / "b.nc", workers=2)
     assert a.x.equals(b.x) and a.final_x.equals(b.final_x)
+    # the engine names the function that created the archive (no text replaced afterwards)
+    assert a.attrs["history"].endswith("created by workbench.continuation.continued_sweep")
     # interrupted after its blocks: the archive goes, the blocks stay; a re-run reuses them
     (tmp_path / "b.nc").unlink()
     c = continued_sweep(scene, tmp_path / "b.nc", workers=2)

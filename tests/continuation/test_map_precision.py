@@ -256,6 +256,56 @@ def test_a_map_point_in_a_worker_picks_its_subset_from_its_values(monkeypatch):
     )
     point = duffing(0.5)
     key = subset_key({"gamma": 0.5}, 7)
-    _map_point(point, None, dims=("gamma",), seed=7, threshold=key, target=0.1, sign=3.0)
-    _map_point(point, None, dims=("gamma",), seed=7, threshold=key / 2, target=0.1, sign=3.0)
+    kw = {"dims": ("gamma",), "subset_seed": 7, "target": 0.1, "sign": 3.0}
+    _map_point(point, None, threshold=key, **kw)
+    _map_point(point, None, threshold=key / 2, **kw)
     assert seen == [True, False]
+
+
+# -- a map that carries state along an axis (issue 39 item 2) -----------------------------------
+def test_a_seeded_newton_keeps_the_runs_orbit_and_falls_back_from_another():
+    """Newton seeded by a neighbour's period-1 orbit finds this point's orbit (the same
+    exponent as from the run's end, -delta / 2); a seed where Newton fails falls back to the
+    run's end."""
+    from workbench.continuation._exponent import floquet_exponent
+
+    def ended(gamma):
+        scene = duffing(gamma)
+        run = workbench.simulate(scene)
+        return scene, np.asarray(run.attrs["end_state"], float)
+
+    near, y_near = ended(0.24)
+    scene, y = ended(0.25)
+    neighbour = floquet_exponent(near, period=1, state=y_near)
+    assert neighbour.orbit is not None and not neighbour.seeded
+    seeded = floquet_exponent(scene, period=1, state=y, seed=neighbour.orbit)
+    plain = floquet_exponent(scene, period=1, state=y)
+    assert seeded.seeded and abs(seeded.value - plain.value) < 1e-6
+    assert abs(seeded.value + 0.15) < 1e-6 and np.allclose(seeded.orbit[0], plain.orbit[0])
+    broken = (y * np.nan, neighbour.orbit[1])  # a seed Newton cannot start from
+    fallback = floquet_exponent(scene, period=1, state=y, seed=broken)
+    assert not fallback.seeded and abs(fallback.value - plain.value) < 1e-9
+
+
+def test_a_map_along_an_axis_seeds_newton_from_the_previous_periodic_point(tmp_path):
+    """Along gamma (upwards), each point starts from the state the previous one ended in, and
+    Newton from the previous point's orbit; the exponents are those of the grid map (-delta /
+    2 at each period-1 point), lle_seeded says where the seed was taken (not at the first
+    point of the line), and the archive's history names chaos_map's engine function."""
+    sweep = {"gamma": [0.2, 0.22, 0.24], "delta": [0.3]}
+    scene = workbench.load_scene(dict(DUFFING, sweep=sweep))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        carried = chaos_map(scene, tmp_path / "along.nc", workers=1, along="gamma")
+        grid = chaos_map(scene, tmp_path / "grid.nc", workers=1)
+    assert carried.lle.dims == ("gamma", "delta") and "lle_seeded" not in grid
+    assert (carried.strobe_period == 1).all() and (grid.strobe_period == 1).all()
+    np.testing.assert_allclose(carried.lle.values, grid.lle.values, atol=1e-6)
+    np.testing.assert_allclose(carried.lle.values, -0.15, atol=1e-6)
+    assert carried.lle_seeded.values[:, 0].tolist() == [0, 1, 1]
+    assert carried.lle_seeded.attrs["flag_meanings"] == "from_run_end from_neighbour"
+    assert carried.seed.values[:, 0].tolist() == [1, 0, 0]  # brute force, then continued
+    assert carried.attrs["history"].endswith("workbench.continuation.continued_sweep")
+    assert carried.attrs["lle_full_points"] == 3
+    with pytest.raises(ValueError, match="along='omega'"):
+        chaos_map(scene, tmp_path / "x.nc", along="omega")

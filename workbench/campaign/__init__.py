@@ -16,15 +16,16 @@ runs blocks of points as tasks (on a local process pool by default, on any
 ``dask.distributed.Client`` when given) and returns one :class:`xarray.Dataset` with the
 parameter dims first, then ``time`` and the model's dims.
 
-Modules: ``_run`` (the orchestration), ``_grid`` (the sweep's points, the campaign's identity
-and code digest), ``_store`` (the store on disk), ``_errors``,
-``_schedule`` (longest first), ``_execute`` (one dispatch loop for both executors), ``_block``
-(one task, in a worker), ``_assemble`` (blocks -> one dataset), ``_warm`` (the kernel loaded
-once; :func:`warm_kernel` compiles it into the cache before a cluster's workers start),
-``_preload`` (the fork server), ``_cluster`` (the worker plugin of a dask cluster),
-``_jobqueue`` (the clusters workbench starts, closed: TLS, named interfaces:
-:func:`local_cluster`, and :func:`jobqueue_cluster` for workers on a batch system,
-docs/cluster.md),
+Modules: ``_engine`` (the one campaign engine: store, task loop, commits, progress,
+provenance and the final write, for every plan), ``_run`` (the grid campaign's plan),
+``_grid`` (the sweep's points, the campaign's identity and code digest), ``_store`` (the
+store on disk), ``_errors``, ``_schedule`` (longest first), ``_execute`` (one dispatch loop for
+both executors), ``_block`` (the one task type, :class:`~workbench.campaign._block.Task`, run in
+a worker), ``_assemble`` (blocks -> one dataset), ``_warm`` (the kernel loaded once;
+:func:`warm_kernel` compiles it into the cache before a cluster's workers start), ``_preload``
+(the fork server), ``_cluster`` (the worker plugin of a dask cluster), ``_jobqueue`` (the
+clusters workbench starts, closed: TLS, named interfaces: :func:`local_cluster`, and
+:func:`jobqueue_cluster` for workers on a batch system, docs/cluster.md),
 ``_lifeline`` (processes that die with the campaign).
 
 Store layout
@@ -95,65 +96,34 @@ the call that wrote it), and the workers and wall times of the call that compute
 them and adds its own as ``resume_*``). It
 stores only what the scene records: ``record.samples_per_period = 1`` keeps strobe samples only.
 
-The pieces another package runs its own tasks with (:mod:`workbench.continuation`'s continued
-sweeps): :class:`Store`, :func:`execute` (with its own ``runner``), :func:`block_dataset`
-(:func:`run_outcome`, :func:`invalid_outcome`), :func:`assemble_blocks`,
-:func:`execution_attrs` (with :meth:`Store.assembled_attrs`), and
-:func:`model_source` / :func:`task_scene` (a task names the module of the user's model, which its
-worker imports before it reads the task's scene).
+Two plans run over the one engine (``_engine``): the grid campaign (:func:`run_campaign`: blocks
+of independent points dealt by cost) and the continued sweep
+(:func:`workbench.continuation.continued_sweep`: segments of points run in order, each from its
+neighbour's state, in rounds). Both use the same task type, store, commits, progress bar and
+provenance (the archive's ``history`` names the function that created it).
 
 Command line: ``workbench campaign SCENE.toml -o sweep.nc [--workers N] [--scheduler ADDRESS]
 [--chunk K] [--restart]`` and ``workbench bifurcation sweep.nc --var x [-o fig.png]``.
 """
 
-from workbench.campaign._assemble import assemble_blocks, execution_attrs, summary
-from workbench.campaign._block import (
-    block_dataset,
-    block_summary,
-    failed,
-    invalid_outcome,
-    model_source,
-    run_outcome,
-    task_scene,
-)
+from workbench.campaign._assemble import summary
+from workbench.campaign._block import task_scene  # noqa: F401 (tests import it from here)
 from workbench.campaign._errors import CampaignError, CampaignWarning
-from workbench.campaign._execute import available_workers, execute
-from workbench.campaign._grid import (
-    SweepGrid,
-    campaign_id,
-    code_of,
-    expand_sweep,
-    parameter_attrs,
-)
+from workbench.campaign._grid import SweepGrid, expand_sweep
 from workbench.campaign._jobqueue import DASK_CONFIG, jobqueue_cluster, local_cluster
 from workbench.campaign._run import run_campaign, store_paths
-from workbench.campaign._store import Store
+from workbench.campaign._store import Store  # noqa: F401 (tests import it from here)
 from workbench.campaign._warm import warm_kernel
 
 __all__ = [
     "DASK_CONFIG",
     "CampaignError",
     "CampaignWarning",
-    "Store",
     "SweepGrid",
-    "assemble_blocks",
-    "available_workers",
-    "block_dataset",
-    "block_summary",
-    "campaign_id",
-    "code_of",
-    "execute",
-    "execution_attrs",
     "expand_sweep",
-    "failed",
-    "invalid_outcome",
     "jobqueue_cluster",
     "local_cluster",
-    "model_source",
-    "parameter_attrs",
     "run_campaign",
-    "run_outcome",
-    "task_scene",
     "store_paths",
     "summary",
     "warm_kernel",

@@ -8,8 +8,9 @@ from collections.abc import Mapping
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench._processor import PROCESSOR_ATTRS
-from workbench.archive import RECORD_DIM, RECORD_TIME, open_run
+from workbench.archive import RECORD_DIM, RECORD_TIME
 from workbench.campaign._block import (
     FAILURE_ATTRS,
     POINT_WALL_ATTRS,
@@ -20,7 +21,6 @@ from workbench.campaign._block import (
     stat_attrs,
 )
 from workbench.campaign._grid import SweepGrid, format_point, grid_periods, parameter_attrs
-from workbench.campaign._store import Store
 from workbench.models import get_model
 from workbench.run import (
     PARAMETERS_ATTR,
@@ -31,7 +31,7 @@ from workbench.run import (
 )
 from workbench.scene import Scene
 
-__all__ = ["assemble", "assemble_blocks", "execution_attrs", "summary"]
+__all__ = ["assemble_blocks", "execution_attrs", "summary"]
 
 _PER_POINT = ("status", "failure", *STATS, "point_wall_time")
 
@@ -50,42 +50,6 @@ def _grid_attrs(scene: Scene, grid: SweepGrid) -> tuple[dict, np.ndarray | None]
     return shared, periods_arr
 
 
-def assemble(
-    scene: Scene,
-    grid: SweepGrid,
-    store: Store,
-    chunk: int,
-    cid: str,
-    run_attrs: dict,
-    computed: dict[int, xr.Dataset] | None = None,
-) -> xr.Dataset:
-    """Build the campaign dataset from its blocks: those in ``computed`` (block index ->
-    dataset, as the tasks of this call wrote them) from memory, every other from its file.
-
-    Dims: the parameter dims (scene ``[sweep]`` order), then the records', then the model's
-    dims; every other parameter of the model is a scalar coordinate with its units
-    (:func:`workbench.run.parameter_coords`; ``model_parameters`` lists them, swept first).
-    When every point has the same record times the records run along ``time``, their 1-D
-    coordinate; otherwise (e.g. a sweep over the forcing frequency, a continued sweep) along
-    ``record`` (the record's index in its point's run, no coordinate variable), and the
-    auxiliary coordinate ``record_time`` (parameter dims, record; ``standard_name`` "time")
-    holds each point's times, NaN-padded (:mod:`workbench.archive._format`, format 4).
-    """
-    computed = computed or {}
-    blocks = [
-        computed[i] if i in computed else open_run(store.block_path(i))
-        for i in range(len(grid.blocks(chunk)))
-    ]
-    ds = assemble_blocks(scene, grid, blocks)
-    ds.attrs.update(
-        campaign_id=cid,
-        campaign_chunk=chunk,
-        campaign_blocks=len(blocks),
-    )
-    ds.attrs.update(run_attrs)
-    return ds
-
-
 def execution_attrs(this: Mapping, previous: Mapping | None) -> dict:
     """The attributes that describe a call of a campaign (``this``: ``campaign_workers``,
     ``campaign_compute_wall_time``, ``campaign_wall_time``, ...) as its archive keeps them
@@ -99,11 +63,22 @@ def execution_attrs(this: Mapping, previous: Mapping | None) -> dict:
     return kept | {f"resume_{k.removeprefix('campaign_')}": v for k, v in this.items()}
 
 
-def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> xr.Dataset:
+def assemble_blocks(
+    scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset], by: str = "workbench.run_campaign"
+) -> xr.Dataset:
     """One dataset over the grid from block datasets (:func:`workbench.campaign._block.
-    block_dataset`) that together hold every point once (see :func:`assemble`); the per-point
-    measurements of a block (variables over ``point`` alone) become variables over the
-    parameter dims, NaN where a block has none."""
+    block_dataset`) that together hold every point once; the per-point measurements of a
+    block (variables over ``point`` alone) become variables over the parameter dims, NaN where
+    a block has none; ``by``: the function that creates the campaign (its provenance).
+
+    Dims: the parameter dims (scene ``[sweep]`` order), then the records', then the model's
+    dims; every other parameter of the model is a scalar coordinate with its units
+    (:func:`workbench.run.parameter_coords`; ``model_parameters`` lists them, swept first).
+    When every point has the same record times the records run along ``time``, their 1-D
+    coordinate; otherwise (e.g. a sweep over the forcing frequency, a continued sweep) along
+    ``record`` (the record's index in its point's run, no coordinate variable), and the
+    auxiliary coordinate ``record_time`` (parameter dims, record; ``standard_name`` "time")
+    holds each point's times, NaN-padded (:mod:`workbench.archive._format`, format 4)."""
     n, shape = grid.size, grid.shape
     n_time = max(b.sizes[RECORD_DIM] for b in blocks)
     first = blocks[0]
@@ -157,7 +132,7 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
         data_vars["forcing_period"] = (
             pdims,
             periods,
-            {"units": "s", "long_name": "period of the external forcing"},
+            variable("period of the external forcing", "s"),
         )
     status = gather("status", -1).astype(np.int8)
     data_vars["status"] = (pdims, status, STATUS_ATTRS)
@@ -181,7 +156,7 @@ def assemble_blocks(scene: Scene, grid: SweepGrid, blocks: list[xr.Dataset]) -> 
         coords["realisation"] = ((), np.int64(scene.run["realisation"]), dict(REALISATION_ATTRS))
     ds = xr.Dataset(data_vars, coords=coords)
     ds.attrs[PARAMETERS_ATTR] = " ".join([*(d for d in pdims if d in model_names), *params])
-    prov = provenance(scene, by="workbench.run_campaign")
+    prov = provenance(scene, by=by)
     if not scene.title:
         prov["title"] = f"workbench campaign of model {scene.model} over {', '.join(pdims)}"
     ds.attrs.update(prov)
@@ -231,13 +206,13 @@ def _compiled_on(
     var = xr.DataArray(
         index.reshape(shape),
         dims=pdims,
-        attrs={
-            "long_name": "index of the processor and compile target that computed the point",
-            "units": "1",
-            "compile_targets": listing,
-            "comment": "other processors round differently: a chaotic quantity agrees across "
+        attrs=variable(
+            "index of the processor and compile target that computed the point",
+            "1",
+            compile_targets=listing,
+            comment="other processors round differently: a chaotic quantity agrees across "
             "them within its error, not in digits (docs/cluster.md)",
-        },
+        ),
     )
     mixed = "mixed: see the variable compiled_on"
     return var, dict.fromkeys(PROCESSOR_ATTRS, mixed)

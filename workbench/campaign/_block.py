@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench._processor import processor_attrs
 from workbench.archive import RECORD_DIM, RECORD_TIME, save_run, sha256_file
 from workbench.campaign._grid import SweepGrid, code_of, modules_of
@@ -32,6 +33,7 @@ from workbench.solver import Status
 
 __all__ = [
     "BlockTask",
+    "Task",
     "INVALID",
     "RAISED",
     "STATUS",
@@ -65,7 +67,7 @@ STATUS_ATTRS["comment"] = (
 STATUS = dict(
     zip(STATUS_ATTRS["flag_values"].tolist(), STATUS_ATTRS["flag_meanings"].split(), strict=True)
 )
-FAILURE_ATTRS = {"long_name": "failure message of the point (empty when none)", "units": "1"}
+FAILURE_ATTRS = variable("failure message of the point (empty when none)", "1")
 # name in the dataset -> (attribute of simulate's dataset, dtype, missing value, attrs)
 STATS = {
     "solver_steps": ("solver_steps", np.int64, -1, "accepted solver steps"),
@@ -79,10 +81,7 @@ STATS = {
     "solver_events": ("solver_events", np.int64, -1, "located events"),
     "solver_wall_time": ("solver_wall_time", np.float64, np.nan, "integration wall time"),
 }
-POINT_WALL_ATTRS = {
-    "long_name": "wall time of the point (scene, problem, integration, dataset)",
-    "units": "s",
-}
+POINT_WALL_ATTRS = variable("wall time of the point (scene, problem, integration, dataset)", "s")
 
 _TASKS_IN_PROCESS = 0
 # A block dataset up to this size (bytes) also travels back to the client with the task's
@@ -94,14 +93,20 @@ MODEL_ENV = "WORKBENCH_CAMPAIGN_MODEL"  # its model_source(), JSON: imported the
 
 
 @dataclass(frozen=True)
-class BlockTask:
-    """What one task needs: the campaign scene (TOML), which points (``flat``, indices into the
-    grid of the swept values ``axes``), where to write, and the module that defines the
+class Task:
+    """What one task of a campaign needs (the one task type of every plan, see ``_engine``):
+    the campaign scene (TOML), which points (``flat``, indices into the grid of the swept
+    values ``axes``, in the order they run), where to write, and the module that defines the
     scene's model when it is not one of workbench's (a user's model, registered when imported:
     a worker process that did not import it yet does so first), and the function (if any) that
     measures each point's run in the worker (``per_point``, see
     :func:`workbench.run_campaign`). Each point's values are looked up when the block runs
-    (:attr:`values`), not when it is planned."""
+    (:attr:`values`), not when it is planned.
+
+    A continued sweep's segment (:func:`workbench.continuation.continued_sweep`) runs its
+    points in order, each from the state the one before ended in: its first ``own_from``
+    points are seam points (computed only to compare), and ``seed_state`` / ``seed_aux`` (a
+    chained segment) the state its first point starts from."""
 
     scene_toml: str
     dims: tuple[str, ...]
@@ -114,11 +119,18 @@ class BlockTask:
     model_module: str = ""  # model_source(): the module the user named, imported in the worker
     model_directory: str = ""  # where it lies, for a worker without it on its import path
     per_point: Callable[[Scene, xr.Dataset], xr.Dataset] | None = None
+    own_from: int = 0  # a segment's first own point (the ones before: seam points)
+    seed_state: tuple[float, ...] | None = None  # a chained segment: the state to start from
+    seed_aux: tuple[float, ...] | None = None  # ... and its discrete state
 
     @property
     def values(self) -> tuple[tuple[float, ...], ...]:
         """The parameter values of each point of the block, in ``dims`` order."""
         return SweepGrid(self.dims, self.axes).rows(self.flat)
+
+
+#: the name of :class:`Task` before the engine had one task type
+BlockTask = Task
 
 
 def worker_start(pids, campaign: int) -> None:
@@ -135,10 +147,11 @@ def worker_start(pids, campaign: int) -> None:
 def stat_attrs(name: str) -> dict:
     _, dtype, missing, long_name = STATS[name]
     units = "s" if dtype is np.float64 else "1"
-    attrs = {"long_name": long_name, "units": units}
     if dtype is np.int64:
-        attrs["comment"] = f"{missing}: not available (the point did not run)"
-    return attrs
+        return variable(
+            long_name, units, comment=f"{missing}: not available (the point did not run)"
+        )
+    return variable(long_name, units)
 
 
 def failed(status: np.ndarray) -> np.ndarray:
@@ -222,19 +235,19 @@ def task_scene(scene_toml: str, model_module: str = "", model_directory: str = "
     return scene_from_toml(scene_toml)
 
 
-def run_block(task: BlockTask) -> dict:
+def run_block(task: Task) -> dict:
     """Run the points of one block and write them to ``task.path`` (atomically).
 
     Returns a summary: the SHA-256 of the file written, the digest of the code that computed it
     (``code_digest``, also an attribute of the file), block index, number of points, failures
-    ``[(flat, message)]``, wall time of the block and the sum of the solvers' wall times (s),
-    worker process id, and ``dataset``: the block as written (None when larger than
+    ``[(flat, message)]``, wall and CPU time of the block and the sum of the solvers' wall
+    times (s), worker process id, and ``dataset``: the block as written (None when larger than
     RETURN_LIMIT bytes; then read the file).
     """
     global _TASKS_IN_PROCESS
     _TASKS_IN_PROCESS += 1
     started = time.time()
-    wall0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     scene = task_scene(task.scene_toml, task.model_module, task.model_directory)
     runs = _points(scene, task)
     ds = block_dataset(scene, task.flat, runs)
@@ -249,10 +262,10 @@ def run_block(task: BlockTask) -> dict:
         block_wall_time=time.perf_counter() - wall0,
     )
     save_run(ds, task.path, classic=True)  # read back by the client only: speed over HDF5
-    return block_summary(task, ds, runs, code, wall0, keep=ds.nbytes <= RETURN_LIMIT)
+    return block_summary(task, ds, runs, code, wall0, cpu0, keep=ds.nbytes <= RETURN_LIMIT)
 
 
-def _points(scene: Scene, task: BlockTask) -> list[dict]:
+def _points(scene: Scene, task: Task) -> list[dict]:
     """The outcomes of the points of a block (:func:`_point`), each prepared from the scene
     prepared once for them (a scene that cannot be prepared at all: each point's outcome is
     that error)."""
@@ -266,11 +279,12 @@ def _points(scene: Scene, task: BlockTask) -> list[dict]:
     return [_point(base, dict(zip(task.dims, v, strict=True)), task.per_point) for v in task.values]
 
 
-def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: float, *,
-                  keep: bool = True) -> dict:  # fmt: skip
+def block_summary(task: Task, ds: xr.Dataset, runs: list[dict], code: str, wall0: float,
+                  cpu0: float, *, keep: bool = True) -> dict:  # fmt: skip
     """What a worker returns for the block it wrote to ``task.path`` (a campaign's block or a
     continued sweep's segment): see :func:`run_block`; ``keep``: return the dataset itself,
-    ``wall0``: :func:`time.perf_counter` when the block started (s)."""
+    ``wall0`` and ``cpu0``: :func:`time.perf_counter` and :func:`time.process_time` when the
+    block started (s)."""
     return {
         "sha256": sha256_file(task.path),
         "code_digest": code,
@@ -281,6 +295,7 @@ def block_summary(task, ds: xr.Dataset, runs: list[dict], code: str, wall0: floa
             (f, r["failure"]) for f, r in zip(task.flat, runs, strict=True) if failed(r["status"])
         ],
         "wall": time.perf_counter() - wall0,
+        "cpu": time.process_time() - cpu0,
         "solver_wall": float(np.nansum(ds["solver_wall_time"].values)),
         "pid": os.getpid(),
     }
@@ -308,7 +323,7 @@ def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
     for name in scene.variables:
         q = declared[name]
         arr = np.full((n, n_time) + tuple(msizes[d] for d in q.dims), np.nan)
-        attrs = {"units": q.units, "long_name": q.long_name}
+        attrs = variable(q.long_name, q.units)
         for i, r in enumerate(runs):
             if r["ds"] is not None and not failed(r["status"]):
                 v = r["ds"][name]
@@ -337,7 +352,7 @@ def block_dataset(scene: Scene, flat, runs: list[dict]) -> xr.Dataset:
         "point": (
             "point",
             np.array(flat, np.int64),
-            {"long_name": "flat (C-order) index of the point in the grid", "units": "1"},
+            variable("flat (C-order) index of the point in the grid", "1"),
         )
     }
     for d, (values, attrs) in mcoords.items():

@@ -36,7 +36,7 @@ _log = logging.getLogger(__name__)
 def _ready(scene_toml: str, model_module: str = "", model_directory: str = "") -> None:
     """Warm the writers and load the kernel of ``scene_toml`` (the module of a user's model,
     ``model_module`` from ``model_directory``, imported first: see
-    :func:`workbench.campaign.task_scene`); failures are logged only (the
+    :func:`workbench.campaign._block.task_scene`); failures are logged only (the
     first block then loads the kernel itself, and reports any real error). A kernel that is
     not in the cache yet is compiled by one worker at a time (a lock file in the cache
     directory): the first compiles it, the others then find it there and only load it."""
@@ -118,7 +118,7 @@ def ready_workers(
     """Register the :class:`WorkerReady` plugin of a campaign's kernel on ``client``'s cluster
     (waits until every worker has loaded it, all at once); returns the plugin's name.
     ``model_module``, ``model_directory``: the campaign's
-    :func:`workbench.campaign.model_source`."""
+    :func:`workbench.campaign._block.model_source`."""
     name = plugin_name(scene_toml)
     client.register_plugin(WorkerReady(scene_toml, model_module, model_directory), name=name)
     return name

@@ -32,7 +32,7 @@ import uuid
 from collections.abc import Callable, Iterator
 
 from workbench._warnings import WarningKind, reraise, warnings_by_kind
-from workbench.campaign._block import MODEL_ENV, PRELOAD_ENV, BlockTask, run_block, worker_start
+from workbench.campaign._block import MODEL_ENV, PRELOAD_ENV, Task, run_block, worker_start
 from workbench.campaign._lifeline import PARENT_ENV
 from workbench.campaign._warm import kernel_cached, load_kernel
 from workbench.scene import scene_from_toml
@@ -56,21 +56,21 @@ def available_workers(client, workers: int | None) -> int:
 
 
 def execute(
-    tasks: list[BlockTask],
+    tasks: list[Task],
     *,
     client=None,
     workers: int,
     cid: str,
     on_done: Callable[[dict], None] | None = None,
     announce: bool = False,
-    runner: Callable[[BlockTask], dict] = run_block,
+    runner: Callable[[Task], dict] = run_block,
 ) -> list[dict]:
     """Run the block tasks, starting them in list order, ``workers`` at a time (and
     ``PREFETCH`` per worker waiting).
 
     Parameters
     ----------
-    tasks : list of BlockTask
+    tasks : list of Task
         In the order they should start (longest first).
     client : distributed.Client, optional
         Run on this cluster; default a local pool of ``workers`` processes.
@@ -84,8 +84,7 @@ def execute(
         Print the dashboard link of a client.
     runner : callable
         What a worker does with a task (a module-level function, so that it pickles):
-        :func:`run_block` by default; another task type needs the fields ``scene_toml``,
-        ``dims``, ``values`` (its first point's kernel is preloaded) and ``block``.
+        :func:`run_block` by default (a continued sweep's segments: its own runner).
 
     Returns
     -------
@@ -119,7 +118,7 @@ def execute(
         ready_workers(client, first, *model)  # every worker imports and loads the kernel once
         token = uuid.uuid4().hex[:8]
 
-        def submit(t: BlockTask):
+        def submit(t: Task):
             key = f"campaign-{cid}-block-{t.block:05d}-{token}"
             return client.submit(_run_task, runner, t, _process(), key=key, pure=False)
 
@@ -130,7 +129,7 @@ def execute(
         load_kernel(first)
     with _local_pool(workers, first, model) as pool:
 
-        def submit_local(t: BlockTask):
+        def submit_local(t: Task):
             with _uninterrupted_start():
                 return pool.submit(_run_task, runner, t, _process())
 
@@ -144,7 +143,7 @@ def _process() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def _run_task(runner: Callable[[BlockTask], dict], task: BlockTask, client: str) -> dict:
+def _run_task(runner: Callable[[Task], dict], task: Task, client: str) -> dict:
     """``runner(task)`` in a worker, with the warnings it raised, by kind, in its summary
     (``warnings``: a list of :class:`workbench._warnings.WarningKind`; the client raises them
     again, so that a campaign says once per kind what its points warned about). Warnings are
@@ -234,7 +233,7 @@ def _dispatch(submit: Callable, wait: Callable, tasks: list, window: int, on_don
     return results
 
 
-def _first_point(task: BlockTask) -> str:
+def _first_point(task: Task) -> str:
     """Scene TOML of a task's first point: the local pool's fork server loads its kernel once."""
     point = dict(zip(task.dims, task.values[0], strict=True))
     return scene_from_toml(task.scene_toml).with_parameters(**point).to_toml()

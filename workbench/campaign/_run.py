@@ -16,11 +16,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from workbench.archive import ArchiveError, DiskFull, WriteFailed, open_run, save_run
-from workbench.campaign._assemble import assemble, execution_attrs
-from workbench.campaign._block import BlockTask, failed, model_source
+from workbench.archive import ArchiveError, open_run
+from workbench.campaign._assemble import execution_attrs
+from workbench.campaign._block import Task, failed, model_source
+from workbench.campaign._engine import Engine
 from workbench.campaign._errors import CampaignError, CampaignWarning
-from workbench.campaign._execute import available_workers, execute
+from workbench.campaign._execute import available_workers
 from workbench.campaign._grid import (
     MAX_POINTS,
     SweepGrid,
@@ -246,6 +247,7 @@ def _run_locked(
             this = {
                 "campaign_workers": 0,
                 "campaign_compute_wall_time": 0.0,
+                "campaign_cpu_time": 0.0,
                 "campaign_wall_time": time.perf_counter() - wall0,
             }
             reused.attrs.update(execution_attrs(this, reused.attrs))
@@ -264,17 +266,28 @@ def _run_locked(
         if cid != campaign_id(scene, chunk, per_point):
             raise CampaignError(
                 f"{str(st.blocks_dir)!r} holds a campaign measured per point by another function "
-                f"(per_point={_name(per_point)}); pass restart=True (CLI --restart) to start "
-                "afresh, or choose another output path"
+                f"(per_point={per_point_name(per_point)}); pass restart=True (CLI --restart) to "
+                "start afresh, or choose another output path"
             )
         blocks = st.blocks(manifest, grid)
-    st.remove_temporaries()
     code = code_of(scene, *modules_of(per_point))
-    done = st.verified_blocks(manifest, blocks, code)
+    engine = Engine(
+        st,
+        manifest,
+        blocks=len(blocks),
+        code=code,
+        cid=cid,
+        client=client,
+        workers=workers,
+        progress=f"campaign {progress}" if isinstance(progress, str) else progress,
+        total=grid.size,
+        wall0=wall0,
+    )
     model_module, model_directory = model_source(scene)
+    toml = scene.to_toml()
     tasks = [
-        BlockTask(
-            scene_toml=scene.to_toml(),
+        Task(
+            scene_toml=toml,
             dims=grid.dims,
             flat=points,
             axes=grid.values,
@@ -287,76 +300,20 @@ def _run_locked(
             per_point=per_point,
         )
         for i, points in enumerate(blocks)
-        if i not in done
     ]
-    tasks = longest_first(scene, grid, tasks)
-    n_workers = available_workers(client, workers)
-    if client is None:
-        n_workers = min(n_workers, max(len(tasks), 1))
-    compute0 = time.perf_counter()
-    results: list[dict] = []
-    if tasks:
-        initial = sum(len(blocks[i]) for i in done)
-        bar = _bar(grid.size, initial, progress) if progress else None
-
-        def commit(result: dict) -> None:
-            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
-            if bar is not None:
-                bar.update(result["points"])
-
-        try:
-            results = execute(
-                tasks,
-                client=client,
-                workers=n_workers,
-                cid=cid,
-                on_done=commit,
-                announce=progress,
-            )
-        except WriteFailed as exc:  # a block's write (in a worker): a full disk, ...
-            raise _resumable(exc, st) from None
-        except RuntimeError as exc:  # a worker died: say what is kept
-            exc.add_note(st.kept_note() or "no block was finished")
-            raise
-        finally:
-            if bar is not None:
-                bar.close()
-        if len(results) != len(tasks):  # pragma: no cover - guards the schedulers
-            raise RuntimeError(f"{len(tasks)} blocks were scheduled, {len(results)} came back")
-    compute = time.perf_counter() - compute0
-    in_memory = {r["block"]: r["dataset"] for r in results if r.get("dataset") is not None}
-    checksums = " ".join(manifest["checksums"][str(i)] for i in range(len(blocks)))
-    execution = {
-        "campaign_workers": n_workers if tasks else 0,
-        "campaign_compute_wall_time": compute,
-        "campaign_wall_time": time.perf_counter() - wall0,
-    }
-    if not tasks:  # every block reused: the figures of the call that computed them stay
-        execution = execution_attrs(execution, st.assembled_attrs(checksums))
-    ds = assemble(
-        scene,
-        grid,
-        st,
-        chunk,
-        cid,
+    engine.run(longest_first(scene, grid, tasks))
+    order = list(range(len(blocks)))
+    ds = engine.assemble(scene, grid, [engine.block(i) for i in order])
+    ds = engine.finish(
+        ds,
+        order,
         {
-            "computed_blocks": len(tasks),
-            "reused_blocks": len(done),
-            **execution,
-            "campaign_block_sha256": checksums,
+            "campaign_chunk": chunk,
+            "campaign_blocks": len(blocks),
             # the measurement's name, only when there is one (None: the attribute is absent)
-            **({"campaign_per_point": _name(per_point)} if per_point is not None else {}),
-            "code_digests": " ".join(
-                sorted({manifest["code_digests"][str(i)] for i in range(len(blocks))})
-            ),
+            **({"campaign_per_point": per_point_name(per_point)} if per_point is not None else {}),
         },
-        in_memory,
     )
-    try:
-        save_run(ds, st.archive)
-    except WriteFailed as exc:
-        raise _resumable(exc, st) from None
-    ds = open_run(st.archive)
     if ds.attrs["failed_points"]:
         _warn_failures(ds, grid)
     return ds
@@ -380,18 +337,8 @@ def _warn_disk(st: Store, size: float) -> None:
         )
 
 
-def _resumable(exc: WriteFailed, st: Store) -> WriteFailed:
-    """A failed write during a campaign (a full disk, ...), with where its finished work is and
-    how to resume."""
-    fix = "free some space" if isinstance(exc, DiskFull) else "remove the cause"
-    kept = st.kept_note()
-    then = " to compute the rest and assemble the archive" if kept else ""
-    return exc.reworded(
-        f"{exc}; {kept or 'no block was finished'}: {fix} and run the campaign again{then}"
-    )
-
-
-def _name(fn: Callable | None) -> str:
+def per_point_name(fn: Callable | None) -> str:
+    """The name of a per-point measurement (its module and qualified name; 'None')."""
     return "None" if fn is None else f"{fn.__module__}.{fn.__qualname__}"
 
 
@@ -416,7 +363,7 @@ def _complete_archive(
             "choose another output path"
         )
     st.check_scene(ds.attrs["scene"], scene, repr(str(st.archive)))
-    if ds.attrs.get("campaign_per_point", "None") != _name(per_point):
+    if ds.attrs.get("campaign_per_point", "None") != per_point_name(per_point):
         return None  # same runs, another measurement: recompute
     if chunk is not None and chunk != int(ds.attrs["campaign_chunk"]):
         return None  # same numbers, other blocks: recompute with the chunk size asked for
@@ -437,14 +384,6 @@ def _warn_failures(ds: xr.Dataset, grid: SweepGrid) -> None:
         ),
         stacklevel=3,
     )
-
-
-def _bar(total: int, initial: int, label: bool | str = True):
-    """The progress bar over a campaign's points; ``label`` (a string) names what runs."""
-    from workbench._progress import Progress
-
-    desc = f"campaign {label}" if isinstance(label, str) else "campaign"
-    return Progress(total, initial=initial, unit="pt", desc=desc)
 
 
 def store_paths(store: str | os.PathLike) -> dict[str, Path]:

@@ -26,7 +26,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from workbench.campaign._block import BlockTask
+from workbench.campaign._block import Task
 from workbench.campaign._grid import SweepGrid, grid_periods
 from workbench.scene import Scene
 
@@ -119,7 +119,7 @@ def block_order(scene: Scene, grid: SweepGrid, blocks: Sequence[Sequence[int]]) 
     return sorted(range(len(blocks)), key=lambda i: (-totals[i], i))
 
 
-def longest_first(scene: Scene, grid: SweepGrid, tasks: list[BlockTask]) -> list[BlockTask]:
+def longest_first(scene: Scene, grid: SweepGrid, tasks: list[Task]) -> list[Task]:
     """The tasks ordered by decreasing estimated cost (their points' simulated time), so that
     the longest blocks start first and no worker is left with one at the end: Graham's (1969)
     longest-processing-time rule, within 4/3 of the best schedule. Ties keep block order."""

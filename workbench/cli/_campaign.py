@@ -40,9 +40,10 @@ def _client(address: str, timeout: float):
 def _cmd_campaign(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from workbench.campaign import CampaignError, Store, expand_sweep, run_campaign, summary
+    from workbench.campaign import CampaignError, expand_sweep, run_campaign, summary
     from workbench.campaign._block import STATUS, failed
     from workbench.campaign._grid import MAX_POINTS, check_points
+    from workbench.campaign._store import Store
     from workbench.cli._console import check_store_output, compile_kernel
     from workbench.scene import load_scene
 

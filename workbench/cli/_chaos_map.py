@@ -36,6 +36,7 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
             progress=not args.quiet,
             full_fraction=args.full_fraction,
             full_seed=args.full_seed,
+            along=args.along,
         )
     print(summary(ds))
     status = ds["lle_status"].values if "lle_status" in ds else None
@@ -109,6 +110,12 @@ def register_cli(sub) -> None:
     )
     p.add_argument(
         "--full-seed", type=int, default=0, help="seed of that subset's choice (default 0)"
+    )
+    p.add_argument(
+        "--along",
+        metavar="NAME",
+        help="carry state along this swept parameter (upwards, as a continued sweep): each "
+        "point's run starts where the previous one ended and Newton from its periodic orbit",
     )
     add_quiet(p)
     p.set_defaults(func=_cmd_chaos_map)

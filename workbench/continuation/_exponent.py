@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -75,6 +75,11 @@ METHODS = {
 }
 #: Newton's tolerance for the orbit (scaled residual)
 ORBIT_TOLERANCE = 1e-8
+#: a seeded Newton's orbit is the run's when its state at the strobe lies within this fraction of
+#: each state's characteristic size of the state the run ended in (:func:`floquet_exponent`)
+SEED_MATCH = 1e-3
+#: Newton's iterations from a seed before it starts again from the run's end instead
+SEED_ITERATIONS = 4
 #: the Floquet exponent's check: the tolerance divided (tangent system) or the copies' step
 #: multiplied (copies) by this
 CHECK_FACTOR = 100.0
@@ -134,6 +139,11 @@ class PointExponent:
     bound: bool = False
     unmet: tuple[str, ...] = ()
     rule: str = ""
+    #: Floquet's: the orbit's state and discrete state at the strobe (to seed a neighbour's
+    #: Newton), whether Newton started from a given seed, and its map evaluations
+    orbit: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
+    seeded: bool = False
+    evaluations: int = 0
 
     def __post_init__(self):
         unmet = tuple(u for u in self.unmet if u != "failed")
@@ -183,12 +193,24 @@ def _largest(M: np.ndarray, span: float) -> tuple[float, float]:
 
 
 def floquet_exponent(
-    scene: Scene, *, period: int, state=None, discrete_state=None, start_cycles: int | None = None
+    scene: Scene,
+    *,
+    period: int,
+    state=None,
+    discrete_state=None,
+    start_cycles: int | None = None,
+    seed=None,
 ) -> PointExponent:
     """``ln |mu_max| / (k T)`` of the period-``k`` orbit Newton finds from ``state`` (state
     units; default the state after ``start_cycles`` forcing periods of the scene, default its
     transient), checked as the module docstring says (error, or an upper bound). Raises
-    :class:`~workbench.continuation._newton.NewtonFailure` where Newton does not converge."""
+    :class:`~workbench.continuation._newton.NewtonFailure` where Newton does not converge.
+
+    ``seed``: ``(y, aux)``, a neighbouring point's orbit at the strobe (its
+    :attr:`PointExponent.orbit`), where Newton starts first; its orbit is taken when Newton
+    converges there to the orbit ``state`` lies on (within :data:`SEED_MATCH` of each state's
+    characteristic size) within :data:`SEED_ITERATIONS` iterations, else Newton starts again
+    from ``state``."""
     smap = StrobeMap(scene, None, periods=period)
     if state is None:
         y, aux = smap.initial(math.nan, start_cycles)
@@ -198,8 +220,25 @@ def floquet_exponent(
         if discrete_state is not None:
             aux = np.asarray(discrete_state, dtype=float)
     span = period * smap.prepared(math.nan).period
-    pt = orbit_at(smap, y, aux, math.nan, tolerance=ORBIT_TOLERANCE)
+    pt, evaluations = None, 0
+    if seed is not None and state is not None:
+        try:
+            pt = orbit_at(
+                smap, seed[0], seed[1], math.nan, tolerance=ORBIT_TOLERANCE,
+                max_iterations=SEED_ITERATIONS,
+            )  # fmt: skip
+        except (NewtonFailure, SolverError, FloatingPointError, ValueError):
+            pt = None  # evaluations of a failed Newton are not counted (it raised)
+        else:
+            evaluations = pt.evaluations
+            if np.max(np.abs(pt.y - y) / smap.scale()) > SEED_MATCH:
+                pt = None  # another orbit (or another phase of this one): not the run's
+    seeded = pt is not None
+    if pt is None:
+        pt = orbit_at(smap, y, aux, math.nan, tolerance=ORBIT_TOLERANCE)
+        evaluations += pt.evaluations
     mu, lam = _largest(pt.value.M, span)
+    found = {"orbit": (pt.y.copy(), pt.aux.copy()), "seeded": seeded, "evaluations": evaluations}
     if smap.monodromy == "copies":
         coarse = StrobeMap(scene, None, periods=period, step=smap.step * CHECK_FACTOR)
         mu_c, lam_c = _largest(coarse(pt.y, pt.aux, math.nan).M, span)
@@ -209,6 +248,7 @@ def floquet_exponent(
                 math.nan,
                 "floquet",
                 bound=True,
+                **found,
                 detail=f"largest multiplier {mu:.3g} at step {smap.step:g}, {mu_c:.3g} at "
                 f"{coarse.step:g}: below the differences' noise; the exponent is at most "
                 f"{lam_c:.4g} 1/s",
@@ -222,11 +262,12 @@ def floquet_exponent(
         check = f"rtol {tight.rtol:g}"
     error = abs(lam - lam_c)
     if error <= TRUST * abs(lam):
-        return PointExponent(lam, error, "floquet")
+        return PointExponent(lam, error, "floquet", **found)
     return PointExponent(
         lam,
         error,
         "floquet",
+        **found,
         unmet=("floquet check",),
         detail=f"floquet check: the exponent reads {lam:.4g} 1/s and {lam_c:.4g} at {check}: "
         f"it moved by {error / max(abs(lam), 1e-300):.0%} (allowed {TRUST:.0%})",
@@ -245,6 +286,7 @@ def point_exponent(
     protocol: str = "full",
     target: float | None = None,
     sign: float | None = None,
+    seed=None,
 ) -> PointExponent:
     """The largest Lyapunov exponent of one point of a forced scene (see the module docstring):
     Floquet's where ``period`` (the strobe's period in forcing periods, 0 for none) is at least
@@ -287,6 +329,9 @@ def point_exponent(
     sign : float, optional
         Fast protocol: standard errors beyond which the sign is decided and the window stops
         (default :data:`MAP_SIGN`); the full protocol has no sign rule.
+    seed : (y, aux), optional
+        A neighbouring point's periodic orbit at the strobe (:attr:`PointExponent.orbit`),
+        where Newton starts first (:func:`floquet_exponent`; from ``state`` when it fails).
     """
     if protocol not in PROTOCOLS:
         raise ValueError(f"protocol={protocol!r}: must be one of {PROTOCOLS!r}")
@@ -312,6 +357,7 @@ def point_exponent(
                     state=state,
                     discrete_state=discrete_state,
                     start_cycles=start_cycles,
+                    seed=seed,
                 )
             )
         except (NewtonFailure, SolverError, FloatingPointError, ValueError) as exc:

@@ -30,6 +30,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
 from workbench.analysis import poincare_section, zero_one_test
 from workbench.archive import save_run
 from workbench.campaign import expand_sweep, run_campaign
@@ -57,27 +58,21 @@ MAX_PERIOD = 16
 #: two strobe samples are the same point when they differ by less than this fraction of the
 #: largest magnitude of their variable
 PERIOD_TOLERANCE = 1e-4
-LLE_STATUS = {
-    "long_name": "outcome of the exponent's runs",
-    "units": "1",
-    "flag_values": np.array([0, 1, 2], np.int8),
-    "flag_meanings": "ok failed upper_bound",
-    "comment": "upper_bound: lle is an upper bound (the Floquet multipliers are below the noise "
+LLE_STATUS = flags(
+    "outcome of the exponent's runs",
+    ["ok", "failed", "upper_bound"],
+    comment="upper_bound: lle is an upper bound (the Floquet multipliers are below the noise "
     "of the copies' differences; lle_stderr NaN)",
-}
-LLE_METHOD = {
-    "long_name": "how the largest Lyapunov exponent was measured",
-    "units": "1",
-    "flag_values": np.arange(len(METHODS), dtype=np.int8),
-    "flag_meanings": " ".join(METHODS),
+)
+LLE_METHOD = flags(
+    "how the largest Lyapunov exponent was measured",
+    list(METHODS),
     **{f"method_{k}": v for k, v in METHODS.items()},
-}
-LLE_CONVERGED = {
-    "long_name": "the largest Lyapunov exponent converged, and on which rule",
-    "units": "1",
-    "flag_values": np.array([0, 1, 2], np.int8),
-    "flag_meanings": "not_converged converged converged_on_sign",
-    "comment": "nonzero where every convergence condition the map runs holds (lle_unmet = 0). "
+)
+LLE_CONVERGED = flags(
+    "the largest Lyapunov exponent converged, and on which rule",
+    ["not_converged", "converged", "converged_on_sign"],
+    comment="nonzero where every convergence condition the map runs holds (lle_unmet = 0). "
     "Trajectory methods: the window (one start from where the point's run ended, its error "
     "from batch means) grew, doubling, until its standard error was at most the map's target "
     "(lle_target) of the estimate (1: converged) or the sign was decided beyond lle_sign "
@@ -87,13 +82,13 @@ LLE_CONVERGED = {
     "failed run, or a window whose budget ended before either rule held. Not run in a map's "
     "fast protocol (their cost; lle_full_protocol marks the points where the full protocol "
     "ran too): " + "; ".join(f"{m}: {', '.join(c)}" for m, c in FAST_NOT_RUN.items()),
-}
-LLE_UNMET = {
-    "long_name": "the convergence conditions of the largest Lyapunov exponent that failed",
-    "units": "1",
-    "flag_masks": np.array([1 << i for i in range(len(UNMET))], np.int16),
-    "flag_meanings": " ".join(u.replace(" ", "_") for u in UNMET),
-    "comment": "bit field, 0: converged. error_target: after the window's budget the "
+)
+LLE_UNMET = variable(
+    "the convergence conditions of the largest Lyapunov exponent that failed",
+    "1",
+    flag_masks=np.array([1 << i for i in range(len(UNMET))], np.int16),
+    flag_meanings=" ".join(u.replace(" ", "_") for u in UNMET),
+    comment="bit field, 0: converged. error_target: after the window's budget the "
     "standard error is above the target of the estimate (lle_target) and the sign is not "
     "decided beyond lle_sign standard errors (the full protocol: above 3 %, no sign rule); "
     "variants: the two-trajectory separation and growth variants disagree; tolerance_check: "
@@ -102,20 +97,26 @@ LLE_UNMET = {
     "upper_bound: see lle_status; failed: the exponent's runs failed; variational: the "
     "copies' exponent and the variational one on the same trajectories differ; other: a "
     "condition of the estimator not named here",
-}
+)
 
 
-LLE_FULL_PROTOCOL = {
-    "long_name": "the full protocol of the exponent ran at this point too",
-    "units": "1",
-    "flag_values": np.array([0, 1], np.int8),
-    "flag_meanings": "fast_only full_protocol",
-    "comment": "1 on the map's random subset (lle_full_fraction of the points, at least 3, "
+LLE_SEEDED = flags(
+    "Newton's periodic orbit started from the previous point's along the map's axis",
+    ["from_run_end", "from_neighbour"],
+    comment="a map that carries state along an axis (chaos_map with along): where the "
+    "previous point was periodic, Newton starts from its orbit at the strobe and keeps the "
+    "orbit it finds there when that is the orbit the point's run ended on (1); else it starts "
+    "from the state the run ended in (0)",
+)
+LLE_FULL_PROTOCOL = flags(
+    "the full protocol of the exponent ran at this point too",
+    ["fast_only", "full_protocol"],
+    comment="1 on the map's random subset (lle_full_fraction of the points, at least 3, "
     "chosen from the points' parameter values and lle_full_seed): the exponent measured again "
     "by the full protocol (four independent starts after the transient, the separation and "
     "growth variants, a 3 % error target; Newton from the state integrated again) in lle_full "
     "and lle_full_stderr; the map's attributes lle_full_* say how it agrees with lle",
-}
+)
 
 
 def strobe_period(samples: np.ndarray, tolerance: float = PERIOD_TOLERANCE) -> int:
@@ -152,6 +153,8 @@ def chaos_indicators(
     full_protocol: bool = False,
     target: float = MAP_TARGET,
     sign: float = MAP_SIGN,
+    seed=None,
+    carry: bool = False,
 ) -> xr.Dataset:
     """The chaos indicators of one point (a campaign's ``per_point``): ``strobe_period``,
     ``zero_one_K`` (median over the recorded variables' components) and ``zero_one_K_<var>``
@@ -183,6 +186,13 @@ def chaos_indicators(
     sign : float
         The fast protocol's sign rule: standard errors beyond which the sign is decided
         (default :data:`~workbench.continuation._exponent.MAP_SIGN`, 3).
+    seed : (y, aux), optional
+        A neighbouring point's periodic orbit at the strobe, where Newton starts first
+        (:func:`~workbench.continuation.point_exponent`; from the run's end when it fails).
+    carry : bool
+        A map that carries state along an axis (:func:`chaos_map` with ``along``): add
+        ``lle_seeded`` (1 where Newton's orbit came from ``seed``) and leave this point's
+        periodic orbit (or None) in the attribute ``carry``, the next point's ``seed``.
     """
     section = poincare_section(run)
     out: dict = {}
@@ -200,22 +210,22 @@ def chaos_indicators(
         out[f"zero_one_K_{name}"] = (
             tuple(extra),
             np.array(per).reshape(shape),
-            {"long_name": f"0-1 test K of the strobe samples of {name}", "units": "1"},
+            variable(f"0-1 test K of the strobe samples of {name}", "1"),
         )
     period = strobe_period(np.concatenate(columns, axis=1))
     out["strobe_period"] = (
         (),
         np.int16(period),
-        {
-            "long_name": "period of the strobe samples in forcing periods (0: none up to "
+        variable(
+            "period of the strobe samples in forcing periods (0: none up to "
             f"{MAX_PERIOD}: quasi-periodic or chaotic)",
-            "units": "1",
-        },
+            "1",
+        ),
     )
     out["zero_one_K"] = (
         (),
         float(np.nanmedian(ks)) if np.isfinite(ks).any() else np.nan,
-        {"long_name": "0-1 test K, median over the recorded variables", "units": "1"},
+        variable("0-1 test K, median over the recorded variables", "1"),
     )
     period_s = float(run.attrs["forcing_period"])
     t, y, aux = run_end(run)
@@ -229,25 +239,26 @@ def chaos_indicators(
         protocol="fast",
         target=target,
         sign=sign,
+        seed=seed,
     )
     out["lle"] = (
         (),
         exp.value,
-        {"long_name": "largest Lyapunov exponent", "units": "s-1"},
+        variable("largest Lyapunov exponent", "s-1"),
     )
     out["lle_stderr"] = (
         (),
         exp.error,
-        {
-            "long_name": "error of the largest Lyapunov exponent (batch means; floquet: its "
+        variable(
+            "error of the largest Lyapunov exponent (batch means; floquet: its "
             "change with the copies' step or the tolerance, see lle_method)",
-            "units": "s-1",
-        },
+            "s-1",
+        ),
     )
     out["lle_per_period"] = (
         (),
         exp.value * period_s,
-        {"long_name": "largest Lyapunov exponent per forcing period", "units": "1"},
+        variable("largest Lyapunov exponent per forcing period", "1"),
     )
     out["lle_method"] = ((), np.int8(list(METHODS).index(exp.method)), LLE_METHOD)
     status = 1 if exp.failed else 2 if exp.bound else 0
@@ -266,14 +277,18 @@ def chaos_indicators(
     out["lle_full"] = (
         (),
         full.value if full is not None else np.nan,
-        {"long_name": "largest Lyapunov exponent by the full protocol", "units": "s-1"},
+        variable("largest Lyapunov exponent by the full protocol", "s-1"),
     )
     out["lle_full_stderr"] = (
         (),
         full.error if full is not None else np.nan,
-        {"long_name": "error of lle_full", "units": "s-1"},
+        variable("error of lle_full", "s-1"),
     )
-    return xr.Dataset(out, attrs={"lle_detail": exp.detail})
+    attrs = {"lle_detail": exp.detail}
+    if carry:
+        out["lle_seeded"] = ((), np.int8(exp.seeded), LLE_SEEDED)
+        attrs["carry"] = exp.orbit
+    return xr.Dataset(out, attrs=attrs)
 
 
 def run_end(run: xr.Dataset) -> tuple[float, np.ndarray, np.ndarray | None]:
@@ -343,14 +358,33 @@ def full_subset(grid, fraction: float, seed: int) -> tuple[np.ndarray, float]:
     return chosen, float(keys[chosen].max())
 
 
+_GRID = object()  # a grid map's point: no neighbour to carry from
+
+
 def _map_point(
-    scene: Scene, run: xr.Dataset, *, dims: tuple, seed: int, threshold: float, **rule
+    scene: Scene,
+    run: xr.Dataset,
+    *,
+    dims: tuple,
+    subset_seed: int,
+    threshold: float,
+    orbit=_GRID,
+    **rule,
 ) -> xr.Dataset:
     """:func:`chaos_indicators` of one map point, with the full protocol where the point's
-    :func:`subset_key` is at most ``threshold`` (:func:`full_subset`)."""
+    :func:`subset_key` is at most ``threshold`` (:func:`full_subset`); ``orbit``: the
+    previous point's periodic orbit along a continued map's axis (None: none)."""
     values = {d: scene.parameters[d] if d in scene.parameters else scene.run[d] for d in dims}
-    full = subset_key(values, seed) <= threshold
-    return chaos_indicators(scene, run, full_protocol=full, **rule)
+    full = subset_key(values, subset_seed) <= threshold
+    if orbit is _GRID:
+        return chaos_indicators(scene, run, full_protocol=full, **rule)
+    return chaos_indicators(scene, run, full_protocol=full, seed=orbit, carry=True, **rule)
+
+
+def _carried_point(scene: Scene, run: xr.Dataset, *, seed=None, **kw) -> xr.Dataset:
+    """:func:`_map_point` of a map that carries state along an axis (a continued sweep's
+    ``per_point``: ``seed`` is the previous point's orbit)."""
+    return _map_point(scene, run, orbit=seed, **kw)
 
 
 def map_measurement(scene: Scene, fraction: float, seed: int, target: float, sign: float):
@@ -361,8 +395,8 @@ def map_measurement(scene: Scene, fraction: float, seed: int, target: float, sig
     grid = expand_sweep(scene)
     _, threshold = full_subset(grid, fraction, seed)
     fn = functools.partial(
-        _map_point, dims=tuple(scene.sweep), seed=int(seed), threshold=threshold,
-        target=float(target), sign=float(sign),
+        _carried_point if scene.continuation else _map_point, dims=tuple(scene.sweep),
+        subset_seed=int(seed), threshold=threshold, target=float(target), sign=float(sign),
     )  # fmt: skip
     fn.__module__ = __name__
     fn.__qualname__ = (
@@ -412,6 +446,7 @@ def chaos_map(
     full_seed: int = 0,
     target: float = MAP_TARGET,
     sign: float = MAP_SIGN,
+    along: str | None = None,
 ) -> xr.Dataset:
     """A campaign over the scene's ``[sweep]`` that measures the chaos indicators of every
     point in its worker (:func:`chaos_indicators`) and stores them over the parameter dims,
@@ -427,6 +462,13 @@ def chaos_map(
     how the two agree (:func:`subset_agreement`), with ``lle_full_fraction``,
     ``lle_full_seed``, ``lle_target`` and ``lle_sign``.
 
+    With ``along`` (a swept parameter; or a scene whose ``[sweep]`` has a ``continuation``)
+    the map runs as a continued sweep upwards along that axis
+    (:func:`workbench.continuation.continued_sweep`): each point's run starts from the state
+    the previous point's ended in, with the per-point transient, and where the previous
+    point was periodic, Newton starts from its orbit (``lle_seeded``; from the run's end
+    where that fails).
+
     The scene should record per forcing period (``record.samples_per_period = 1``) at least
     100 cycles (the 0-1 test needs 100 samples). Draw the maps with
     :func:`workbench.plot.chaos_map_figure`.
@@ -434,7 +476,8 @@ def chaos_map(
     Parameters
     ----------
     scene : Scene, path or mapping
-        A forced model with a ``[sweep]`` (without ``continuation``).
+        A forced model with a ``[sweep]`` (with a ``continuation``: the map carries state
+        along its axis, as with ``along``).
     store : str or PathLike
         Path of the campaign archive; blocks and manifest go to ``<store>.blocks/``.
     client : dask.distributed.Client, optional
@@ -456,6 +499,9 @@ def chaos_map(
         The fast protocol's relative error target (default 10 %).
     sign : float
         The fast protocol's sign rule, in standard errors (default 3).
+    along : str, optional
+        Carry state along this swept parameter (upwards, in the segments of
+        :func:`~workbench.continuation.continued_sweep`); not with ``chunk``.
 
     Returns
     -------
@@ -472,17 +518,44 @@ def chaos_map(
     scene = load_scene(scene)
     if not scene.sweep:
         raise ValueError("the scene has no [sweep]: a chaos map runs over a campaign's grid")
+    if along is not None:
+        if along not in scene.sweep:
+            raise ValueError(
+                f"along={along!r}: a map carries state along one of its swept parameters "
+                f"{list(scene.sweep)!r}"
+            )
+        scene = scene.replace(
+            sweep={**scene.sweep, "continuation": {"direction": "up", "along": along}}
+        )
     measure = map_measurement(scene, full_fraction, full_seed, target, sign)
-    maps = run_campaign(
-        scene,
-        store,
-        client=client,
-        workers=workers,
-        chunk=chunk,
-        restart=restart,
-        progress=progress,
-        per_point=measure,
-    )
+    if scene.continuation:
+        if chunk is not None:
+            raise ValueError(
+                f"chunk={chunk!r}: a map along an axis runs in the continuation's segments "
+                "(sweep.continuation.segments), not in chunks; drop chunk"
+            )
+        from workbench.continuation._sweep import continued_sweep
+
+        maps = continued_sweep(
+            scene,
+            store,
+            client=client,
+            workers=workers,
+            restart=restart,
+            progress=progress,
+            per_point=measure,
+        )
+    else:
+        maps = run_campaign(
+            scene,
+            store,
+            client=client,
+            workers=workers,
+            chunk=chunk,
+            restart=restart,
+            progress=progress,
+            per_point=measure,
+        )
     attrs = {
         "lle_full_fraction": float(full_fraction),
         "lle_full_seed": int(full_seed),

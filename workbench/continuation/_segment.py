@@ -14,58 +14,48 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import flags, variable
 from workbench.archive import RECORD_DIM, save_run
-from workbench.campaign import (
+from workbench.campaign._block import (
+    Task,
     block_dataset,
     block_summary,
-    code_of,
     invalid_outcome,
     run_outcome,
     task_scene,
 )
+from workbench.campaign._grid import code_of, modules_of
 from workbench.models import get_model
-from workbench.run import derive, integrate, prepare, to_dataset
+from workbench.run import Prepared, derive, integrate, prepare, run_status, to_dataset
 from workbench.scene import Scene, SceneError
 from workbench.solver import Status
 
-__all__ = ["SEED_ATTRS", "SegmentTask", "continue_point", "run_segment", "segment_code"]
+__all__ = ["SEED_ATTRS", "SegmentTask", "Starts", "continue_point", "run_segment", "segment_code"]
 
 #: how a point of a continued sweep started (int8 ``seed``, CF flags)
 CONTINUED, BRUTE_FORCE, CHAINED_START, RESTARTED = 0, 1, 2, 3
-SEED_ATTRS = {
-    "long_name": "how the point's run started",
-    "units": "1",
-    "flag_values": np.array([CONTINUED, BRUTE_FORCE, CHAINED_START, RESTARTED], np.int8),
-    "flag_meanings": "continued brute_force_seed chained_seed restarted_after_failure",
-    "comment": "continued: from the previous point's final state with the per-point transient; "
+SEED_ATTRS = flags(
+    "how the point's run started",
+    {
+        CONTINUED: "continued",
+        BRUTE_FORCE: "brute_force_seed",
+        CHAINED_START: "chained_seed",
+        RESTARTED: "restarted_after_failure",
+    },
+    comment="continued: from the previous point's final state with the per-point transient; "
     "brute_force_seed: from the scene's initial state with the scene's transient (the first "
     "point of a segment); chained_seed: from the final state of the previous segment's last "
     "point (a segment run again after its seam disagreed); restarted_after_failure: from the "
     "scene's initial state because the previous point failed",
-}
+)
 
 
-@dataclass(frozen=True)
-class SegmentTask:
-    """What a worker needs for one segment: the scene, the points in order, the seed."""
-
-    scene_toml: str
-    dims: tuple[str, ...]
-    flat: tuple[int, ...]
-    values: tuple[tuple[float, ...], ...]
-    own_from: int
-    path: str
-    campaign_id: str
-    block: int
-    seed_state: tuple[float, ...] | None = None  # chained: the state to start from
-    seed_aux: tuple[float, ...] | None = None
-    model_module: str = ""  # workbench.campaign.model_source: imported in the worker first
-    model_directory: str = ""
+#: the name of a segment's task before the campaign engine had one task type
+SegmentTask = Task
 
 
 def _settled(scene: Scene, c) -> Scene:
@@ -79,35 +69,68 @@ def _settled(scene: Scene, c) -> Scene:
     return scene.replace(run=run)
 
 
+class Starts:
+    """The sweep's scene prepared once for its points (:meth:`workbench.run.Prepared.at`): as
+    it is (a brute-force start) and with the per-point transient (a continued start); a scene
+    that cannot be prepared keeps its error, which each point then reports."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        self._prepared: dict[bool, Prepared | SceneError] = {}
+
+    def at(self, continued: bool, params: dict[str, float]) -> Prepared:
+        """The point ``params`` prepared for a continued start or a brute-force one."""
+        if continued not in self._prepared:
+            scene = _settled(self.scene, self.scene.continuation) if continued else self.scene
+            try:
+                self._prepared[continued] = prepare(scene, points=True)
+            except SceneError as exc:
+                self._prepared[continued] = exc
+        base = self._prepared[continued]
+        if isinstance(base, SceneError):
+            raise base
+        return base.at(**params)
+
+
 def continue_point(
-    scene: Scene,
+    starts: Starts,
     params: dict[str, float],
     carried: tuple[np.ndarray, np.ndarray] | None,
+    per_point=None,
+    seed=None,
 ) -> tuple[dict, tuple[np.ndarray, np.ndarray] | None]:
-    """Run one point of a continued sweep of ``scene`` (with its ``continuation`` settings).
+    """Run one point of a continued sweep (its scene, with its ``continuation`` settings,
+    prepared for its points: ``starts``), and measure it (``per_point``).
 
     Parameters
     ----------
-    scene : Scene
-        The sweep's scene.
+    starts : Starts
+        The sweep's scene prepared for its points.
     params : dict
         The point's swept values.
     carried : (y, aux) or None
         The state (state units) and discrete state to start from, with the per-point
         transient; None: the scene's initial state and transient (a brute-force start).
+    per_point : callable, optional
+        ``per_point(scene, run, seed=seed)``: the measurement of a run that succeeded (as
+        :func:`workbench.run_campaign`'s), which may leave in its dataset's attribute
+        ``carry`` what the next point's measurement starts from (its ``seed``, e.g. a
+        periodic orbit for the next point's Newton).
+    seed : object, optional
+        What the previous point's measurement left (``carry``), for ``per_point``.
 
     Returns
     -------
     outcome : dict
-        As :func:`workbench.campaign.run_outcome` (or ``invalid_outcome``).
+        As :func:`workbench.campaign._block.run_outcome` (or ``invalid_outcome``), with
+        ``measured`` (the measurement, or None) and ``carry`` (for the next point, or None).
     final : (y, aux) or None
         The state at the end of the run, to carry to the next point (None if the run failed
         or ended early).
     """
     t0 = time.perf_counter()
     try:
-        point = scene.with_parameters(**params)
-        prepared = prepare(_settled(point, scene.continuation) if carried is not None else point)
+        prepared = starts.at(carried is not None, params)
         if carried is not None:
             pb = prepared.problem
             y0 = np.array(pb.y0, dtype=float)
@@ -118,6 +141,10 @@ def continue_point(
         result = integrate(prepared)
         derived, result = derive(prepared, result)
         ds = to_dataset(prepared, result, derived)
+        measured = carry = None
+        if per_point is not None and not run_status(ds).failed:
+            measured = per_point(prepared.scene, ds, seed=seed)
+            carry = measured.attrs.pop("carry", None)
     except SceneError as exc:
         return invalid_outcome(exc, time.perf_counter() - t0), None
     except Exception as exc:
@@ -128,7 +155,7 @@ def continue_point(
             "anything else is a bug or a broken setup. Finished blocks are kept: fix the cause "
             "and run the sweep again."
         ) from exc
-    outcome = run_outcome(ds, time.perf_counter() - t0)
+    outcome = run_outcome(ds, time.perf_counter() - t0) | {"measured": measured, "carry": carry}
     final = None
     if result.status is Status.OK:
         final = (result.Y[-1].copy(), result.AUX[-1].copy())
@@ -137,18 +164,19 @@ def continue_point(
     return outcome, final
 
 
-def segment_code(scene: Scene) -> str:
+def segment_code(scene: Scene, per_point=None) -> str:
     """Digest of the code that computes a segment's block (the campaign's
-    :func:`workbench.campaign.code_of` with this module)."""
-    return code_of(scene, __name__)
+    :func:`workbench.campaign._grid.code_of` with this module and that of ``per_point``)."""
+    return code_of(scene, __name__, *modules_of(per_point))
 
 
-def run_segment(task: SegmentTask) -> dict:
+def run_segment(task: Task) -> dict:
     """Run a segment (in a worker) and write its block file (atomically); the summary has the
     fields of :func:`workbench.campaign._block.run_block`'s."""
     wall0, cpu0 = time.perf_counter(), time.process_time()
     scene = task_scene(task.scene_toml, task.model_module, task.model_directory)
-    carried = None
+    starts = Starts(scene)
+    carried, seed = None, None
     if task.seed_state is not None:
         carried = (np.array(task.seed_state), np.array(task.seed_aux or ()))
     runs, seeds = [], []
@@ -157,7 +185,9 @@ def run_segment(task: SegmentTask) -> dict:
             kind = CHAINED_START if (i == 0 and task.seed_state is not None) else CONTINUED
         else:
             kind = BRUTE_FORCE if i == 0 else RESTARTED
-        outcome, carried = continue_point(scene, dict(zip(task.dims, v, strict=True)), carried)
+        params = dict(zip(task.dims, v, strict=True))
+        outcome, carried = continue_point(starts, params, carried, task.per_point, seed)
+        seed = outcome.get("carry") if carried is not None else None
         runs.append(outcome)
         seeds.append(kind)
     own = slice(task.own_from, None)
@@ -166,7 +196,7 @@ def run_segment(task: SegmentTask) -> dict:
     if task.own_from:
         ds = ds.merge(_seam_points(scene, task.flat[: task.own_from], runs[: task.own_from]))
     ran = next((r for r in runs if r.get("states") is not None), None)
-    code = segment_code(scene)
+    code = segment_code(scene, task.per_point)
     ds.attrs.update(
         code_digest=code,
         campaign_id=task.campaign_id,
@@ -177,7 +207,7 @@ def run_segment(task: SegmentTask) -> dict:
         block_cpu_time=time.process_time() - cpu0,
     )
     save_run(ds, task.path, classic=True)
-    return block_summary(task, ds, runs, code, wall0)
+    return block_summary(task, ds, runs, code, wall0, cpu0)
 
 
 def _finals(scene: Scene, runs: list[dict], seeds: list[int]) -> xr.Dataset:
@@ -195,17 +225,17 @@ def _finals(scene: Scene, runs: list[dict], seeds: list[int]) -> xr.Dataset:
             y[i], a[i] = r["final"]
     for k, q in enumerate(states):
         if not q.name.startswith("_"):
-            attrs = {"units": q.units, "long_name": f"{q.long_name} at the end of the run"}
+            attrs = variable(f"{q.long_name} at the end of the run", q.units)
             data[f"final_{q.name}"] = ("point", y[:, k], attrs)
     if na:
         data["final_discrete_state"] = (
             ("point", "discrete_state"),
             a,
-            {
-                "long_name": "the model's discrete state at the end of the run (the mechanisms: "
-                "each joint's held contact onset velocity, 0 out of contact)",
-                "units": get_model(scene.model).discrete_state_units,
-            },
+            variable(
+                "the model's discrete state at the end of the run (the mechanisms: each joint's "
+                "held contact onset velocity, 0 out of contact)",
+                get_model(scene.model).discrete_state_units,
+            ),
         )
     return xr.Dataset(data)
 

@@ -9,29 +9,22 @@ import time
 import numpy as np
 import xarray as xr
 
-from workbench.archive import RECORD_DIM, RECORD_TIME, open_run, save_run
-from workbench.campaign import (
-    CampaignError,
-    Store,
-    assemble_blocks,
-    available_workers,
-    campaign_id,
-    execute,
-    execution_attrs,
-    expand_sweep,
-    model_source,
-)
+from workbench._attributes import flags, variable
+from workbench.archive import RECORD_DIM, RECORD_TIME, open_run
+from workbench.campaign import CampaignError, expand_sweep
+from workbench.campaign._block import Task, model_source
+from workbench.campaign._engine import Engine
+from workbench.campaign._grid import campaign_id
+from workbench.campaign._run import per_point_name
+from workbench.campaign._store import Store
 from workbench.continuation._plan import BRUTE, CHAINED, Plan, SegmentSpec
 from workbench.continuation._seams import attractor_distance, cloud, line_scale
-from workbench.continuation._segment import SEED_ATTRS, SegmentTask, run_segment, segment_code
+from workbench.continuation._segment import SEED_ATTRS, run_segment, segment_code
 from workbench.scene import Scene, SceneSource, load_scene
 
 __all__ = ["continued_sweep"]
 
-DIRECTION_ATTRS = {
-    "long_name": "direction of the continuation over the swept parameter",
-    "units": "1",
-}
+DIRECTION_ATTRS = variable("direction of the continuation over the swept parameter", "1")
 
 
 def continued_sweep(
@@ -42,6 +35,7 @@ def continued_sweep(
     workers: int | None = None,
     restart: bool = False,
     progress: bool = False,
+    per_point=None,
 ) -> xr.Dataset:
     """Run a scene's ``[sweep]`` as a continued sweep (``[sweep] continuation``): along one
     swept parameter each point starts from the state its neighbour settled to, with a short
@@ -71,6 +65,11 @@ def continued_sweep(
         The archive to write; blocks and manifest go to ``<store>.blocks/``.
     client, workers, restart, progress
         As :func:`workbench.run_campaign`.
+    per_point : callable, optional
+        As :func:`workbench.run_campaign`'s, called ``per_point(scene, run, seed=seed)``:
+        ``seed`` is what the previous point's measurement left in its dataset's attribute
+        ``carry`` (None at a segment's start or after a failed point), e.g. a periodic orbit
+        to start Newton from (:func:`workbench.continuation.chaos_map` along an axis).
 
     Returns
     -------
@@ -115,13 +114,15 @@ def continued_sweep(
     with st.lock():
         if restart:
             st.clear()
-        return _run(scene, plan, st, client, workers, progress, wall0)
+        return _run(scene, plan, st, client, workers, progress, wall0, per_point)
 
 
-def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) -> xr.Dataset:
+def _run(
+    scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0, per_point=None
+) -> xr.Dataset:
     manifest = st.read_manifest()
-    cid = campaign_id(scene, plan.segments)
-    code = segment_code(scene)
+    cid = campaign_id(scene, plan.segments, per_point)
+    code = segment_code(scene, per_point)
     if manifest is None:
         if st.archive.is_file():
             ds = open_run(st.archive)
@@ -130,92 +131,71 @@ def _run(scene: Scene, plan: Plan, st: Store, client, workers, progress, wall0) 
         manifest = st.write_manifest(scene, plan.grid, plan.segments, cid, code)
     else:
         st.check_manifest(manifest, scene, plan.segments)
-    st.remove_temporaries()
-    done = st.verified_blocks(manifest, [range(0)] * plan.n_blocks, code)
-    n_workers = available_workers(client, workers)
-    blocks: dict[int, xr.Dataset] = {}
-    stats = {"computed": 0, "reused": 0, "rounds": 0, "compute": 0.0, "cpu": 0.0}
-    bar = _bar(plan, progress)
+    engine = Engine(
+        st,
+        manifest,
+        blocks=plan.n_blocks,
+        code=code,
+        cid=cid,
+        client=client,
+        workers=workers,
+        progress="continued sweep" if progress else False,
+        total=sum(len(s.flat) for s in plan.all_segments()),
+        runner=run_segment,
+        wall0=wall0,
+        by="workbench.continuation.continued_sweep",
+    )
 
-    def run(tasks: list[SegmentTask]) -> None:
-        for t in tasks:
-            if t.block in done:
-                blocks[t.block] = open_run(st.block_path(t.block)).load()
-                stats["reused"] += 1
-        todo = [t for t in tasks if t.block not in done]
-        if not todo:
-            return
-        todo.sort(key=lambda t: (-len(t.flat), t.block))  # longest first (Graham 1969)
-        t0 = time.perf_counter()
-
-        def commit(result: dict) -> None:
-            st.commit(manifest, result["block"], result["sha256"], result["code_digest"])
-            blocks[result["block"]] = result["dataset"]
-            stats["cpu"] += result["dataset"].attrs["block_cpu_time"]
-            if bar is not None:
-                bar.update(result["points"])
-
-        execute(
-            todo,
-            client=client,
-            workers=min(n_workers, len(todo)) if client is None else n_workers,
-            cid=cid,
-            on_done=commit,
-            announce=progress and stats["rounds"] == 0,  # the dashboard link once
-            runner=run_segment,
-        )
-        stats["computed"] += len(todo)
-        stats["rounds"] += 1
-        stats["compute"] += time.perf_counter() - t0
+    def run(tasks: list[Task]) -> None:
+        # longest first (Graham 1969)
+        engine.run(sorted(tasks, key=lambda t: (-len(t.flat), t.block)))
 
     try:
-        run([_task(scene, plan, st, cid, s, BRUTE) for s in plan.all_segments()])
-        final, seams = _settle_seams(scene, plan, st, cid, blocks, run)
+        run([_task(scene, plan, st, cid, s, BRUTE, None, per_point) for s in plan.all_segments()])
+        blocks = _Blocks(engine)
+        final, seams = _settle_seams(scene, plan, engine, blocks, run, per_point)
     finally:
-        if bar is not None:
-            bar.close()
+        engine.close()
+    chosen = sorted(final.values())
     ds = _assemble(scene, plan, final, seams, blocks)
-    checksums = " ".join(manifest["checksums"][str(b)] for b in sorted(final.values()))
-    execution = {
-        "campaign_workers": n_workers if stats["computed"] else 0,
-        "campaign_compute_wall_time": stats["compute"],
-        "campaign_cpu_time": stats["cpu"],
-        "campaign_wall_time": time.perf_counter() - wall0,
-    }
-    if not stats["computed"]:  # every block reused: the figures of the call that computed them
-        execution = execution_attrs(execution, st.assembled_attrs(checksums))
-    ds.attrs.update(
-        campaign_id=cid,
-        campaign_chunk=plan.segments,
-        campaign_blocks=len(final),
-        computed_blocks=stats["computed"],
-        reused_blocks=stats["reused"],
-        continuation_rounds=stats["rounds"],
-        **execution,
-        campaign_block_sha256=checksums,
-        code_digests=" ".join(sorted({manifest["code_digests"][str(b)] for b in final.values()})),
+    return engine.finish(
+        ds,
+        chosen,
+        {
+            "campaign_chunk": plan.segments,
+            "campaign_blocks": len(final),
+            "continuation_rounds": engine.rounds,
+            **({"campaign_per_point": per_point_name(per_point)} if per_point is not None else {}),
+        },
     )
-    save_run(ds, st.archive)
-    return open_run(st.archive)
 
 
-def _task(scene: Scene, plan: Plan, st: Store, cid: str, seg: SegmentSpec, kind: int, seed=None):
-    values = tuple(tuple(plan.grid.point(f).values()) for f in seg.flat)
+def _task(
+    scene: Scene,
+    plan: Plan,
+    st: Store,
+    cid: str,
+    seg: SegmentSpec,
+    kind: int,
+    seed=None,
+    per_point=None,
+) -> Task:
     block = plan.block(kind, seg)
     model_module, model_directory = model_source(scene)
-    return SegmentTask(
+    return Task(
         scene_toml=scene.to_toml(),
         dims=plan.grid.dims,
         flat=seg.flat,
-        values=values,
-        own_from=seg.own_from,
+        axes=plan.grid.values,
         path=str(st.block_path(block)),
         campaign_id=cid,
         block=block,
-        seed_state=None if seed is None else tuple(float(x) for x in seed[0]),
-        seed_aux=None if seed is None else tuple(float(x) for x in seed[1]),
         model_module=model_module,
         model_directory=model_directory,
+        per_point=per_point,
+        own_from=seg.own_from,
+        seed_state=None if seed is None else tuple(float(x) for x in seed[0]),
+        seed_aux=None if seed is None else tuple(float(x) for x in seed[1]),
     )
 
 
@@ -232,12 +212,26 @@ def _final_state(ds: xr.Dataset, flat: int):
     return y, np.asarray(aux, dtype=float)
 
 
-def _settle_seams(scene: Scene, plan: Plan, st: Store, cid: str, blocks: dict, run):
+class _Blocks:
+    """The blocks of a continued sweep by index, each read once (loaded) from its task's result
+    or its file."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine, self.read = engine, {}
+
+    def __getitem__(self, index: int) -> xr.Dataset:
+        if index not in self.read:
+            self.read[index] = self.engine.block(index).load()
+        return self.read[index]
+
+
+def _settle_seams(scene: Scene, plan: Plan, engine: Engine, blocks: _Blocks, run, per_point):
     """Walk every line's seams in order; a seam whose two runs disagree has its later segment
     run again (chained) from the earlier one's final state, round by round, until every seam
     agrees or is chained. Returns the block chosen per segment and the seam measurements."""
     tol = scene.continuation["seam_tolerance"]
     variables = scene.variables
+    st, cid = engine.store, engine.cid
     final: dict[tuple[int, int, int], int] = {}
     seams: dict[tuple[int, int, int], tuple[float, float, int]] = {}
     scales = {}
@@ -271,18 +265,19 @@ def _settle_seams(scene: Scene, plan: Plan, st: Store, cid: str, blocks: dict, r
                     chained = plan.segment(d, line, j, CHAINED)
                     seams[d, line, j] = (cross, within, 1)
                     block = plan.block(CHAINED, chained)
-                    if block in blocks:
+                    if block in engine.computed or block in engine.reused:
                         final[d, line, j] = block
                         continue
                     seed = _final_state(prev, f)
-                    pending.append(_task(scene, plan, st, cid, chained, CHAINED, seed))
+                    pending.append(_task(scene, plan, st, cid, chained, CHAINED, seed, per_point))
                     break  # the next seam of this line waits for this segment
         if not pending:
             return final, seams
         run(pending)
 
 
-def _assemble(scene: Scene, plan: Plan, final: dict, seams: dict, blocks: dict) -> xr.Dataset:
+def _assemble(scene: Scene, plan: Plan, final: dict, seams: dict, blocks: _Blocks) -> xr.Dataset:
+    engine = blocks.engine
     per_direction = []
     for d in range(len(plan.directions)):
         chosen = [
@@ -290,7 +285,7 @@ def _assemble(scene: Scene, plan: Plan, final: dict, seams: dict, blocks: dict) 
             for line in range(plan.lines)
             for j in range(plan.segments)
         ]
-        ds = assemble_blocks(scene, plan.grid, chosen)
+        ds = engine.assemble(scene, plan.grid, chosen)
         ds["seed"] = ds["seed"].fillna(-1).astype(np.int8).assign_attrs(SEED_ATTRS)
         if plan.segments > 1:
             ds = _with_seams(ds, plan, seams, d)
@@ -315,9 +310,6 @@ def _assemble(scene: Scene, plan: Plan, final: dict, seams: dict, blocks: dict) 
         ds.attrs["campaign_points"] = len(plan.directions) * plan.grid.size
         ds.attrs["failed_points"] = sum(d.attrs["failed_points"] for d in per_direction)
     ds.attrs.update({f"continuation_{k}": v for k, v in scene.continuation.items()})
-    ds.attrs["history"] = ds.attrs["history"].replace(
-        "workbench.run_campaign", "workbench.continuation.continued_sweep"
-    )
     return ds
 
 
@@ -335,36 +327,24 @@ def _with_seams(ds: xr.Dataset, plan: Plan, seams: dict, d: int) -> xr.Dataset:
     ds["seam_distance"] = (
         dims,
         dist,
-        {
-            "long_name": "mean nearest-record distance at a seam between the two segments' runs",
-            "units": "1",
-            "comment": "in fractions of each recorded variable's range over the line",
-        },
+        variable(
+            "mean nearest-record distance at a seam between the two segments' runs",
+            "1",
+            comment="in fractions of each recorded variable's range over the line",
+        ),
     )
     ds["seam_spread"] = (
         dims,
         spread,
-        {"long_name": "mean nearest-record distance within the two runs at a seam", "units": "1"},
+        variable("mean nearest-record distance within the two runs at a seam", "1"),
     )
     ds["seam_chained"] = (
         dims,
         chained,
-        {
-            "long_name": "whether the later segment was run again from the earlier one's state",
-            "units": "1",
-            "flag_values": np.array([0, 1], np.int8),
-            "flag_meanings": "seam_agreed chained",
-        },
+        flags(
+            "whether the later segment was run again from the earlier one's state",
+            ["seam_agreed", "chained"],
+        ),
     )
-    seam_attrs = {"long_name": "seam before segment j (between segments j-1 and j)", "units": "1"}
+    seam_attrs = variable("seam before segment j (between segments j-1 and j)", "1")
     return ds.assign_coords(seam=("seam", np.arange(1, plan.segments), seam_attrs))
-
-
-def _bar(plan: Plan, progress: bool):
-    """Progress over the sweep's points (:class:`workbench._progress.Progress`), or None."""
-    if not progress:
-        return None
-    from workbench._progress import Progress
-
-    total = sum(len(s.flat) for s in plan.all_segments())
-    return Progress(total, unit="pt", desc="continued sweep")
