@@ -113,6 +113,34 @@ def test_the_sequence_sees_a_contact_between_two_samples():
     assert match_extrema(a, b, 1.0) == [(0, 1), (1, 0)]
 
 
+def test_an_impact_shorter_than_the_samples_spacing_is_in_the_sequence():
+    """A stop of 1e8 N/m against a 1 kg mass: each impact lasts about pi sqrt(m / k_s) = 0.3 ms,
+    a tenth of the 2048 samples' spacing over the 7.9 s period (3.8 ms), and reaches about
+    v sqrt(m / k_s) ~ 1e-4 m into the stop. Sampled at 2048 points the orbit read as a free
+    flight that misses the stop by 0.5 mm (its 2 events per period in no crossing); the map now
+    samples densely enough for its crossings to be the events the integration located, and the
+    impact's depth is the margin."""
+    from workbench.continuation import periodic_orbit
+    from workbench.continuation._strobe import SAMPLES, StrobeMap
+
+    params = {"mass": 1.0, "damping": 0.2, "stiffness": 1.0, "stop_stiffness": 1e8}
+    params |= {"gap": 1.0, "force": 0.8, "omega": 0.8}
+    scene = {"model": {"name": "stop_oscillator"}, "parameters": params}
+    orbit = periodic_orbit(dict(scene, run={"transient_cycles": 300}), tolerance=1e-9)
+    assert float(orbit.events_per_period[0]) == 2.0
+    assert orbit.crossings_per_orbit.values[0].tolist() == [1, 1]
+    depth = 0.8 * math.sqrt(1.0 / 1e8)  # order of magnitude: the speed ~0.8 m/s times sqrt(m/k_s)
+    assert depth / 3 < float(orbit.event_max.values[0, 0]) < 3 * depth
+    # the density stays with the map: a neighbour is read at the same one
+    smap = StrobeMap(scene, "omega", rtol=1e-9)
+    y = np.array([float(orbit.orbit_x[0]), float(orbit.orbit_v[0])])
+    aux = orbit.orbit_discrete_state.values[0]
+    assert smap.samples == SAMPLES
+    seq = smap.contact_sequence(y, aux, 0.8)
+    assert seq.counts == (1, 1) and seq.samples == smap.samples > SAMPLES
+    assert smap.with_rtol(1e-10).samples == smap.samples
+
+
 @pytest.mark.parametrize(
     "params, start, stop",
     [(ISSUE, 0.6, 1.15), (ISSUE, 0.6, 1.1), (DRAWN[0], 0.64, 0.74), (DRAWN[1], 0.52, 0.61)],

@@ -207,8 +207,9 @@ def _detect(a: dict, b: dict) -> list[str]:
 
 
 def sequence_of(smap: StrobeMap, pt: OrbitPoint) -> ContactSequence:
-    """The contact sequence of a converged orbit (computed once per point)."""
-    if pt.sequence is None:
+    """The contact sequence of a converged orbit (computed once per point, and again where the
+    map has since read sequences at a higher density: neighbours are compared at one)."""
+    if pt.sequence is None or pt.sequence.samples < smap.samples:
         pt.sequence = smap.contact_sequence(pt.y, pt.aux, pt.p)
     return pt.sequence
 
