@@ -164,6 +164,35 @@ def test_grazing_of_stop_oscillators_against_the_closed_form(params, start, stop
     assert (r.crossings_per_orbit.values[r.omega.values > exact * (1 + 1e-6)] == 1).all()
 
 
+def test_a_grazing_the_corrector_cannot_cross_is_located_at_fixed_parameters(monkeypatch):
+    """A map that is not smooth at a grazing (the nine-bar's, where a lift-off so short that
+    the contact after it starts with an onset velocity near zero) lets steps cross it but not
+    the corrector between: here the corrector is made to fail within 2e-6 of the grazing. The
+    grazing is then located at fixed parameter values from the side the branch came from,
+    within 1e-6 of the closed form, and typed persistent (the branch went on past it). Before,
+    the search stopped at its first failure: unresolved, or labelled off the closed form."""
+    import workbench.continuation._branch as branch
+    from workbench.continuation._newton import NewtonFailure
+
+    exact = lower_grazing(ISSUE)
+    correct = branch.correct
+
+    def rough(smap, pred, *args, **kwargs):
+        pt = correct(smap, pred, *args, **kwargs)
+        if abs(pt.p - exact) < 2e-6 * exact:
+            raise NewtonFailure("the map is not smooth here")
+        return pt
+
+    monkeypatch.setattr(branch, "correct", rough)
+    r = _branch(ISSUE, 0.6, 1.1)
+    found = [b for b in branch_bifurcations(r, "omega") if b["type"] == "grazing"]
+    assert len(found) == 1 and found[0]["resolved"], found
+    assert abs(found[0]["value"] - exact) < 1e-6 * exact, (found, exact)
+    assert found[0]["transition"] == "persistent"
+    assert "located at fixed parameter values" in r.attrs["bifurcation_notes"]
+    _assert_labels_confirmed(r)
+
+
 def test_an_unconfirmed_bifurcation_is_stored_unresolved(monkeypatch):
     """Where the defining quantity does not confirm the kind (here: a tolerance no multiplier
     meets), the point is labelled unresolved and the bifurcation kept with its suspected kind,
