@@ -8,7 +8,8 @@ up to ``--stop`` and prints every point (parameter in units of pi, label, events
 largest multipliers) and every located bifurcation (kind, parameter, critical multiplier,
 transition at a grazing). ``-o`` keeps the branch as netCDF.
 
-Run (one core, about 20 min of CPU)::
+Run (one core; near the end of the branch its steps collapse at nonsmooth points of the map,
+each failed correction costing eight evaluations of the map with its monodromy matrix)::
 
     python studies/periodic_end_branch.py --start 1.855 --stop 1.87 -o branch.nc
 """

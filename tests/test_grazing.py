@@ -193,6 +193,26 @@ def test_a_grazing_the_corrector_cannot_cross_is_located_at_fixed_parameters(mon
     _assert_labels_confirmed(r)
 
 
+def test_the_grazing_search_ahead_ends_where_its_bracket_closes(monkeypatch):
+    """The search for a grazing ahead of the last orbits (Newton at fixed parameter values)
+    can come back to a value it has (the nine-bar's 40-event orbit, whose existence ends at
+    1.8611 pi with its shallowest impact still 1.7 nm deep: every trial past the end fails and
+    the halvings lead back). Its bracket then closes to one value; the search ends there
+    without a grazing instead of dividing by zero."""
+    import workbench.continuation._branch as branch
+    from workbench.continuation._strobe import StrobeMap
+
+    scene = {"model": {"name": "stop_oscillator"}, "parameters": dict(ISSUE, omega=1.063)}
+    smap = StrobeMap(scene, "omega")
+    cfg = branch.Settings(pscale=0.1, bounds=(0.9, 1.1), tolerance=1e-9)
+    y0, a0 = smap.initial(1.063, 300)
+    prev = branch.orbit_at(smap, y0, a0, 1.063, tolerance=1e-9)
+    A = branch.orbit_at(smap, prev.y, prev.aux, 1.064, tolerance=1e-9)  # 5e-4 short of it
+    # every trial converges back onto prev's value: the bracket closes at once
+    monkeypatch.setattr(branch, "orbit_at", lambda *args, **kwargs: prev)
+    assert branch._grazing_ahead(smap, prev, A, cfg) is None
+
+
 def test_an_unconfirmed_bifurcation_is_stored_unresolved(monkeypatch):
     """Where the defining quantity does not confirm the kind (here: a tolerance no multiplier
     meets), the point is labelled unresolved and the bifurcation kept with its suspected kind,

@@ -627,6 +627,8 @@ def _grazing_ahead(
     best = A
     beyond = math.nan  # the nearest value past the last orbit where Newton did not converge
     for _ in range(40):
+        if pts[1].p == pts[0].p:  # the bracket closed to one value
+            break
         p = pts[1].p - f[1] * (pts[1].p - pts[0].p) / (f[1] - f[0])
         p = min(max(p, lo), hi)
         if (p - pts[1].p) * (p - beyond) >= 0.0 and (beyond - pts[1].p) * (p - pts[1].p) > 0.0:
