@@ -113,6 +113,34 @@ def test_the_sequence_sees_a_contact_between_two_samples():
     assert match_extrema(a, b, 1.0) == [(0, 1), (1, 0)]
 
 
+def test_an_impact_shorter_than_the_samples_spacing_is_in_the_sequence():
+    """A stop of 1e8 N/m against a 1 kg mass: each impact lasts about pi sqrt(m / k_s) = 0.3 ms,
+    a tenth of the 2048 samples' spacing over the 7.9 s period (3.8 ms), and reaches about
+    v sqrt(m / k_s) ~ 1e-4 m into the stop. Sampled at 2048 points the orbit read as a free
+    flight that misses the stop by 0.5 mm (its 2 events per period in no crossing); the map now
+    samples densely enough for its crossings to be the events the integration located, and the
+    impact's depth is the margin."""
+    from workbench.continuation import periodic_orbit
+    from workbench.continuation._strobe import SAMPLES, StrobeMap
+
+    params = {"mass": 1.0, "damping": 0.2, "stiffness": 1.0, "stop_stiffness": 1e8}
+    params |= {"gap": 1.0, "force": 0.8, "omega": 0.8}
+    scene = {"model": {"name": "stop_oscillator"}, "parameters": params}
+    orbit = periodic_orbit(dict(scene, run={"transient_cycles": 300}), tolerance=1e-9)
+    assert float(orbit.events_per_period[0]) == 2.0
+    assert orbit.crossings_per_orbit.values[0].tolist() == [1, 1]
+    depth = 0.8 * math.sqrt(1.0 / 1e8)  # order of magnitude: the speed ~0.8 m/s times sqrt(m/k_s)
+    assert depth / 3 < float(orbit.event_max.values[0, 0]) < 3 * depth
+    # the density stays with the map: a neighbour is read at the same one
+    smap = StrobeMap(scene, "omega", rtol=1e-9)
+    y = np.array([float(orbit.orbit_x[0]), float(orbit.orbit_v[0])])
+    aux = orbit.orbit_discrete_state.values[0]
+    assert smap.samples == SAMPLES
+    seq = smap.contact_sequence(y, aux, 0.8)
+    assert seq.counts == (1, 1) and seq.samples == smap.samples > SAMPLES
+    assert smap.with_rtol(1e-10).samples == smap.samples
+
+
 @pytest.mark.parametrize(
     "params, start, stop",
     [(ISSUE, 0.6, 1.15), (ISSUE, 0.6, 1.1), (DRAWN[0], 0.64, 0.74), (DRAWN[1], 0.52, 0.61)],
@@ -134,6 +162,55 @@ def test_grazing_of_stop_oscillators_against_the_closed_form(params, start, stop
     before = r.omega.values < exact * (1 - 1e-6)
     assert (r.crossings_per_orbit.values[before] == 0).all()
     assert (r.crossings_per_orbit.values[r.omega.values > exact * (1 + 1e-6)] == 1).all()
+
+
+def test_a_grazing_the_corrector_cannot_cross_is_located_at_fixed_parameters(monkeypatch):
+    """A map that is not smooth at a grazing (the nine-bar's, where a lift-off so short that
+    the contact after it starts with an onset velocity near zero) lets steps cross it but not
+    the corrector between: here the corrector is made to fail within 2e-6 of the grazing. The
+    grazing is then located at fixed parameter values from the side the branch came from,
+    within 1e-6 of the closed form, and typed persistent (the branch went on past it). Before,
+    the search stopped at its first failure: unresolved, or labelled off the closed form."""
+    import workbench.continuation._branch as branch
+    from workbench.continuation._newton import NewtonFailure
+
+    exact = lower_grazing(ISSUE)
+    correct = branch.correct
+
+    def rough(smap, pred, *args, **kwargs):
+        pt = correct(smap, pred, *args, **kwargs)
+        if abs(pt.p - exact) < 2e-6 * exact:
+            raise NewtonFailure("the map is not smooth here")
+        return pt
+
+    monkeypatch.setattr(branch, "correct", rough)
+    r = _branch(ISSUE, 0.6, 1.1)
+    found = [b for b in branch_bifurcations(r, "omega") if b["type"] == "grazing"]
+    assert len(found) == 1 and found[0]["resolved"], found
+    assert abs(found[0]["value"] - exact) < 1e-6 * exact, (found, exact)
+    assert found[0]["transition"] == "persistent"
+    assert "located at fixed parameter values" in r.attrs["bifurcation_notes"]
+    _assert_labels_confirmed(r)
+
+
+def test_the_grazing_search_ahead_ends_where_its_bracket_closes(monkeypatch):
+    """The search for a grazing ahead of the last orbits (Newton at fixed parameter values)
+    can come back to a value it has (the nine-bar's 40-event orbit, whose existence ends at
+    1.8611 pi with its shallowest impact still 1.7 nm deep: every trial past the end fails and
+    the halvings lead back). Its bracket then closes to one value; the search ends there
+    without a grazing instead of dividing by zero."""
+    import workbench.continuation._branch as branch
+    from workbench.continuation._strobe import StrobeMap
+
+    scene = {"model": {"name": "stop_oscillator"}, "parameters": dict(ISSUE, omega=1.063)}
+    smap = StrobeMap(scene, "omega")
+    cfg = branch.Settings(pscale=0.1, bounds=(0.9, 1.1), tolerance=1e-9)
+    y0, a0 = smap.initial(1.063, 300)
+    prev = branch.orbit_at(smap, y0, a0, 1.063, tolerance=1e-9)
+    A = branch.orbit_at(smap, prev.y, prev.aux, 1.064, tolerance=1e-9)  # 5e-4 short of it
+    # every trial converges back onto prev's value: the bracket closes at once
+    monkeypatch.setattr(branch, "orbit_at", lambda *args, **kwargs: prev)
+    assert branch._grazing_ahead(smap, prev, A, cfg) is None
 
 
 def test_an_unconfirmed_bifurcation_is_stored_unresolved(monkeypatch):

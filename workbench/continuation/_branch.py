@@ -98,6 +98,10 @@ MARGIN_TOLERANCE = 1e-6
 #: (branch jumping), where a turn of the tangent or a change of a test function would be
 #: labelled a bifurcation that is not there
 JUMP = 2.0
+#: halvings towards the last orbit where Newton fails on the way to a grazing
+GRAZE_HALVINGS = 12
+#: how a bifurcation's note starts where the corrector failed inside its bracket
+CORRECTOR_FAILED = "the corrector failed inside the bracket"
 
 
 def _distance(smap, A: OrbitPoint, B: OrbitPoint, pscale: float) -> float:
@@ -207,8 +211,9 @@ def _detect(a: dict, b: dict) -> list[str]:
 
 
 def sequence_of(smap: StrobeMap, pt: OrbitPoint) -> ContactSequence:
-    """The contact sequence of a converged orbit (computed once per point)."""
-    if pt.sequence is None:
+    """The contact sequence of a converged orbit (computed once per point, and again where the
+    map has since read sequences at a higher density: neighbours are compared at one)."""
+    if pt.sequence is None or pt.sequence.samples < smap.samples:
         pt.sequence = smap.contact_sequence(pt.y, pt.aux, pt.p)
     return pt.sequence
 
@@ -374,10 +379,10 @@ def _locate(
                     mid = 0.5 * (lo + hi)
                     pt = _at(smap, A, mid, cfg)
                 except NewtonFailure as exc2:
-                    note = f"the corrector failed inside the bracket ({exc2})"
+                    note = f"{CORRECTOR_FAILED} ({exc2})"
                     break
             else:
-                note = f"the corrector failed inside the bracket ({exc})"
+                note = f"{CORRECTOR_FAILED} ({exc})"
                 break
         evals += pt.evaluations
         f = value(pt)
@@ -598,15 +603,21 @@ def _with_tangent(smap: StrobeMap, pt: OrbitPoint, orientation: np.ndarray, cfg:
     return pt
 
 
-def _grazing_ahead(smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settings):
-    """The grazing the branch runs into after A, where its steps collapsed: the smallest margin
-    of A's orbit followed at fixed parameter values (Newton at each) by the Illinois method on
-    the secant through prev and A; the :class:`Special` (confirmed by its margin) or None."""
+def _grazing_ahead(
+    smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settings, graze: tuple | None = None
+):
+    """The grazing the branch runs into after A, where it cannot be corrected through it: the
+    margin ``graze`` (``(k, phase, kind)``; default the smallest margin of A's orbit) followed at
+    fixed parameter values (Newton at each, from A's side) by the Illinois method on the secant
+    through prev and A; the :class:`Special` (confirmed by its margin) or None."""
     seq = sequence_of(smap, A)
-    k, phase, value = seq.smallest_margin()
-    if k < 0 or abs(value) > 1e-2 * float(seq.scale[k]):
-        return None
-    kind = float(seq.extrema[k][np.argmin(np.abs(seq.extrema[k][:, 1] - value)), 2])
+    if graze is None:
+        k, phase, value = seq.smallest_margin()
+        if k < 0 or abs(value) > 1e-2 * float(seq.scale[k]):
+            return None
+        kind = float(seq.extrema[k][np.argmin(np.abs(seq.extrema[k][:, 1] - value)), 2])
+    else:
+        k, phase, kind = graze
     margin = _extremum_value(smap, k, phase, kind)
     pts = [prev, A]
     f = [margin(prev), margin(A)]
@@ -614,18 +625,28 @@ def _grazing_ahead(smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settin
         return None
     lo, hi = cfg.bounds
     best = A
+    beyond = math.nan  # the nearest value past the last orbit where Newton did not converge
     for _ in range(40):
+        if pts[1].p == pts[0].p:  # the bracket closed to one value
+            break
         p = pts[1].p - f[1] * (pts[1].p - pts[0].p) / (f[1] - f[0])
         p = min(max(p, lo), hi)
+        if (p - pts[1].p) * (p - beyond) >= 0.0 and (beyond - pts[1].p) * (p - pts[1].p) > 0.0:
+            p = 0.5 * (pts[1].p + beyond)  # not past where it failed: halfway there
         w = (p - pts[0].p) / (pts[1].p - pts[0].p)
         y = pts[0].y + w * (pts[1].y - pts[0].y)
         try:
             pt = orbit_at(smap, y, pts[1].aux, p, tolerance=cfg.tolerance, max_iterations=12)
         except NewtonFailure:  # no orbit of this family there: halve towards the last one
-            p = 0.5 * (p + pts[1].p)
-            try:
-                pt = orbit_at(smap, pts[1].y, pts[1].aux, p, tolerance=cfg.tolerance)
-            except NewtonFailure:
+            pt = None
+            for _ in range(GRAZE_HALVINGS):
+                beyond, p = p, 0.5 * (p + pts[1].p)
+                try:
+                    pt = orbit_at(smap, pts[1].y, pts[1].aux, p, tolerance=cfg.tolerance)
+                    break
+                except NewtonFailure:
+                    continue
+            if pt is None:
                 return None
         fp = margin(pt)
         if not np.isfinite(fp):
@@ -647,6 +668,45 @@ def _grazing_ahead(smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settin
     return Special(
         "grazing", best, 0.0, best.p, best.p, True, fb, complex(np.nan, np.nan), k, phase
     )
+
+
+def _grazing_across(
+    smap: StrobeMap,
+    out: Traced,
+    A: OrbitPoint,
+    B: OrbitPoint,
+    h: float,
+    sp: Special,
+    graze: tuple,
+    cfg: Settings,
+) -> Special:
+    """A grazing stepped across (A and B converged on its two sides) whose search along the
+    arclength failed because the corrector does not converge between them (the map is not
+    smooth, or not even continuous, at the grazing: e.g. a lift-off so short that the contact
+    after it starts with an onset velocity near zero, which a contact law with memory divides
+    by): located instead at fixed parameter values from A's side (:func:`_grazing_ahead` on the
+    extremum ``graze`` that changed sign, with the point before A), with the distance from the
+    grazing orbit to B in the note beside what the step allows (a jump: the orbit past the
+    grazing is not the continuation of the grazing orbit). ``sp`` where that does not confirm
+    it."""
+    prev = next((q for q in reversed(out.points) if q is not A and abs(q.p - A.p) > 0), None)
+    if prev is None:
+        return sp
+    try:
+        G = _grazing_ahead(smap, prev, A, cfg, graze)
+    except (NewtonFailure, SceneError, SolverError):
+        return sp
+    if G is None or not min(A.p, B.p) <= G.point.p <= max(A.p, B.p):
+        return sp
+    G.sigma = h * (G.point.p - A.p) / (B.p - A.p) if B.p != A.p else 0.0
+    G.lower, G.upper = min(G.point.p, B.p), max(G.point.p, B.p)
+    G.critical = _critical(G.point, "grazing")
+    gap = _distance(smap, G.point, B, cfg.pscale)
+    G.note = (
+        f"located at fixed parameter values ({sp.note}); the orbit past it lies {gap:.3g} "
+        f"(scaled) from the grazing orbit, {JUMP * abs(h - G.sigma):.3g} allowed by the step"
+    )
+    return G
 
 
 #: a branch stalls where this many accepted steps in a row were all shorter than STALL_STEP
@@ -781,6 +841,8 @@ def trace(
             sp, evals = _locate(smap, A, B, h, kind, cfg, graze)
             out.evaluations += evals
             if kind == "grazing":  # stepped through: the branch went on, or turned at it
+                if not sp.resolved and sp.note.startswith(CORRECTOR_FAILED):
+                    sp = _grazing_across(smap, out, A, B, h, sp, graze, cfg)
                 turned = np.sign(A.tau[-1]) != np.sign(B.tau[-1])
                 sp.transition = "nonsmooth_fold" if turned else "persistent"
             specials.append(sp)

@@ -47,6 +47,8 @@ class ContactSequence:
     scale : ndarray
         Per event function, the range of ``g_k`` along the orbit (event units): the size its
         margins are measured against.
+    samples : int
+        Samples per forcing period it was read from (0: not said).
     """
 
     span: float
@@ -54,6 +56,7 @@ class ContactSequence:
     crossings: tuple[np.ndarray, ...]
     extrema: tuple[np.ndarray, ...]
     scale: np.ndarray
+    samples: int = 0
 
     @property
     def counts(self) -> tuple[int, ...]:
@@ -101,7 +104,9 @@ def _extrema(g: np.ndarray) -> list[tuple[int, int]]:
     return sorted(out)
 
 
-def contact_sequence(values: np.ndarray, directions: np.ndarray, span: float) -> ContactSequence:
+def contact_sequence(
+    values: np.ndarray, directions: np.ndarray, span: float, samples: int = 0
+) -> ContactSequence:
     """The contact sequence from event functions sampled at equal steps over whole periods.
 
     Parameters
@@ -113,6 +118,8 @@ def contact_sequence(values: np.ndarray, directions: np.ndarray, span: float) ->
         The event functions' directions (+1 rising, -1 falling, 0 either way).
     span : float
         The orbit's time (s).
+    samples : int
+        Samples per forcing period (recorded with the sequence; 0: not said).
 
     Examples
     --------
@@ -153,7 +160,12 @@ def contact_sequence(values: np.ndarray, directions: np.ndarray, span: float) ->
         crossings.append(np.sort(np.array(phases, dtype=float)))
         extrema.append(e)
     return ContactSequence(
-        float(span), np.asarray(directions, dtype=np.int64), tuple(crossings), tuple(extrema), scale
+        float(span),
+        np.asarray(directions, dtype=np.int64),
+        tuple(crossings),
+        tuple(extrema),
+        scale,
+        int(samples),
     )
 
 

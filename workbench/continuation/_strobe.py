@@ -64,6 +64,10 @@ __all__ = ["SAMPLES", "MapValue", "StrobeMap"]
 
 #: samples of the event functions per forcing period along an orbit (its contact sequence)
 SAMPLES = 2048
+#: where the sampled crossings miss events, the sampling is made this many times denser ...
+REFINE = 4
+#: ... up to this many samples per forcing period
+MAX_SAMPLES = 64 * SAMPLES
 
 
 @dataclass
@@ -138,6 +142,7 @@ class StrobeMap:
         if not 0 < step < 1:
             raise ValueError(f"step={step!r}: must be a scaled step in (0, 1)")
         self.step = float(step)
+        self._samples, self._refine = SAMPLES, True  # the contact sequences' density
         self.scene: Scene = scene.replace(sweep={}) if scene.sweep else scene
         self.parameter = parameter
         if parameter is not None and parameter not in self.scene.resolved_parameters:
@@ -188,7 +193,7 @@ class StrobeMap:
 
     def with_periods(self, periods: int) -> StrobeMap:
         """The same map over another number of periods."""
-        return StrobeMap(
+        return self._like(
             self.scene,
             self.parameter,
             periods=periods,
@@ -199,7 +204,7 @@ class StrobeMap:
 
     def with_rtol(self, rtol: float) -> StrobeMap:
         """The same map integrated at another tolerance (``atol`` scaled alike)."""
-        return StrobeMap(
+        return self._like(
             self.scene,
             self.parameter,
             periods=self.periods,
@@ -207,6 +212,13 @@ class StrobeMap:
             monodromy=self.monodromy,
             step=self.step,
         )
+
+    def _like(self, *args, **kwargs) -> StrobeMap:
+        """A new map (arguments as for the constructor) reading contact sequences at this
+        one's density."""
+        other = StrobeMap(*args, **kwargs)
+        other._samples, other._refine = self._samples, self._refine
+        return other
 
     def jitter(
         self, value: MapValue, y: np.ndarray, aux: np.ndarray, p: float, size: float
@@ -411,18 +423,24 @@ class StrobeMap:
         """The event functions along the orbit through (y, aux) over its ``k`` periods, at
         ``samples`` equally spaced times per period from the strobe time on (the strobe time
         itself included, the end excluded: rows of ``g``, event units)."""
+        return self._sampled(y, aux, p, samples)[0]
+
+    def _sampled(
+        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int
+    ) -> tuple[np.ndarray, int]:
+        """:meth:`sampled_events` and the number of events the integration located."""
         prep = self.prepared(p)
         pb = prep.problem
         ne = pb.event_direction.size
         n_rec = samples * self.periods
         if ne == 0:
-            return np.zeros((n_rec, 0))
+            return np.zeros((n_rec, 0)), 0
         start = dataclasses.replace(pb, y0=np.asarray(y, float), aux0=np.asarray(aux, float))
         res = self._solve(start, pb.t0 + self.periods * prep.period, n_rec)
         # records at j span / n_rec, j = 1 .. n_rec: the last is the strobe state again (by
         # periodicity), so it stands for j = 0
         values = _event_values(pb, res.t, res.Y, res.AUX)
-        return np.roll(values, 1, axis=0)
+        return np.roll(values, 1, axis=0), int(res.stats["events"])
 
     def event_extrema(
         self, y: np.ndarray, aux: np.ndarray, p: float, samples: int = SAMPLES
@@ -437,16 +455,45 @@ class StrobeMap:
             return np.zeros(0), np.zeros(0)
         return _extreme(values, np.argmax, 1.0), _extreme(values, np.argmin, -1.0)
 
+    @property
+    def samples(self) -> int:
+        """Samples per forcing period of the contact sequences this map reads now (raised by
+        :meth:`contact_sequence` where a contact falls between samples, never lowered)."""
+        return self._samples
+
     def contact_sequence(
-        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int = SAMPLES
+        self, y: np.ndarray, aux: np.ndarray, p: float, samples: int | None = None
     ) -> ContactSequence:
         """The contact sequence of the orbit through (y, aux) at ``p``
         (:mod:`workbench.continuation._contacts`): per event function its crossings and the
-        local maxima of its signed value, the margins to the next grazing."""
-        values = self.sampled_events(y, aux, p, samples)
+        local maxima of its signed value, the margins to the next grazing.
+
+        Read off the event functions sampled at ``samples`` points per period (default
+        :attr:`samples`). A contact shorter than the samples' spacing (an impact) can fall
+        between two samples; so where the sampled crossings are fewer than the events the
+        integration located, the sampling is made :data:`REFINE` times denser until they are
+        as many, up to :data:`MAX_SAMPLES` per period, and the map keeps that density for the
+        orbits it reads later (neighbouring orbits are compared at one density). Where even
+        that does not find them (events whose function does not change sign, e.g. an
+        instantaneous impact), the density found before stays and the map stops refining."""
         pb = self.prepared(p).problem
         span = self.periods * self.prepared(p).period
-        return contact_sequence(values, pb.event_direction, span)
+        n = self._samples if samples is None else int(samples)
+        values, events = self._sampled(y, aux, p, n)
+        seq = contact_sequence(values, pb.event_direction, span, samples=n)
+        if samples is not None or not self._refine:
+            return seq
+        finer = n
+        while sum(seq.counts) < events and finer * REFINE <= MAX_SAMPLES:
+            finer *= REFINE
+            values, events = self._sampled(y, aux, p, finer)
+            seq_f = contact_sequence(values, pb.event_direction, span, samples=finer)
+            if sum(seq_f.counts) >= events:
+                self._samples = finer
+                return seq_f
+        if sum(seq.counts) < events:
+            self._refine = False  # sampling does not find these events: refine no more
+        return seq
 
 
 def _event_values(pb, t: np.ndarray, Y: np.ndarray, AUX: np.ndarray) -> np.ndarray:
