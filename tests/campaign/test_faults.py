@@ -48,6 +48,8 @@ EXECUTION_ATTRS = (
     "reused_blocks",
     "campaign_wall_time",
     "campaign_compute_wall_time",
+    "campaign_cpu_time",
+    "resume_cpu_time",
     "campaign_workers",
     "campaign_block_sha256",
 )
