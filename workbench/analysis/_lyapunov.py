@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
+from workbench._attributes import variable
 from workbench.analysis._convergence import (
     BATCHES,
     TARGET,
@@ -297,12 +298,12 @@ def lyapunov_spectrum(
         out["exponent_tight"] = (
             "index",
             lam_t,
-            {"units": "s-1", "long_name": f"exponent at rtol = {tight['rtol']:g}"},
+            variable(f"exponent at rtol = {tight['rtol']:g}", "s-1"),
         )
         out["agrees"] = (
             "index",
             agrees,
-            {"long_name": "agrees with the tighter run within 2 standard errors"},
+            variable("agrees with the tighter run within 2 standard errors"),
         )
         conditions["tolerance check"] = (
             bool(agrees.all()),
@@ -312,11 +313,11 @@ def lyapunov_spectrum(
     else:
         conditions["tolerance check"] = (False, "not run (check=False)")
     converged, failed = judge(conditions, "the Lyapunov spectrum")
-    out["converged"] = ((), converged, {"long_name": "every convergence condition holds"})
+    out["converged"] = ((), converged, variable("every convergence condition holds"))
     out["trusted"] = (
         "index",
         converged & agrees & (err <= TRUST * np.abs(lam)),
-        {"long_name": f"converged, agrees at rtol/100, standard error <= {TRUST:.0%}"},
+        variable(f"converged, agrees at rtol/100, standard error <= {TRUST:.0%}"),
     )
     out.attrs["failed"] = failed
     out.attrs["stopped_by"] = rule or "budget"
@@ -341,41 +342,38 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
     closure = abs(float(lam.sum()) - volume) / max(abs(volume), 1e-300)
     ds = xr.Dataset(
         {
-            "exponent": ("index", lam, {"units": "s-1", "long_name": "Lyapunov exponent"}),
+            "exponent": ("index", lam, variable("Lyapunov exponent", "s-1")),
             "stderr": (
                 "index",
                 err,
-                {"units": "s-1", "long_name": f"standard error ({BATCHES} batch means)"},
+                variable(f"standard error ({BATCHES} batch means)", "s-1"),
             ),
             "running": (
                 ("elapsed", "index"),
                 running,
-                {"units": "s-1", "long_name": "running estimate"},
+                variable("running estimate", "s-1"),
             ),
-            "spectrum_sum": ((), float(lam.sum()), {"units": "s-1", "long_name": "sum"}),
+            "spectrum_sum": ((), float(lam.sum()), variable("sum", "s-1")),
             "volume_rate": (
                 (),
                 volume,
-                {
-                    "units": "s-1",
-                    "long_name": "mean rate of the log volume the tangent vectors span, "
+                variable(
+                    "mean rate of the log volume the tangent vectors span, "
                     "integrated with the tangent system (trace of its generator on their span, "
                     "the discrete state's feedback included, plus the volume jumps at events); "
                     "equals the sum of the exponents",
-                },
+                    "s-1",
+                ),
             ),
             "sum_check": (
                 (),
                 closure,
-                {
-                    "units": "1",
-                    "long_name": "relative difference of the spectrum's sum and volume_rate",
-                },
+                variable("relative difference of the spectrum's sum and volume_rate"),
             ),
         },
         coords={
-            "index": ("index", np.arange(1, m + 1), {"long_name": "exponent index"}),
-            "elapsed": ("elapsed", times - start, {"units": "s", "long_name": "time followed"}),
+            "index": ("index", np.arange(1, m + 1), variable("exponent index")),
+            "elapsed": ("elapsed", times - start, variable("time followed", "s")),
         },
         attrs={
             "method": "variational equations with saltation at events, Gram-Schmidt "
@@ -394,20 +392,20 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
         ds["divergence"] = (
             (),
             volume - memory,
-            {
-                "units": "s-1",
-                "long_name": "mean phase-space contraction rate (trace of J plus the log volume "
+            variable(
+                "mean phase-space contraction rate (trace of J plus the log volume "
                 "jumps at events, per time)",
-            },
+                "s-1",
+            ),
         )
         ds["memory_rate"] = (
             (),
             memory,
-            {
-                "units": "s-1",
-                "long_name": "part of volume_rate fed back by the discrete state (a contact's "
+            variable(
+                "part of volume_rate fed back by the discrete state (a contact's "
                 "held onset velocity): the trace of J_a's share of the generator",
-            },
+                "s-1",
+            ),
         )
         ds.attrs["memory"] = int(memory != 0.0)
         ds.attrs["memory_note"] = (
@@ -418,7 +416,7 @@ def _spectrum_dataset(prep: Window, run: dict) -> xr.Dataset:
         ds["exponent_per_period"] = (
             "index",
             lam * prep.period,
-            {"units": "1", "long_name": "exponent per forcing period"},
+            variable("exponent per forcing period"),
         )
         ds.attrs["forcing_period"] = prep.period
     return ds
