@@ -204,7 +204,7 @@ def test_the_grazing_search_ahead_ends_where_its_bracket_closes(monkeypatch):
 
     scene = {"model": {"name": "stop_oscillator"}, "parameters": dict(ISSUE, omega=1.063)}
     smap = StrobeMap(scene, "omega")
-    cfg = branch.Settings(pscale=0.1, bounds=(0.9, 1.1), tolerance=1e-9)
+    cfg = branch.BranchSettings(pscale=0.1, bounds=(0.9, 1.1), tolerance=1e-9)
     y0, a0 = smap.initial(1.063, 300)
     prev = branch.orbit_at(smap, y0, a0, 1.063, tolerance=1e-9)
     A = branch.orbit_at(smap, prev.y, prev.aux, 1.064, tolerance=1e-9)  # 5e-4 short of it

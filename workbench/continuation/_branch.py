@@ -28,7 +28,7 @@ it: the critical multiplier within :data:`MULTIPLIER_TOLERANCE` of +1 (fold, bra
 grazing extremum within :data:`MARGIN_TOLERANCE` of its event function's range. Otherwise it is
 stored as **unresolved** between the two converged ends of its bracket, with its suspected kind
 and the defining quantity's value; before that, the step that brackets it is rejected and
-halved until the search confirms it or the step is ``Settings.approach`` short. Located points
+halved until the search confirms it or the step is ``BranchSettings.approach`` short. Located points
 are stored in order of arclength; a step whose contact sequence changes in a way no extremum's
 sign change explains is rejected and halved. A branch ends on the bound of its parameter
 range (the last point is corrected at the bound), never beyond it.
@@ -64,7 +64,7 @@ __all__ = [
     "LABELS",
     "MARGIN_TOLERANCE",
     "MULTIPLIER_TOLERANCE",
-    "Settings",
+    "BranchSettings",
     "Special",
     "trace",
     "switch_at_doubling",
@@ -114,7 +114,7 @@ def _distance(smap, A: OrbitPoint, B: OrbitPoint, pscale: float) -> float:
 
 
 @dataclass
-class Settings:
+class BranchSettings:
     """Knobs of the continuation (scaled units: states by their sizes, the parameter by
     ``pscale``)."""
 
@@ -271,7 +271,7 @@ def _predict(smap: StrobeMap, A: OrbitPoint, u: np.ndarray, pscale: float) -> Or
     return OrbitPoint(float(u[-1] * pscale), y, aux, A.value, 0, np.inf)
 
 
-def _at(smap, A: OrbitPoint, sigma: float, cfg: Settings) -> OrbitPoint:
+def _at(smap, A: OrbitPoint, sigma: float, cfg: BranchSettings) -> OrbitPoint:
     """The branch point at arclength ``sigma`` from A along A's tangent."""
     s = smap.scale()
     u_pred = A.u(s, cfg.pscale) + sigma * A.tau
@@ -350,7 +350,7 @@ def _confirm(smap, kind: str, pt: OrbitPoint, f: float, graze) -> tuple[bool, fl
 
 
 def _locate(
-    smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: Settings, graze=None
+    smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: BranchSettings, graze=None
 ) -> tuple[Special, int]:
     """The bifurcation ``kind`` between A and B (B at arclength h from A): the Illinois method
     on its test function, the bracket kept between converged points; returns the
@@ -433,7 +433,9 @@ def _locate(
     return special, evals
 
 
-def _on_bound(smap, A: OrbitPoint, B: OrbitPoint, bound: float, cfg: Settings) -> OrbitPoint | None:
+def _on_bound(
+    smap, A: OrbitPoint, B: OrbitPoint, bound: float, cfg: BranchSettings
+) -> OrbitPoint | None:
     """The orbit at the parameter's bound between A and B (the state interpolated along the
     step, then Newton at the fixed parameter), or None where it does not converge."""
     w = (bound - A.p) / (B.p - A.p) if B.p != A.p else 1.0
@@ -517,7 +519,7 @@ def _attractor_period(smap: StrobeMap, y, aux, p: float, cycles: int = 200) -> i
 
 
 def _beyond_grazing(
-    smap: StrobeMap, A: OrbitPoint, G: OrbitPoint, cfg: Settings
+    smap: StrobeMap, A: OrbitPoint, G: OrbitPoint, cfg: BranchSettings
 ) -> tuple[str, OrbitPoint | None, str]:
     """What lies past the grazing ``G``, reached from ``A``, where the branch cannot be stepped
     through it: the orbit a little further on with the new contact (``persistent``: returned,
@@ -594,7 +596,7 @@ def _beyond_grazing(
     return "not_typed", None, "its other side lies outside the parameter's range"
 
 
-def _with_tangent(smap: StrobeMap, pt: OrbitPoint, orientation: np.ndarray, cfg: Settings):
+def _with_tangent(smap: StrobeMap, pt: OrbitPoint, orientation: np.ndarray, cfg: BranchSettings):
     """``pt`` with its parameter column and unit tangent (oriented along ``orientation``)."""
     if pt.Pp is None:
         pt.Pp = smap.parameter_derivative(pt.y, pt.aux, pt.p, pt.value.live, cfg.pscale)
@@ -604,7 +606,11 @@ def _with_tangent(smap: StrobeMap, pt: OrbitPoint, orientation: np.ndarray, cfg:
 
 
 def _grazing_ahead(
-    smap: StrobeMap, prev: OrbitPoint, A: OrbitPoint, cfg: Settings, graze: tuple | None = None
+    smap: StrobeMap,
+    prev: OrbitPoint,
+    A: OrbitPoint,
+    cfg: BranchSettings,
+    graze: tuple | None = None,
 ):
     """The grazing the branch runs into after A, where it cannot be corrected through it: the
     margin ``graze`` (``(k, phase, kind)``; default the smallest margin of A's orbit) followed at
@@ -678,7 +684,7 @@ def _grazing_across(
     h: float,
     sp: Special,
     graze: tuple,
-    cfg: Settings,
+    cfg: BranchSettings,
 ) -> Special:
     """A grazing stepped across (A and B converged on its two sides) whose search along the
     arclength failed because the corrector does not converge between them (the map is not
@@ -737,7 +743,7 @@ def diagnosis(pt: OrbitPoint, h: float) -> str:
 MAX_RESUMES = 20
 
 
-def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: Settings) -> OrbitPoint | None:
+def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -> OrbitPoint | None:
     """Where the steps collapsed at A: the grazing ahead, located and typed
     (:func:`_grazing_ahead`, :func:`_beyond_grazing`) and stored; the orbit on its other side
     to go on from (its tangent set), or None (the branch ends there)."""
@@ -773,7 +779,7 @@ def trace(
     smap: StrobeMap,
     first: OrbitPoint,
     direction: np.ndarray,
-    cfg: Settings,
+    cfg: BranchSettings,
     label="start",
     report: Callable[[float, int], None] | None = None,
 ) -> Traced:
@@ -889,7 +895,7 @@ def trace(
     return out
 
 
-def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: Settings, out: Traced) -> None:
+def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: BranchSettings, out: Traced) -> None:
     """Why a branch ends where it cannot be continued, said in ``out.ended``: the contact
     structure just beyond the last point (the events per period and the live discrete states at
     the prediction, not a converged orbit) and the last orbit's smallest margin. The last point
@@ -926,7 +932,7 @@ def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: Settings, out: Trac
 
 
 def switch_at_doubling(
-    smap: StrobeMap, pd: OrbitPoint, cfg: Settings, epsilon: float = 0.05
+    smap: StrobeMap, pd: OrbitPoint, cfg: BranchSettings, epsilon: float = 0.05
 ) -> tuple[StrobeMap, OrbitPoint, np.ndarray]:
     """The first point of the period-2k branch born at the period doubling ``pd`` of the
     period-k branch of ``smap``, and the direction to continue it in (away from ``pd``).
@@ -976,7 +982,7 @@ START_ITERATIONS = 30
 
 
 def start_point(
-    smap: StrobeMap, y, aux, p: float, cfg: Settings, max_iterations: int = START_ITERATIONS
+    smap: StrobeMap, y, aux, p: float, cfg: BranchSettings, max_iterations: int = START_ITERATIONS
 ) -> OrbitPoint:
     """The converged orbit at ``p`` from the guess (y, aux), in at most ``max_iterations``
     Newton iterations (:class:`NewtonFailure` otherwise)."""
@@ -989,7 +995,7 @@ NOISE_MARGIN = 10.0
 TIGHTEST_RTOL = 1e-12
 
 
-def settle_noise(smap: StrobeMap, first: OrbitPoint, cfg: Settings):
+def settle_noise(smap: StrobeMap, first: OrbitPoint, cfg: BranchSettings):
     """The map's noise at the branch's first orbit against Newton's tolerance: the map is
     integrated 10x tighter (down to :data:`TIGHTEST_RTOL`, the orbit corrected again) until its
     noise lies :data:`NOISE_MARGIN` below the tolerance; if even that does not do it, the

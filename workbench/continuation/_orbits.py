@@ -17,7 +17,7 @@ from workbench.continuation._branch import (
     MULTIPLIER_TOLERANCE,
     START_ITERATIONS,
     TRANSITIONS,
-    Settings,
+    BranchSettings,
     Traced,
     sequence_of,
     settle_noise,
@@ -138,7 +138,7 @@ def periodic_orbit(
     smap = StrobeMap(scene, None, periods=periods, rtol=rtol, monodromy=monodromy)
     t0 = time.perf_counter()
     y, aux = _guess(smap, math.nan, state, discrete_state, None)
-    cfg = Settings(1.0, (-math.inf, math.inf), tolerance)
+    cfg = BranchSettings(1.0, (-math.inf, math.inf), tolerance)
     pt = start_point(smap, y, aux, math.nan, cfg, max_iterations=int(max_iterations))
     tr = Traced(smap, [pt], ["start"], [complex(np.nan, np.nan)], "one orbit", pt.evaluations)
     tr.wall_time = time.perf_counter() - t0
@@ -239,7 +239,7 @@ def continue_orbit(
     if not (math.isfinite(stop) and stop != p0):
         raise ValueError(f"stop={stop!r}: must be a finite value other than start ({p0!r})")
     pscale = abs(stop - p0)
-    cfg = Settings(
+    cfg = BranchSettings(
         pscale=pscale,
         bounds=(min(p0, stop), max(p0, stop)),
         tolerance=tolerance,
