@@ -18,6 +18,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         (
             "workbench._attributes",
             "workbench._cache",
+            "workbench._checks",
             "workbench._errors",
             "workbench._layers",
             "workbench._processor",

@@ -21,6 +21,7 @@ import numpy as np
 import xarray as xr
 
 from workbench._attributes import named, variable
+from workbench._checks import positive_int
 from workbench.analysis._window import EXPLICIT_METHODS, Window, measurement_window
 from workbench.run import integrate as integrate_scene
 from workbench.run import prepare
@@ -264,8 +265,7 @@ def floquet(
     window = measurement_window(scene, cycles=1)
     if window.period is None:
         raise ValueError(f"model {window.prepared.scene.model!r} is not forced: no Floquet map")
-    if periods < 1:
-        raise ValueError(f"periods={periods!r}: must be a positive integer")
+    periods = positive_int("periods", periods)
     rtol = min(window.rtol, 1e-10) if rtol is None else float(rtol)
     if window.method not in EXPLICIT_METHODS:
         warnings.warn(

@@ -47,6 +47,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from workbench._checks import positive_int
+
 __all__ = ["DASK_CONFIG", "SYSTEMS", "cluster_security", "jobqueue_cluster", "local_cluster"]
 
 #: dask settings for a cluster that runs campaigns. dask's processes run timers whether or not
@@ -328,8 +330,7 @@ def jobqueue_cluster(
     if system not in SYSTEMS:
         raise ValueError(f"system={system!r}; allowed: {', '.join(SYSTEMS)}")
     for name, value in (("cores", cores), ("threads_per_worker", threads_per_worker)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+        positive_int(name, value)
     if cores % threads_per_worker:
         raise ValueError(
             f"threads_per_worker={threads_per_worker!r} must divide cores={cores!r} (each job "

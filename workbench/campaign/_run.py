@@ -11,11 +11,11 @@ import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from workbench._checks import positive_int
 from workbench.archive import ArchiveError, open_run
 from workbench.campaign._assemble import execution_attrs
 from workbench.campaign._block import Task, failed, model_source
@@ -42,14 +42,6 @@ __all__ = ["run_campaign", "store_paths"]
 
 _BLOCKS_PER_WORKER = 4
 _PLAN_NOTICE = 10**6  # a grid of this many points takes about a second to plan: say so
-
-
-def _positive_int(name: str, value: Any) -> int | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ValueError(f"{name} must be a positive integer or None, got {value!r}")
-    return value
 
 
 def run_campaign(
@@ -195,9 +187,9 @@ def run_campaign(
             "sweep.continuation"
         )
     grid = expand_sweep(scene)
-    check_points(grid, _positive_int("max_points", max_points))
-    workers = _positive_int("workers", workers)
-    chunk = _positive_int("chunk", chunk)
+    check_points(grid, positive_int("max_points", max_points, allow_none=True))
+    workers = positive_int("workers", workers, allow_none=True)
+    chunk = positive_int("chunk", chunk, allow_none=True)
     if progress and grid.size >= _PLAN_NOTICE:
         print(f"campaign: planning {grid.size} points ({grid.describe()})", file=sys.stderr)
     size = check_archive_memory(scene, grid, max_memory)

@@ -45,6 +45,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from workbench._checks import positive_int
 from workbench.continuation._contacts import ContactSequence, contact_sequence
 from workbench.run import Prepared, prepare
 from workbench.scene import Scene, SceneError, SceneSource, load_scene
@@ -150,9 +151,7 @@ class StrobeMap:
                 f"parameter={parameter!r} is not a parameter of model {self.scene.model!r}; "
                 f"allowed: {', '.join(sorted(self.scene.resolved_parameters))}"
             )
-        if isinstance(periods, bool) or not isinstance(periods, int) or periods < 1:
-            raise ValueError(f"periods={periods!r}: must be a positive integer")
-        self.periods = periods
+        self.periods = positive_int("periods", periods)
         s = self.scene.solver
         self.rtol = min(float(s["rtol"]), 1e-9) if rtol is None else float(rtol)
         self.atol = float(s["atol"]) * self.rtol / float(s["rtol"])
