@@ -93,3 +93,27 @@ def tiny_tmpfs(path: Path, size: str = "1m"):
         yield path
     finally:
         subprocess.run(["umount", "-l", str(path)], check=False)
+
+
+#: attributes of a campaign archive that describe one execution (when, how fast, by whom), not
+#: its numbers
+CAMPAIGN_EXECUTION_ATTRS = (
+    "history",
+    "computed_blocks",
+    "reused_blocks",
+    "campaign_wall_time",
+    "campaign_compute_wall_time",
+    "campaign_cpu_time",
+    "resume_cpu_time",
+    "campaign_workers",
+    "campaign_block_sha256",  # the blocks' bytes hold their wall times and worker pids
+)
+
+
+def campaign_numbers(ds: xr.Dataset, also: tuple[str, ...] = ()) -> xr.Dataset:
+    """A campaign's data without its wall times and without the attributes of one execution
+    (CAMPAIGN_EXECUTION_ATTRS and ``also``)."""
+    drop = set(CAMPAIGN_EXECUTION_ATTRS) | set(also)
+    out = ds.drop_vars(["point_wall_time", "solver_wall_time"])
+    out.attrs = {k: v for k, v in ds.attrs.items() if k not in drop}
+    return out

@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import campaign_numbers
 
 import workbench
 from workbench.archive import DiskFull, StoreWarning
@@ -24,31 +25,21 @@ BASE = {
     "record": {"samples_per_period": 4},
 }
 SWEEP = {"gamma": [0.3, 0.4, 0.5], "omega": [1.0, 1.1, 1.2, 1.3]}  # 12 points, two dims
-# Attributes that describe one execution (when, how it was split), not the numbers.
+# Attributes of one execution beyond helpers.CAMPAIGN_EXECUTION_ATTRS: how it was split, and
+# what a call that reused every block records of itself
 _RUN_ATTRS = (
-    "history",
-    "computed_blocks",
-    "reused_blocks",
-    "campaign_wall_time",
-    "campaign_compute_wall_time",
-    "campaign_cpu_time",
-    "campaign_workers",
-    "resume_workers",  # of a call that reused every block
+    "resume_workers",
     "resume_compute_wall_time",
     "resume_wall_time",
-    "resume_cpu_time",
     "campaign_chunk",
     "campaign_blocks",
     "campaign_id",
-    "campaign_block_sha256",  # the blocks' bytes hold their wall times and worker pids
 )
 
 
 def numbers(ds: xr.Dataset) -> xr.Dataset:
     """The dataset without wall times and the attributes of one execution."""
-    out = ds.drop_vars(["point_wall_time", "solver_wall_time"])
-    out.attrs = {k: v for k, v in ds.attrs.items() if k not in _RUN_ATTRS}
-    return out
+    return campaign_numbers(ds, also=_RUN_ATTRS)
 
 
 @pytest.fixture(scope="module")

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import campaign_numbers as numbers
 
 import workbench
 from workbench.archive import ArchiveError, StoreLocked, StoreWarning, sha256_file
@@ -42,24 +43,6 @@ QUICK = {
     "record": {"samples_per_period": 1},
     "sweep": {"gamma": [0.25, 0.3, 0.35, 0.4]},
 }
-EXECUTION_ATTRS = (
-    "history",
-    "computed_blocks",
-    "reused_blocks",
-    "campaign_wall_time",
-    "campaign_compute_wall_time",
-    "campaign_cpu_time",
-    "resume_cpu_time",
-    "campaign_workers",
-    "campaign_block_sha256",
-)
-
-
-def numbers(ds: xr.Dataset) -> xr.Dataset:
-    """The data of a campaign without wall times and the attributes of one execution."""
-    out = ds.drop_vars(["point_wall_time", "solver_wall_time"])
-    out.attrs = {k: v for k, v in ds.attrs.items() if k not in EXECUTION_ATTRS}
-    return out
 
 
 @pytest.fixture(scope="module", autouse=True)
