@@ -12,6 +12,9 @@ Run (one core; near the end of the branch its steps collapse at nonsmooth points
 each failed correction costing eight evaluations of the map with its monodromy matrix)::
 
     python studies/periodic_end_branch.py --start 1.855 --stop 1.87 -o branch.nc
+
+``--scene studies/periodic_end_hunt_crossley.toml`` follows the same branch under the
+Hunt-Crossley law (no memory).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ def branch(
     start: float,
     stop: float,
     *,
+    scene_path: Path = SCENE,
     rtol: float = 1e-10,
     tolerance: float = 1e-6,
     transient: int = 200,
@@ -42,7 +46,7 @@ def branch(
 ):
     """The period-1 branch of Fig. 32's scene from ``start`` to ``stop`` (rad/s), its first orbit
     found by Newton's method from the state after ``transient`` forcing periods from rest."""
-    scene = workbench.load_scene(SCENE).replace(sweep={})
+    scene = workbench.load_scene(scene_path).replace(sweep={})
     point = scene.replace(run={"cycles": 1, "transient_cycles": transient}).with_parameters(
         omega=start
     )
@@ -72,13 +76,16 @@ def table(r) -> list[str]:
             f"mu {' '.join(f'{m.real:+.4f}{m.imag:+.4f}j' for m in mu)}"
         )
     for b in branch_bifurcations(r, "omega"):
-        lines.append(f"bifurcation {b['label']} at {b['value'] / math.pi:.9f} pi: {b}")
+        lines.append(f"bifurcation {b['type']} at {b['value'] / math.pi:.9f} pi: {b}")
     lines.append(f"ended: {r.attrs['branch_ended']}")
     return lines
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument(
+        "--scene", type=Path, default=SCENE, help="the scene (default: Fig. 32's, LN contact)"
+    )
     ap.add_argument("--start", type=float, default=1.855, help="omega / pi at the start")
     ap.add_argument("--stop", type=float, default=1.87, help="omega / pi at the stop")
     ap.add_argument("--rtol", type=float, default=1e-10)
@@ -92,6 +99,7 @@ def main() -> None:
     r = branch(
         a.start * math.pi,
         a.stop * math.pi,
+        scene_path=a.scene,
         rtol=a.rtol,
         tolerance=a.tolerance,
         transient=a.transient,
@@ -104,9 +112,9 @@ def main() -> None:
         f"{r.sizes['point']} points, {r.attrs['map_evaluations']} map evaluations, rtol "
         f"{r.attrs['rtol']:g}, tolerance {r.attrs['tolerance']:g}, noise {r.attrs['map_noise']:.3g}"
     )
-    print("\n".join(table(r)))
     if a.output is not None:
         r.to_netcdf(a.output)
+    print("\n".join(table(r)))
 
 
 if __name__ == "__main__":

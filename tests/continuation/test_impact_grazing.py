@@ -256,6 +256,8 @@ def test_the_non_impacting_orbit_grazes_at_the_closed_form_and_adds_periods_past
     assert match, note
     k, where = int(match.group(1)), float(match.group(2))
     assert where < OMEGA_G and predicted_period(mu_of(where)) == k >= 2
+    # found from the first step that failed across it, not after halving to the least step
+    assert "the grazing ahead lies within a step that failed" in r.attrs["branch_ended"]
 
 
 # -- (b) period adding in the flow ---------------------------------------------------------------

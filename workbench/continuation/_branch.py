@@ -100,6 +100,10 @@ MARGIN_TOLERANCE = 1e-6
 JUMP = 2.0
 #: halvings towards the last orbit where Newton fails on the way to a grazing
 GRAZE_HALVINGS = 12
+#: a grazing searched at fixed parameter values is polished to this fraction of
+#: MARGIN_TOLERANCE, or until the secant moves the parameter by less than POLISHED of its scale
+POLISH = 1e-3
+POLISHED = 1e-9
 #: how a bifurcation's note starts where the corrector failed inside its bracket
 CORRECTOR_FAILED = "the corrector failed inside the bracket"
 
@@ -657,9 +661,11 @@ def _grazing_ahead(
         fp = margin(pt)
         if not np.isfinite(fp):
             return None
+        moved = abs(p - best.p)
         best = pt
-        if abs(fp) <= MARGIN_TOLERANCE * float(sequence_of(smap, pt).scale[k]):
-            break
+        tol = MARGIN_TOLERANCE * float(sequence_of(smap, pt).scale[k])
+        if abs(fp) <= POLISH * tol or (abs(fp) <= tol and moved <= POLISHED * cfg.pscale):
+            break  # polished below the label's tolerance, or the secant no longer moves
         if np.sign(fp) != np.sign(f[1]):
             pts, f = [pts[1], pt], [f[1], fp]
         else:
@@ -741,6 +747,30 @@ def diagnosis(pt: OrbitPoint, h: float) -> str:
 
 #: how often a branch is taken through a grazing it could not be stepped through
 MAX_RESUMES = 20
+#: a margin at most this small (relative to its event function's range) can be the grazing
+#: that makes a step fail (as in :func:`_grazing_ahead`)
+NEAR_GRAZING = 1e-2
+
+
+def _grazing_within(smap: StrobeMap, out: Traced, A: OrbitPoint, h: float, pscale: float) -> bool:
+    """Whether the grazing ahead of A lies within the step ``h`` that just failed: A's smallest
+    margin, extrapolated linearly in the scaled arclength from the point before A through A,
+    reaches zero at most ``h`` beyond A. Where it does, halving the step down to its minimum
+    (each failed correction costing several evaluations of the map with its monodromy) cannot
+    do better than locating the grazing at once (:func:`_through`)."""
+    prev = next((q for q in reversed(out.points) if q is not A and abs(q.p - A.p) > 0), None)
+    if prev is None:
+        return False
+    seq = sequence_of(smap, A)
+    k, phase, value = seq.smallest_margin()
+    if k < 0 or abs(value) > NEAR_GRAZING * float(seq.scale[k]):
+        return False
+    kind = float(seq.extrema[k][np.argmin(np.abs(seq.extrema[k][:, 1] - value)), 2])
+    before = _extremum_value(smap, k, phase, kind)(prev)
+    if not np.isfinite(before) or np.sign(before) != np.sign(value) or abs(before) <= abs(value):
+        return False  # not approaching zero
+    span = _distance(smap, prev, A, pscale)
+    return abs(value) * span / (abs(before) - abs(value)) <= h
 
 
 def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -> OrbitPoint | None:
@@ -754,7 +784,8 @@ def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -
     if G is None:
         return None
     transition, pt, text = _beyond_grazing(smap, A, G.point, cfg)
-    G.transition, G.note = transition, text
+    G.transition = transition
+    G.note = f"located at fixed parameter values ahead of {A.p:.10g}, where steps failed; {text}"
     if not any(sp.point is G.point for sp in out.specials):
         out.points.append(G.point)
         out.labels.append("grazing")
@@ -804,6 +835,7 @@ def trace(
     h = cfg.step
     A = first
     resumed = short = 0
+    tried = None  # the last point from which the grazing ahead was looked for (_through)
     while len(out.points) < cfg.max_points:
         try:
             B = _at(smap, A, h, cfg)
@@ -819,19 +851,33 @@ def trace(
         except NewtonFailure as exc:
             B, sharp, failure = None, True, f"the corrector failed at the smallest step ({exc})"
         if sharp:
+            if (
+                events
+                and resumed < MAX_RESUMES
+                and A is not tried
+                and _grazing_within(smap, out, A, h, cfg.pscale)
+            ):
+                tried = A  # the grazing lies within the failed step: located at once
+                located = len(out.specials)
+                nxt = _through(smap, out, A, cfg)
+                if nxt is not None:
+                    resumed += 1
+                    A, h = nxt, cfg.step
+                    continue
+                if len(out.specials) > located:  # located, and no orbit of the branch past it
+                    why = f"the grazing ahead lies within a step that failed ({failure})"
+                    _end(smap, out, A, h, why, cfg)
+                    break
             h /= 2.0
             if h < cfg.min_step:
                 nxt = None
-                if events and resumed < MAX_RESUMES:
+                if events and resumed < MAX_RESUMES and A is not tried:
                     nxt = _through(smap, out, A, cfg)
                 if nxt is not None:
                     resumed += 1
                     A, h = nxt, cfg.step
                     continue
-                out.ended = f"{failure} at {A.p:.10g}: {diagnosis(A, h)}" + (
-                    f"; {out.specials[-1].note}" if out.specials and out.specials[-1].note else ""
-                )
-                _mark_end(smap, A, h, cfg, out)
+                _end(smap, out, A, h, failure, cfg)
                 break
             continue
         out.evaluations += B.evaluations
@@ -893,6 +939,15 @@ def trace(
         report(out.points[-1].p, len(out.points))
     out.wall_time = time.perf_counter() - wall0
     return out
+
+
+def _end(smap: StrobeMap, out: Traced, A: OrbitPoint, h: float, failure: str, cfg) -> None:
+    """End the branch at A, where the step ``h`` failed with ``failure``: the reason, in
+    numbers (:func:`diagnosis`, the last bifurcation's note, :func:`_mark_end`)."""
+    out.ended = f"{failure} at {A.p:.10g}: {diagnosis(A, h)}" + (
+        f"; {out.specials[-1].note}" if out.specials and out.specials[-1].note else ""
+    )
+    _mark_end(smap, A, h, cfg, out)
 
 
 def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: BranchSettings, out: Traced) -> None:

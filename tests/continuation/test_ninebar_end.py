@@ -1,0 +1,86 @@
+"""How the nine-bar's impacting period-1 orbit ends (issue 38, item 6b), on Fig. 32's scene
+(c = 0.1 mm at A and B, c_f = 0.01, Lankarani-Nikravesh contact) at rtol 1e-10.
+
+Just below 1.8611 pi the orbit (40 contact events per period) is stable and far from any
+smooth bifurcation (multipliers 0.33 and -0.13), yet past 1.8611 pi Newton finds no period-1
+orbit. What ends it is a lasting contact at joint A that nearly lifts off at phase 0.952 s: its
+penetration dips to a few hundredths of a nanometre. The dip is narrower than the default
+samples' spacing, so the contact sequence reads it only with the near-grazing refinement
+(:data:`workbench.continuation._strobe.NEAR_MARGIN`); read at the old fixed density it seemed
+1.7 nm deep, and the branch's end looked like no grazing at all. Across that lift-off the map
+is not even continuous: the contact splits in two, the second starts with an onset velocity
+near zero, and the Lankarani-Nikravesh damping holds that velocity for the rest of the contact
+(the law's memory), so the map jumps.
+"""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import workbench
+from workbench.continuation._branch import BranchSettings, _with_tangent
+from workbench.continuation._newton import orbit_at
+from workbench.continuation._strobe import StrobeMap
+
+SCENE = Path(__file__).resolve().parents[2] / "studies" / "bifurcation_speed" / "sweep.toml"
+#: just below the end of the 40-event orbit, rad/s
+OMEGA = 1.8610999 * math.pi
+
+
+@pytest.fixture(scope="module")
+def end():
+    scene = workbench.load_scene(SCENE).replace(sweep={})
+    smap = StrobeMap(scene, "omega", rtol=1e-10)
+    y, aux = smap.initial(OMEGA, 200)
+    return smap, orbit_at(smap, y, aux, OMEGA, tolerance=1e-6, max_iterations=15)
+
+
+@pytest.mark.slow
+def test_the_orbit_just_below_the_end_is_stable_and_far_from_a_smooth_bifurcation(end):
+    smap, pt = end
+    assert pt.value.events == 40
+    mu = np.sort(np.abs(pt.multipliers))[::-1]
+    assert 0.2 < mu[0] < 0.5 and mu[1] < 0.2, mu  # no multiplier near +1 or -1
+
+
+@pytest.mark.slow
+def test_a_lasting_contact_at_joint_a_is_within_a_tenth_of_a_nanometre_of_lifting_off(end):
+    """Read at the fixed density of before (8192 samples per period) the shallowest dip looked
+    1.7 nm deep; refined near the grazing it is below 0.1 nm, 1e-4 of its event function's
+    range at most, at joint A (event function 0) and phase 0.952 s."""
+    smap, pt = end
+    coarse = smap.contact_sequence(pt.y, pt.aux, pt.p, samples=8192)
+    _, _, shallow = coarse.smallest_margin()
+    seq = smap.contact_sequence(pt.y, pt.aux, pt.p)
+    k, phase, value = seq.smallest_margin()
+    assert seq.counts == (14, 14, 6, 6)
+    assert k == 0 and abs(phase - 0.9519) < 1e-3, (k, phase)
+    assert 0.0 < value < 1e-10 and value / seq.scale[k] < 1e-4, (value, seq.scale[k])
+    assert shallow > 10 * value, (shallow, value)
+
+
+@pytest.mark.slow
+def test_the_map_jumps_where_that_contact_lifts_off(end):
+    """From the orbit, states moved along the branch's tangent (towards the end): 3e-3 scaled
+    units on, the map still moves linearly (|change| well below the move); 1e-2 on, the lasting
+    contact has split (42 events, 15 crossings at A's onset function) and the map has jumped by
+    more than ten times the move."""
+    smap, pt = end
+    cfg = BranchSettings(pscale=0.01 * math.pi, bounds=(1.8 * math.pi, 1.9 * math.pi))
+    direction = np.zeros(pt.y.size + pt.value.live.size + 1)
+    direction[-1] = 1.0
+    _with_tangent(smap, pt, direction, cfg)
+    s = smap.scale()
+    v = pt.tau[: pt.y.size] / np.linalg.norm(pt.tau[: pt.y.size])
+    base = smap(pt.y, pt.aux, pt.p, tangent=False)
+
+    def moved(size):
+        out = smap(pt.y + size * s * v, pt.aux, pt.p, tangent=False)
+        return out, float(np.max(np.abs((out.y1 - base.y1) / s))) / size
+
+    near, ratio_near = moved(3e-3)
+    far, ratio_far = moved(1e-2)
+    assert near.events == 40 and ratio_near < 1.0, ratio_near
+    assert far.events == 42 and ratio_far > 10.0, ratio_far
