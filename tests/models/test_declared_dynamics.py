@@ -92,11 +92,12 @@ def test_slider_crank_clearance_states_over_a_fifth_of_a_cycle():
 
 
 def test_ninebar_clearance_states_until_the_first_impacts():
-    """With clearances at A and B (studies/ninebar.toml: Coulomb friction, rtol 1e-6) the
-    clearance vectors agree within 1e-6 of c while the journals fly and through the first
-    contacts' onset. (Beyond, the impacts multiply every difference: a change of the initial
-    normal velocity by 1e-12 m s-1 moves the built-in's own clearance vectors by 1e-9 m within
-    0.05 s; the right-hand sides are compared in every state below.)"""
+    """With clearances at A and B (studies/ninebar.toml: Coulomb friction; DOP853 at rtol = atol
+    = 1e-10, so that the integration's error is far below the comparison's) the clearance
+    vectors agree within 1e-6 of c while the journals fly, up to the first contact. (Beyond,
+    the impacts multiply every difference: a change of the initial normal velocity by
+    1e-12 m s-1 moves the built-in's own clearance vectors by 1e-9 m within 0.05 s; the
+    right-hand sides are compared in every state below.)"""
     study = ninebar_study()
     variables = ["clearance_x", "clearance_y", "penetration"]
     a, b = pair(
@@ -104,48 +105,55 @@ def test_ninebar_clearance_states_until_the_first_impacts():
         dict(study["effects"]),
         {"cycles": 1},
         variables,
-        dict(study["solver"]),
+        {"method": "dop853", "rtol": 1e-10, "atol": 1e-10},
         dict(study["parameters"]),
     )
     first = int(np.argmax((a.penetration.values > 0).any(axis=1)))
     assert 10 < first < 400  # the journals fly, then reach their bearings in the first 0.2 cycle
     for v in ("clearance_x", "clearance_y"):
-        assert np.abs(a[v].values[: first + 1] - b[v].values[: first + 1]).max() <= 1e-6 * C
+        assert np.abs(a[v].values[:first] - b[v].values[:first]).max() <= 1e-6 * C
 
 
-def _problems(name: str, friction: str):
+def _problems(name: str, friction: str, energy: bool):
+    """The built-in's and the declared twin's problems; ``energy``: with the driver-work and
+    dissipation quadratures (and, under LuGre, the friction-law ones), else the clearance states
+    alone."""
     study = ninebar_study()
     joints = ["A", "B"] if name == "ninebar" else ["B"]
-    effects = {"clearance": joints, "friction": friction}
-    params = {"omega": study["parameters"]["omega"]} if name == "ninebar" else {}
-    builtin = prepare(
-        load_scene({"model": {"name": name}, "effects": effects, "parameters": params})
-    ).problem
+    scene = {
+        "effects": {"clearance": joints, "friction": friction},
+        "parameters": {"omega": study["parameters"]["omega"]} if name == "ninebar" else {},
+    }
+    if not energy:
+        scene["record"] = {"variables": ["clearance_x"]}
+    builtin = prepare(load_scene({"model": {"name": name}, **scene})).problem
     declared = prepare(
-        load_scene(
-            {
-                "model": {"name": "declared"},
-                "mechanism": declaration(name),
-                "effects": effects,
-                "parameters": params,
-            }
-        )
+        load_scene({"model": {"name": "declared"}, "mechanism": declaration(name), **scene})
     ).problem
-    return builtin, declared
+    return builtin, declared, len(joints)
 
 
 @pytest.mark.parametrize(
-    ("name", "friction"),
-    [("ninebar", "coulomb"), ("ninebar", "none"), ("slider_crank", "coulomb")],
+    ("name", "friction", "energy"),
+    [
+        ("ninebar", "coulomb", False),
+        ("ninebar", "coulomb", True),
+        ("ninebar", "lugre", True),
+        ("ninebar", "none", False),
+        ("slider_crank", "coulomb", False),
+        ("slider_crank", "none", True),
+    ],
 )
-def test_right_hand_side_equals_the_builtin(name, friction):
+def test_right_hand_side_equals_the_builtin(name, friction, energy):
     """At random states, out of contact and in it (penetrations up to 10 um, onset velocities
-    held or not), the declared right-hand side equals the built-in's lean one to rounding."""
-    pa, pb = _problems(name, friction)
+    held or not, LuGre bristles within their bound), the declared right-hand side equals the
+    built-in's lean one to rounding, and its own record-time evaluation's; with and without the
+    energy (and friction-law) quadratures."""
+    pa, pb, nj = _problems(name, friction, energy)
     ha, hb = importlib.import_module(pa.hooks), importlib.import_module(pb.hooks)
     rng = np.random.default_rng(42)
-    n, nj = pa.y0.size, pa.y0.size // 4
-    assert pb.y0.size == n
+    n, nf = pa.y0.size, 2 * nj
+    assert pb.y0.size == n and (n > 2 * nf) == (energy or friction == "lugre")
     contacts = 0
     for _ in range(200):
         y = np.zeros(n)
@@ -153,14 +161,19 @@ def test_right_hand_side_equals_the_builtin(name, friction):
             angle, e = rng.uniform(0, 2 * np.pi), C * rng.uniform(0.9, 1.02)
             contacts += e > C
             y[2 * j : 2 * j + 2] = e * np.cos(angle), e * np.sin(angle)
-            y[2 * nj + 2 * j : 2 * nj + 2 * j + 2] = rng.normal(size=2) * 8 * C
+            y[nf + 2 * j : nf + 2 * j + 2] = rng.normal(size=2) * 8 * C
+        if friction == "lugre":
+            y[2 * nf : 2 * nf + nj] = rng.uniform(-1.5e-6, 1.5e-6, nj)  # m, |z| <= mu_s / sigma0
         t = rng.uniform(0, 0.8)
         aux = rng.uniform(0, 0.01, pa.aux0.size) * (rng.uniform() > 0.2)
-        da, db = np.zeros(n), np.zeros(n)
+        da, db, dr = np.zeros(n), np.zeros(n), np.zeros(n)
         ca = ha.rhs(t, y.copy(), pa.p, pa.ip, aux, np.zeros(pa.work_size), da)
         cb = hb.rhs(t, y.copy(), pb.p, pb.ip, aux, np.zeros(pb.work_size), db)
-        assert ca == cb
-        assert np.abs(da - db).max() <= 1e-12 * np.abs(da).max()
+        cr = hb.rhs_reference(t, y.copy(), pb.p, pb.ip, aux, np.zeros(pb.work_size), dr)
+        assert ca == cb == cr
+        scale = np.abs(da).max()
+        assert np.abs(da - db).max() <= 1e-12 * scale
+        assert np.abs(dr - db).max() <= 1e-12 * scale  # lean = record-time
     assert contacts > 30
 
 
