@@ -4,9 +4,10 @@ built-in ``ninebar`` and ``slider_crank``, whose compiled hooks are generated fr
 
 A scene declares its mechanism in a ``[mechanism]`` table (``model.name = "declared"``, or no
 ``[model]`` table); Python code calls :func:`declared_model` with a
-:class:`~workbench.models._declaration.Linkage`. Either registers the model under
-``declared_<name>_<digest>`` (the digest of the declaration, so that two declarations of one name
-are two models), which is what campaigns, continuation, analysis and archives look up.
+:class:`~workbench.models._declaration.Linkage`. Either makes the model known to
+:func:`workbench.models.get_model` as ``declared_<name>_<digest>`` (the digest of the
+declaration, so that two declarations of one name are two models), which is what campaigns,
+continuation, analysis and archives look up.
 
 Parameters (SI), each defaulting to the declaration's value:
 
@@ -34,8 +35,8 @@ from typing import ClassVar
 
 import numpy as np
 
+import workbench.models as models
 from workbench._errors import SceneError
-from workbench.models import register
 from workbench.models._base import Effect, Parameter
 from workbench.models._clearance import (
     CONTACT_EFFECT,
@@ -269,6 +270,6 @@ def declared_model(linkage: Linkage) -> type[DeclaredMechanism]:
             "__module__": __name__,
         }
         cls = type(f"Declared_{digest[:8]}", (DeclaredMechanism,), namespace)
-        register(cls)
+        models._DECLARED[cls.name] = cls
         _MODELS[digest] = cls
         return cls
