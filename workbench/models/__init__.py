@@ -60,6 +60,9 @@ __all__ = [
 ]
 
 _REGISTRY: dict[str, type[Model]] = {}
+#: the models of declared mechanisms by name, made from a scene's data, not defined by modules
+#: (:func:`workbench.models._declared_model.declared_model` adds them)
+_DECLARED: dict[str, type[Model]] = {}
 # The public modules of this package that are libraries for models, not models: every other
 # public module or package of workbench.models is the built-in model of its name.
 _LIBRARIES = frozenset({"contact", "friction", "no_events"})
@@ -92,11 +95,13 @@ def register(cls: type[Model]) -> type[Model]:
 
 def available_models() -> tuple[str, ...]:
     """Names of the registered and built-in models."""
-    return tuple(sorted(set(_REGISTRY) | set(_builtin())))
+    return tuple(sorted(set(_REGISTRY) | set(_builtin()) | set(_DECLARED)))
 
 
 def get_model(name: str) -> Model:
     """An instance of the model registered as ``name`` (KeyError if unknown)."""
+    if name in _DECLARED:
+        return _DECLARED[name]()
     if name not in _REGISTRY and name in _builtin():
         importlib.import_module(_builtin()[name])
     return _REGISTRY[name]()

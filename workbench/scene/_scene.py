@@ -56,6 +56,7 @@ _TABLES = (
     "run",
     "record",
     "sweep",
+    "mechanism",
 )
 
 
@@ -81,6 +82,11 @@ class Scene:
         Solver settings, run length, what and how often to record (defaults filled in).
     sweep : Mapping[str, tuple[float, ...]]
         Parameter name -> the values of that campaign dimension (empty for a single run).
+    mechanism : Mapping
+        The ``[mechanism]`` table of a declared mechanism (``model.name = "declared"``: a
+        planar linkage declared as data, :mod:`workbench.models._declaration`), every field
+        written; empty for any other model. :attr:`model` is then the name under which the
+        declaration's model is registered (:func:`workbench.models._declared_model.declared_model`).
     model_module : str
         The module that defines a model of one's own (``[model] module``; imported, and so
         registered, when a scene given directly is loaded, and trusted for the rest of the
@@ -109,6 +115,7 @@ class Scene:
     title: str = ""
     description: str = ""
     model_module: str = ""
+    mechanism: Mapping[str, Any] = field(default_factory=lambda: _frozen({}))
 
     # -- derived views --------------------------------------------------------------------------
     @property
@@ -130,7 +137,9 @@ class Scene:
             d["title"] = self.title
         if self.description:
             d["description"] = self.description
-        d["model"] = {"name": self.model}
+        d["model"] = {"name": DECLARED if self.mechanism else self.model}
+        if self.mechanism:
+            d["mechanism"] = dict(self.mechanism)
         if self.model_module:
             d["model"]["module"] = self.model_module
         for key in ("effects", "parameters", "initial", "solver", "run", "record"):
@@ -275,6 +284,9 @@ def _validate(
     tables = {k: table(data, k) for k in _TABLES[3:]}
     solver = validate_solver(tables["solver"])
     name = model_t.get("name")
+    mechanism: dict[str, Any] = {}
+    if "mechanism" in data or name == DECLARED:
+        name, mechanism = _declared(name, data)
     if name is None:
         raise SceneError(
             "model.name", "is required; available models: " + ", ".join(available_models())
@@ -326,4 +338,30 @@ def _validate(
         title=data.get("title", ""),
         description=data.get("description", ""),
         model_module=module,
+        mechanism=_frozen(mechanism),
     )
+
+
+#: the ``model.name`` of a scene that declares its mechanism in a ``[mechanism]`` table
+DECLARED = "declared"
+
+
+def _declared(name: str | None, data: Mapping[str, Any]) -> tuple[str, dict[str, Any]]:
+    """The registered name of the model that a scene's ``[mechanism]`` table declares, and the
+    table with every field written."""
+    from workbench.models._declaration import to_table
+    from workbench.models._declare import parse_mechanism
+    from workbench.models._declared_model import declared_model
+
+    if "mechanism" not in data:
+        raise SceneError(
+            "model.name", f"got {DECLARED!r} without a [mechanism] table; declare the mechanism"
+        )
+    if name not in (None, DECLARED):
+        raise SceneError(
+            "model.name",
+            f"got {name!r} with a [mechanism] table; a scene that declares its mechanism has "
+            f"model.name = {DECLARED!r} (or no [model] table)",
+        )
+    linkage = parse_mechanism(data["mechanism"])
+    return declared_model(linkage).name, to_table(linkage)
