@@ -849,7 +849,7 @@ def trace(
                     f"step ({far / h:.3g} steps away)"
                 )
         except NewtonFailure as exc:
-            B, sharp, failure = None, True, f"the corrector failed at the smallest step ({exc})"
+            B, sharp, failure = None, True, f"the corrector failed ({exc})"
         if sharp:
             if (
                 events
@@ -865,7 +865,7 @@ def trace(
                     A, h = nxt, cfg.step
                     continue
                 if len(out.specials) > located:  # located, and no orbit of the branch past it
-                    why = f"the grazing ahead lies within a step that failed ({failure})"
+                    why = f"the grazing ahead lies within a step that failed; {failure}"
                     _end(smap, out, A, h, why, cfg)
                     break
             h /= 2.0
@@ -877,6 +877,8 @@ def trace(
                     resumed += 1
                     A, h = nxt, cfg.step
                     continue
+                if failure.startswith("the corrector failed"):
+                    failure += ", at the smallest step"
                 _end(smap, out, A, h, failure, cfg)
                 break
             continue
