@@ -36,6 +36,10 @@ code writes.
   ``studies/periodic_end.toml`` (omega 1.75-2 pi in steps of 0.01 pi, up and down, at the
   maps' clearances) and its cost; ``python data/regenerate.py --periodic-end`` (``make
   chaos-maps`` runs it; minutes on 2 workers).
+- ``periodic_end_branch.nc``: the nine-bar's 40-event period-1 orbit continued to its end
+  (a lift-off grazing typed a border collision), written by ``python
+  studies/periodic_end_branch.py --start 1.86105 --stop 1.8612 -o data/periodic_end_branch.nc``
+  (9 min of CPU).
 - ``periodic_end_hunt_crossley.nc``: the same for ``studies/periodic_end_hunt_crossley.toml``
   (c = 100 um under the Hunt-Crossley law); ``python data/regenerate.py
   --periodic-end-hunt-crossley`` (minutes on 2 workers).

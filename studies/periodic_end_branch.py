@@ -11,7 +11,10 @@ transition at a grazing). ``-o`` keeps the branch as netCDF.
 Run (one core; near the end of the branch its steps collapse at nonsmooth points of the map,
 each failed correction costing eight evaluations of the map with its monodromy matrix)::
 
-    python studies/periodic_end_branch.py --start 1.855 --stop 1.87 -o branch.nc
+    python studies/periodic_end_branch.py --start 1.86105 --stop 1.8612 -o branch.nc
+
+(``data/periodic_end_branch.nc`` is that run: the end of the 40-event orbit, a lift-off
+grazing typed a border collision, docs/continuation.md.)
 
 ``--scene studies/periodic_end_hunt_crossley.toml`` follows the same branch under the
 Hunt-Crossley law (no memory).
@@ -112,8 +115,14 @@ def main() -> None:
         f"{r.sizes['point']} points, {r.attrs['map_evaluations']} map evaluations, rtol "
         f"{r.attrs['rtol']:g}, tolerance {r.attrs['tolerance']:g}, noise {r.attrs['map_noise']:.3g}"
     )
+    r.attrs.update(
+        measured_cpu_time=time.process_time() - t0,
+        measured_wall_time=time.time() - w0,
+        command="python studies/periodic_end_branch.py "
+        + f"--start {a.start:g} --stop {a.stop:g} --rtol {a.rtol:g}",
+    )
     if a.output is not None:
-        r.to_netcdf(a.output)
+        workbench.save_run(r, a.output)
     print("\n".join(table(r)))
 
 

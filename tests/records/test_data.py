@@ -8,6 +8,8 @@ The numbers themselves are not compared: a chaotic run's values move with any ro
 change of the code; the notebooks' numbers are checked against the API by test_notebooks.py.
 """
 
+import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -264,3 +266,40 @@ def test_the_end_under_hunt_crossley_the_docs_quote():
     assert f"period-1 again at {last_periodic:.2f} pi" in section
     assert f"no period from {last_periodic + 0.01:.2f} pi on" in section
     assert f"{hc.attrs['measured_worker_time'] / 60:.0f} min of the workers' CPU" in section
+
+
+def test_the_end_of_the_impacting_orbit_the_docs_quote():
+    """data/periodic_end_branch.nc is ``studies/periodic_end_branch.py --start 1.86105 --stop
+    1.8612``: the 40-event orbit of Fig. 32's scene continued to its end. docs/continuation.md
+    quotes its points, the located grazing (value, label, transition, the period just past it),
+    the stored orbit's multiplier across the jump and the run's CPU."""
+    from workbench.continuation import branch_bifurcations
+
+    r = workbench.open_run(DATA / "periodic_end_branch.nc")
+    assert r.attrs["command"].startswith(
+        "python studies/periodic_end_branch.py --start 1.86105 --stop 1.8612"
+    )
+    found = branch_bifurcations(r, "omega")
+    assert len(found) == 1
+    (g,) = found
+    assert g["type"] == "grazing" and g["resolved"] and g["transition"] == "border_collision"
+    flags = r.label.attrs["flag_meanings"].split()
+    labels = [flags[int(v)] for v in r.label.values]
+    assert labels[0] == "start" and labels[-1] == "grazing" and g["index"] == len(labels) - 1
+    assert (r.events_per_period.values == 40).all()
+    largest = r.multiplier_modulus.values[:, 0]
+    orbits = len(labels) - 1
+    note = r.attrs["bifurcation_notes"]
+    match = re.search(r"no period-1 orbit found past it; period (\d+) at ([0-9.]+)", note)
+    assert match, note
+    text = " ".join((DATA.parent / "docs" / "continuation.md").read_text().split())
+    section = text[text.index("The package finds and types that end by itself") :][:1200]
+    assert f"the map's noise check tightened it to {r.attrs['rtol']:.0e}" in section
+    assert f"through {orbits} orbits" in section
+    assert f"from {largest[0]:.3f} to {largest[orbits - 1]:.3f}" in section
+    assert f"at fixed parameter values at {g['value'] / math.pi:.7f} pi" in section
+    past = float(match.group(2))
+    assert past > g["value"]
+    assert f"at {past / math.pi:.7f} pi, has period {match.group(1)}" in section
+    assert f"multiplier of modulus {largest[-1]:.0f}" in section
+    assert f"took {r.attrs['measured_cpu_time'] / 60:.0f} min of CPU" in section
