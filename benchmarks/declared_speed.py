@@ -23,8 +23,8 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+from _hook_calls import hook_calls  # benchmarks/_hook_calls.py
 from _results import record, recording  # benchmarks/_results.py: a JSON record per run
-from numba import njit
 
 import workbench
 from workbench.run import prepare
@@ -82,23 +82,6 @@ def per_cycle(scene, cycles: int, repeats: int) -> dict:
     return {"s": (min(times), max(times)), "evals": evals}
 
 
-@njit  # takes the hook as an argument: numba cannot cache that
-def _calls(f, T, Y, p, ip, AUX, work, reps):
-    n = Y.shape[1]
-    y = np.empty(n)
-    aux = np.empty(AUX.shape[1])
-    dydt = np.empty(n)
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(T.size):
-            for k in range(n):
-                y[k] = Y[i, k]
-            for k in range(aux.size):
-                aux[k] = AUX[i, k]
-            acc += f(T[i], y, p, ip, aux, work, dydt) + dydt[n - 1]
-    return acc
-
-
 def rhs_cost(scene, repeats: int, reps: int = 100) -> tuple[float, float]:
     """CPU microseconds per right-hand side call (min, max) at the first cycle's records."""
     one = scene.replace(
@@ -110,11 +93,11 @@ def rhs_cost(scene, repeats: int, reps: int = 100) -> tuple[float, float]:
     run = integrate(prob, prepared.times, method="dop853", rtol=1e-6, atol=1e-6)
     rhs = importlib.import_module(prob.hooks).rhs
     work = np.zeros(prob.work_size)
-    _calls(rhs, run.t, run.Y, prob.p, prob.ip, run.AUX, work, 1)
+    hook_calls(rhs, run.t, run.Y, prob.p, prob.ip, run.AUX, work, 1)
     times = []
     for _ in range(repeats):
         c0 = time.process_time()
-        _calls(rhs, run.t, run.Y, prob.p, prob.ip, run.AUX, work, reps)
+        hook_calls(rhs, run.t, run.Y, prob.p, prob.ip, run.AUX, work, reps)
         times.append((time.process_time() - c0) / (reps * run.t.size) * 1e6)
     return min(times), max(times)
 

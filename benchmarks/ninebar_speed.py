@@ -53,8 +53,8 @@ from pathlib import Path
 
 import ninebar_reference_hooks  # noqa: F401  (imported: the loop's cache follows its file)
 import numpy as np
+from _hook_calls import hook_calls  # benchmarks/_hook_calls.py
 from _results import recording  # benchmarks/_results.py: a JSON record per run
-from numba import njit
 
 import workbench
 from workbench import accuracy
@@ -134,24 +134,6 @@ def _timed(prob, t_rec, method: str, n: float, repeats: int, rtol: float) -> dic
     }
 
 
-@njit  # takes the hook as an argument: numba cannot cache that
-def _calls(f, T, Y, p, ip, AUX, work, reps):
-    """Call the hook f at every state (copied element-wise: no array views in the loop)."""
-    n = Y.shape[1]
-    y = np.empty(n)
-    aux = np.empty(AUX.shape[1])
-    dydt = np.empty(n)
-    acc = 0.0
-    for _ in range(reps):
-        for i in range(T.size):
-            for k in range(n):
-                y[k] = Y[i, k]
-            for k in range(aux.size):
-                aux[k] = AUX[i, k]
-            acc += f(T[i], y, p, ip, aux, work, dydt) + dydt[n - 1]
-    return acc
-
-
 def rhs_cost(friction: str, repeats: int) -> dict[str, tuple[float, float]]:
     """CPU time per call (us; min, max over repeats) of the lean and the reference hook."""
     prob, t_rec = problem(friction, 1, spp=2000)
@@ -160,11 +142,11 @@ def rhs_cost(friction: str, repeats: int) -> dict[str, tuple[float, float]]:
     out = {}
     for name, f in (("lean", dyn.rhs), ("reference", dyn.rhs_reference)):
         reps = 400 if name == "lean" else 50
-        _calls(f, run.t, run.Y, prob.p, prob.ip, run.AUX, work, 1)
+        hook_calls(f, run.t, run.Y, prob.p, prob.ip, run.AUX, work, 1)
         times = []
         for _ in range(repeats):
             c0 = time.process_time()
-            _calls(f, run.t, run.Y, prob.p, prob.ip, run.AUX, work, reps)
+            hook_calls(f, run.t, run.Y, prob.p, prob.ip, run.AUX, work, reps)
             times.append((time.process_time() - c0) / (reps * run.t.size) * 1e6)
         out[name] = (min(times), max(times))
     return out
