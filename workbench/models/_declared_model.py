@@ -267,6 +267,7 @@ def declared_model(linkage: Linkage) -> type[DeclaredMechanism]:
             "not close)",
             "dynamics": _hooks_module(linkage),
             "linkage": linkage,
+            "verification": "workbench.verification._mechanisms:declared_mechanism",
             "__module__": __name__,
         }
         cls = type(f"Declared_{digest[:8]}", (DeclaredMechanism,), namespace)

@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from workbench._attributes import variable
+from workbench.models import get_model
 from workbench.run import simulate
 from workbench.scene import SceneError, SceneSource, load_scene
 from workbench.verification._exudyn import run_exudyn
@@ -96,7 +97,8 @@ def verify(
     Parameters
     ----------
     scene : Scene or path
-        A ``ninebar`` or ``slider_crank`` scene with friction "none" or "coulomb" (see
+        A scene of the ``ninebar`` or ``slider_crank`` model or of a declared mechanism (a
+        ``[mechanism]`` table), with friction "none" or "coulomb" (see
         :mod:`workbench.verification._exudyn` for what each side models).
     horizon : float, optional
         Simulated time from t = 0, s (default: one crank period).
@@ -117,7 +119,8 @@ def verify(
     -------
     xarray.Dataset
         Dim ``run`` ("workbench", then "exudyn h=..." per step) with coordinates ``engine`` and
-        ``step`` (s; NaN for the workbench), dim ``time``; the compared series of every run;
+        ``step`` (s; NaN for the workbench), dim ``time``; the compared series of every run
+        (the slider's only where the model records a slider);
         ``wall_time`` (s) per run; ``max_relative_error`` per run and series (largest difference
         from the workbench over the horizon divided by the workbench's largest magnitude); with
         clearances ``first_impact_time`` (s) and ``first_impact_force`` (N) per run and joint and
@@ -153,7 +156,8 @@ def verify(
                 f"record_dt = {record_dt!r} s must be a whole multiple of every step; step "
                 f"{h!r} s gives {ratio:g} (choose steps that divide record_dt)"
             )
-    variables = [v for v in _SERIES if joints or not v.startswith(("clearance", "contact"))]
+    recorded = {q.name for q in get_model(scene.model).outputs(scene.effects)}
+    variables = [v for v in _SERIES if v in recorded]
     ours_scene = scene.replace(
         run={"duration": horizon},
         record={"dt": record_dt, "variables": variables},

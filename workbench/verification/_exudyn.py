@@ -41,7 +41,13 @@ from workbench._attributes import variable
 from workbench.models import get_model
 from workbench.run import TIME_ATTRS
 from workbench.scene import Scene
-from workbench.verification._mechanisms import Mechanism, Point, build_mechanism, check_scene
+from workbench.verification._mechanisms import (
+    Mechanism,
+    Point,
+    Prismatic,
+    build_mechanism,
+    check_scene,
+)
 
 __all__ = ["run_exudyn"]
 
@@ -113,44 +119,54 @@ class _Build:
         markers = [self.marker(b0, point), self.marker(b1, point)]
         self.mbs.AddObject(self.it.ObjectJointRevolute2D(markerNumbers=markers))
 
-    def slider_guide(self) -> None:
-        """The prismatic joint of the slider along the x axis of its initial placement."""
-        point = self.mech.bodies[self.mech.slider].placement[:2]
-        markers = [self.marker(None, point, rigid=True), self.marker(self.mech.slider, point, True)]
+    def prismatic(self, joint: Prismatic) -> None:
+        """An ideal prismatic joint: body1 slides along body0 (or the ground) on the joint's
+        axis and keeps its angle relative to it."""
+        b0, b1 = joint.body0, joint.body1
+        ux, uy = joint.axis
+        norm = math.hypot(ux, uy)
+        ux, uy = ux / norm, uy / norm
+        phi0 = 0.0 if b0 is None else self.mech.bodies[b0].placement[2]
+        phi1 = self.mech.bodies[b1].placement[2]
+        axis = _rotate(-phi0, ux, uy)  # in body0's frame
+        normal = _rotate(-phi1, -uy, ux)  # in body1's frame
+        markers = [self.marker(b0, joint.point, True), self.marker(b1, joint.point, True)]
         self.mbs.AddObject(
             self.it.ObjectJointPrismatic2D(
                 markerNumbers=markers,
-                axisMarker0=[1.0, 0.0, 0.0],
-                normalMarker1=[0.0, 1.0, 0.0],
+                axisMarker0=[axis[0], axis[1], 0.0],
+                normalMarker1=[normal[0], normal[1], 0.0],
                 constrainRotation=True,
             )
         )
 
     def clearance(self, j: str, coulomb: bool) -> None:
-        """Joint ``j`` as a journal in a hollow sphere (Hunt-Crossley = Lankarani-Nikravesh)."""
-        p = self.params
-        bearing, journal, point, c, stiffness = self.mech.clearances[j]
+        """Joint ``j`` as a journal in a hollow sphere (Hunt-Crossley = Lankarani-Nikravesh),
+        with the joint's own clearance and contact parameters."""
+        joint = self.mech.clearances[j]
         data = self.mbs.AddNode(
             self.it.NodeGenericData(numberOfDataCoordinates=4, initialCoordinates=[0.0] * 4)
         )
-        markers = [self.marker(journal, point, coulomb), self.marker(bearing, point, coulomb)]
+        markers = [
+            self.marker(joint.journal, joint.point, coulomb),
+            self.marker(joint.bearing, joint.point, coulomb),
+        ]
         obj = self.mbs.AddObject(
             self.it.ObjectContactSphereSphere(
                 markerNumbers=markers,
                 nodeNumber=data,
-                spheresRadii=[p["bearing_radius"] - c, p["bearing_radius"]],
+                spheresRadii=[joint.bearing_radius - joint.clearance, joint.bearing_radius],
                 isHollowSphere1=True,
-                contactStiffness=stiffness,
-                contactStiffnessExponent=p["contact_exponent"],
-                restitutionCoefficient=(1.0 + p["restitution"] ** 2) / 2.0,
+                contactStiffness=joint.stiffness,
+                contactStiffnessExponent=joint.contact_exponent,
+                restitutionCoefficient=(1.0 + joint.restitution**2) / 2.0,
                 impactModel=1,
-                minimumImpactVelocity=p["impact_velocity_floor"],
-                dynamicFriction=p["friction_coefficient"] if coulomb else 0.0,
-                frictionProportionalZone=p["coulomb_v1"],
+                minimumImpactVelocity=joint.impact_velocity_floor,
+                dynamicFriction=joint.friction_coefficient if coulomb else 0.0,
+                frictionProportionalZone=joint.coulomb_v1,
             )
         )
-        local = (self.local(journal, point), self.local(bearing, point))
-        self.contacts[j] = (obj, journal, bearing, *local)
+        self.contacts[j] = obj
 
     def drive(self, b: int, rate: float, m_ground: int) -> None:
         """Crank ``b``'s angle imposed as rate * t by a rheonomic coordinate constraint."""
@@ -182,22 +198,32 @@ class _Build:
         )
 
     def sensors(self) -> dict[str, Any]:
-        """The recorded quantities: drive multipliers and angles, slider motion, contacts."""
-        out, slider = self.exu.OutputVariableType, self.nodes[self.mech.slider]
+        """The recorded quantities: drive multipliers and angles, slider motion, contacts (a
+        joint's side on the ground is its fixed place, not a sensor)."""
+        out = self.exu.OutputVariableType
         found: dict[str, Any] = {
             "drive": [self.sensor("object", d, out.Force) for d in self.drives],
             "angle": [
                 self.sensor("node", self.nodes[b], out.Coordinates) for b, _ in self.mech.drives
             ],
-            "slider_x": self.sensor("node", slider, out.Position),
-            "slider_v": self.sensor("node", slider, out.Velocity),
-            "slider_a": self.sensor("node", slider, out.Acceleration),
         }
-        for j, (obj, journal, bearing, lj, lb) in self.contacts.items():
+        if self.mech.slider is not None:
+            node = self.nodes[self.mech.slider.body]
+            for key, output in (("x", out.Position), ("v", out.Velocity), ("a", out.Acceleration)):
+                found[f"slider_{key}"] = self.sensor("node", node, output)
+        for j, obj in self.contacts.items():
+            joint = self.mech.clearances[j]
             found[f"force_{j}"] = self.sensor("object", obj, out.Force)
-            for side, body, at in (("journal", journal, lj), ("bearing", bearing, lb)):
-                found[f"{side}_{j}"] = self.sensor(
-                    "body", self.bodies[body], out.Position, localPosition=at
+            for side, body in (("journal", joint.journal), ("bearing", joint.bearing)):
+                found[f"{side}_{j}"] = (
+                    joint.point
+                    if body is None
+                    else self.sensor(
+                        "body",
+                        self.bodies[body],
+                        out.Position,
+                        localPosition=self.local(body, joint.point),
+                    )
                 )
         return found
 
@@ -209,13 +235,14 @@ def _build(exu, it, scene: Scene) -> tuple[_Build, dict[str, Any]]:
     b = _Build(exu, it, mech, params, params["gravity"] if scene.effects["gravity"] else 0.0)
     for b0, b1, point in mech.revolutes:
         b.revolute(b0, b1, point)
-    b.slider_guide()
+    for joint in mech.prismatics:
+        b.prismatic(joint)
     # clearance joints: journal in the bearing; ideal pins where the scene has no clearance
-    for j, (bearing, journal, point, _, _) in mech.clearances.items():
+    for j, joint in mech.clearances.items():
         if j in scene.effects["clearance"]:
             b.clearance(j, coulomb=scene.effects["friction"] == "coulomb")
         else:
-            b.revolute(bearing, journal, point)
+            b.revolute(joint.bearing, joint.journal, joint.point)
     ground_node = b.mbs.AddNode(it.NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
     m_ground = b.mbs.AddMarker(it.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
     for body, rate in mech.drives:
@@ -274,15 +301,22 @@ def _series(b: _Build, sensors: dict, keep: np.ndarray, t: np.ndarray) -> tuple[
     def data(key):
         return b.mbs.GetSensorStoredData(key)[keep]
 
+    def side(key):
+        """A joint's side (m, (n, 2)): its sensor's, or its fixed place on the ground."""
+        found = sensors[key]
+        return (
+            np.broadcast_to(found, (t.size, 2)) if isinstance(found, tuple) else data(found)[:, 1:3]
+        )
+
     # the drive multiplier acts on the crank's angle coordinate; the torque the motor applies
     # to the crank (counter-clockwise positive) is its negative (the workbench's torques, which
     # pass their energy-balance tests, agree with it record by record)
-    out = {
-        "torque": np.stack([-data(s)[:, 1] for s in sensors["drive"]], axis=1),
-        "slider_position": mech.slider_position(data(sensors["slider_x"])[:, 1]),
-        "slider_velocity": mech.slider_sign * data(sensors["slider_v"])[:, 1],
-        "slider_acceleration": mech.slider_sign * data(sensors["slider_a"])[:, 1],
-    }
+    out = {"torque": np.stack([-data(s)[:, 1] for s in sensors["drive"]], axis=1)}
+    if mech.slider is not None:
+        guide = mech.slider
+        out["slider_position"] = guide.position(data(sensors["slider_x"])[:, 1:3])
+        out["slider_velocity"] = guide.along(data(sensors["slider_v"])[:, 1:3])
+        out["slider_acceleration"] = guide.along(data(sensors["slider_a"])[:, 1:3])
     angle_error = max(
         float(np.max(np.abs(data(s)[:, 3] - rate * t)))
         for s, (_, rate) in zip(sensors["angle"], mech.drives, strict=True)
@@ -290,7 +324,7 @@ def _series(b: _Build, sensors: dict, keep: np.ndarray, t: np.ndarray) -> tuple[
     per_joint: dict[str, list] = {k: [] for k in ("clearance_x", "clearance_y")}
     per_joint.update(contact_force=[], friction_force=[])
     for j in b.contacts:
-        rel = data(sensors[f"journal_{j}"])[:, 1:3] - data(sensors[f"bearing_{j}"])[:, 1:3]
+        rel = side(f"journal_{j}") - side(f"bearing_{j}")
         e = np.hypot(rel[:, 0], rel[:, 1])
         n = rel / np.where(e > 0, e, 1.0)[:, None]
         f = data(sensors[f"force_{j}"])[:, 1:3]  # force on the journal's sphere (marker 0)

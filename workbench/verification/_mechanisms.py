@@ -1,30 +1,38 @@
 """The mechanisms as an independent multibody engine sees them: bodies with their initial
-placement, ideal joints, clearance joints, drives and the slider (:class:`Mechanism`), the
-builders of the built-in mechanisms (each model names its own:
+placement, ideal revolute and prismatic joints, clearance joints with their own contact
+parameters, drives and the recorded slider (:class:`Mechanism`), the builders of the built-in
+mechanisms and of any declared linkage (each model names its own:
 :attr:`workbench.models.Model.verification`), and which scenes can be rebuilt at all.
 
 Only the initial placement and velocities come from the workbench's kinematics; the engine then
 holds the bodies to its own constraints. The nine-bar's placement is its public
-:func:`workbench.models.ninebar.placement`.
+:func:`workbench.models.ninebar.placement`; a declared linkage's is its ideal-joint kinematics at
+t = 0 (:func:`workbench.models._declared_kinematics.kinematics`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from workbench.models import available_models, get_model, joint_stiffness
+from workbench.models._declaration import GROUND, RPR, RRP
 from workbench.scene import Scene, SceneError
 
 __all__ = [
     "Body",
+    "ClearanceJoint",
+    "Guide",
     "Mechanism",
     "Point",
+    "Prismatic",
     "build_mechanism",
     "check_scene",
+    "declared_mechanism",
     "verifiable_models",
 ]
 
@@ -44,24 +52,95 @@ class Body:
 
 
 @dataclass
+class Prismatic:
+    """An ideal prismatic joint: ``body1`` slides along ``body0`` (None: the ground) on the line
+    through ``point`` (m, at t = 0) along ``axis`` (a direction in the ground frame at t = 0),
+    and keeps its angle relative to ``body0``."""
+
+    body0: int | None
+    body1: int
+    point: Point
+    axis: Point
+
+
+@dataclass
+class ClearanceJoint:
+    """A revolute joint that may have a radial clearance: the bearing's and the journal's bodies
+    (None: the ground), the joint's place at t = 0 (m, the journal centred), its clearance (m),
+    contact stiffness (N m^-n) and the contact and friction parameters that the engine's contact
+    uses, by the built-ins' names (``bearing_radius`` m, ``contact_exponent``, ``restitution``,
+    ``impact_velocity_floor`` m s-1, ``friction_coefficient``, ``coulomb_v1`` m s-1)."""
+
+    bearing: int | None
+    journal: int | None
+    point: Point
+    clearance: float
+    stiffness: float
+    bearing_radius: float
+    contact_exponent: float
+    restitution: float
+    impact_velocity_floor: float
+    friction_coefficient: float
+    coulomb_v1: float
+
+
+@dataclass
+class Guide:
+    """The recorded slider: its body, and its position ``offset + (x - origin) . axis`` (m) from
+    its centroid x (m); its velocity and acceleration are the centroid's along ``axis`` (a unit
+    vector in the ground frame)."""
+
+    body: int
+    origin: Point
+    axis: Point
+    offset: float
+
+    def position(self, x: np.ndarray) -> np.ndarray:
+        """The slider's position (m) from its centroid's positions (arrays (n, 2), m)."""
+        return self.offset + self.along(x - np.asarray(self.origin))
+
+    def along(self, v: np.ndarray) -> np.ndarray:
+        """The component along the guide of vectors (n, 2)."""
+        return v[:, 0] * self.axis[0] + v[:, 1] * self.axis[1]
+
+
+@dataclass
 class Mechanism:
     """A mechanism as exudyn sees it. Bodies are indices into ``bodies``; None is the ground.
 
-    ``revolutes``: ideal pins (body0, body1, point); ``clearances``: joint name -> (bearing
-    body, journal body, point, clearance m, contact stiffness N m^-n), ideal pins when the scene
-    has no clearance there; ``drives``: (body, angular rate rad s-1) per driven crank, in the
-    order of the model's ``crank`` coordinate; ``slider``: the body on the guide (the x axis of
-    its initial placement), ``slider_position``: the map x_body -> slider position (m) and
-    ``slider_sign``: the sign of the slider's velocity against x_body.
+    ``revolutes``: ideal pins (body0, body1, point); ``prismatics``: ideal sliding joints;
+    ``clearances``: joint name -> :class:`ClearanceJoint`, ideal pins when the scene has no
+    clearance there; ``drives``: (body, angular rate rad s-1) per driven crank, in the order of
+    the model's ``crank`` coordinate; ``slider``: the slider the model records (None: it records
+    none).
     """
 
     bodies: list[Body]
     revolutes: list[tuple[int | None, int, Point]]
-    clearances: dict[str, tuple[int, int, Point, float, float]]
+    prismatics: list[Prismatic]
+    clearances: dict[str, ClearanceJoint]
     drives: list[tuple[int, float]]
-    slider: int
-    slider_position: Callable[[np.ndarray], np.ndarray]
-    slider_sign: float
+    slider: Guide | None
+
+
+def clearance_joint(
+    bearing: int | None, journal: int | None, point: Point, c: float, params: Mapping[str, float]
+) -> ClearanceJoint:
+    """A clearance joint with the clearance ``c`` (m) and the contact and friction parameters
+    ``params`` (the built-ins' names)."""
+    return ClearanceJoint(
+        bearing,
+        journal,
+        point,
+        c,
+        joint_stiffness(params, c),
+        params["bearing_radius"],
+        params["contact_exponent"],
+        params["restitution"],
+        params["impact_velocity_floor"],
+        params["friction_coefficient"],
+        params["coulomb_v1"],
+    )
 
 
 def ninebar_mechanism(scene: Scene) -> Mechanism:
@@ -85,8 +164,8 @@ def ninebar_mechanism(scene: Scene) -> Mechanism:
     A, B, P, C, D, E = (at.points[k] for k in "ABPCDE")
     o6 = at.ground["O6"]
     c = model.clearances(params)
-    s0 = at.slider_offset
     b = BODY_INDEX
+    slider = bodies[b["slider9"]].placement
     return Mechanism(
         bodies=bodies,
         revolutes=[
@@ -99,14 +178,14 @@ def ninebar_mechanism(scene: Scene) -> Mechanism:
             (b["panel7"], b["link8"], D),
             (b["link8"], b["slider9"], E),
         ],
+        prismatics=[Prismatic(None, b["slider9"], slider[:2], (1.0, 0.0))],
         clearances={
-            "A": (b["crank1"], b["link2"], A, c["A"], joint_stiffness(params, c["A"])),
-            "B": (b["crank4"], b["link3"], B, c["B"], joint_stiffness(params, c["B"])),
+            "A": clearance_joint(b["crank1"], b["link2"], A, c["A"], params),
+            "B": clearance_joint(b["crank4"], b["link3"], B, c["B"], params),
         },
         drives=[(b["crank1"], -omega), (b["crank4"], omega)],
-        slider=b["slider9"],
-        slider_position=lambda x: s0 - (x - o6[0]),  # S9 = S0 - (x_E - x_O6)
-        slider_sign=-1.0,
+        # S9 = S0 - (x_E - x_O6)
+        slider=Guide(b["slider9"], (o6[0], o6[1]), (-1.0, 0.0), at.slider_offset),
     )
 
 
@@ -136,17 +215,104 @@ def slider_crank_mechanism(scene: Scene) -> Mechanism:
     return Mechanism(
         bodies=bodies,
         revolutes=[(None, 0, (0.0, 0.0)), (0, 1, a)],
-        clearances={"B": (2, 1, b, c, joint_stiffness(params, c))},
+        prismatics=[Prismatic(None, 2, b, (1.0, 0.0))],
+        clearances={"B": clearance_joint(2, 1, b, c, params)},
         drives=[(0, w1)],
-        slider=2,
-        slider_position=lambda x: x,
-        slider_sign=1.0,
+        slider=Guide(2, (0.0, 0.0), (1.0, 0.0), 0.0),
+    )
+
+
+def declared_mechanism(scene: Scene) -> Mechanism:
+    """A declared linkage at t = 0 (:mod:`workbench.models._declared_model`): its links and
+    sliders placed by its ideal-joint kinematics at the scene's crank speed, a pin wherever two
+    bodies (or a body and the ground) carry one point, a clearance joint where the declaration
+    has one (the journal's body at the bearing's place, which the other bodies carrying the
+    point share), a prismatic joint along each slider's guide and each RPR group's line, a drive
+    per crank and the first slider as the recorded one."""
+    from workbench.models._declared_kinematics import kinematics
+
+    model = get_model(scene.model)
+    params = scene.resolved_parameters
+    linkage = model.linkage
+    slowest = min(abs(c.omega) for c in linkage.cranks)
+    rates = [c.omega / slowest * params["omega"] for c in linkage.cranks]
+    linkage = dataclasses.replace(
+        linkage,
+        cranks=tuple(
+            dataclasses.replace(c, omega=w) for c, w in zip(linkage.cranks, rates, strict=True)
+        ),
+    )
+    motion = kinematics(linkage, 0.0)
+    names = [b.name for b in (*linkage.links, *linkage.sliders)]
+    index: dict[str, int | None] = {n: i for i, n in enumerate(names)}
+    index[GROUND] = None
+    links = {link.name for link in linkage.links}
+    bodies = []
+    for n in names:
+        centre, angle = motion.centres[n], motion.angles[n]
+        bodies.append(
+            Body(
+                n,
+                params[f"mass_{n}"],
+                params[f"inertia_{n}"] if n in links else 1e-6,  # a slider does not turn
+                (*centre.position[0], angle.position[0]),
+                (*centre.velocity[0], angle.velocity[0]),
+            )
+        )
+
+    def at(point: str) -> Point:
+        x, y = motion.points[point].position[0]
+        return (float(x), float(y))
+
+    clearances = {c.joint: c for c in linkage.clearances}
+    revolutes: list[tuple[int | None, int, Point]] = []
+    joints: dict[str, ClearanceJoint] = {}
+    carriers = [GROUND, *names]
+    for point in motion.points:
+        on = [b for b in carriers if point in linkage.points_of(b)]
+        c = clearances.get(point)
+        pinned = [b for b in on if c is None or b != c.journal]
+        revolutes += [(index[pinned[0]], index[b], at(point)) for b in pinned[1:]]
+        if c is not None:
+            joints[point] = clearance_joint(
+                index[c.bearing],
+                index[c.journal],
+                at(point),
+                params[f"clearance_{point}"],
+                model.joint_parameters(params, point),
+            )
+    prismatics = []
+    for g in linkage.groups:
+        if isinstance(g, RRP):
+            s = next(s for s in linkage.sliders if s.name == g.slider)
+            u = (math.cos(s.angle), math.sin(s.angle))
+            prismatics.append(Prismatic(None, index[s.name], at(s.pin), u))
+        elif isinstance(g, RPR):
+            a, b = at(g.line[0]), at(g.line[1])
+            u = (b[0] - a[0], b[1] - a[1])
+            prismatics.append(Prismatic(index[g.guide], index[g.block], at(g.pin), u))
+    slider = None
+    if linkage.sliders:
+        s = linkage.sliders[0]
+        g = linkage.ground[s.guide]
+        u = (math.cos(s.angle), math.sin(s.angle))
+        com = s.centre_of_mass
+        origin = (g[0] + u[0] * com[0] - u[1] * com[1], g[1] + u[1] * com[0] + u[0] * com[1])
+        slider = Guide(index[s.name], origin, u, s.offset)
+    return Mechanism(
+        bodies=bodies,
+        revolutes=revolutes,
+        prismatics=prismatics,
+        clearances=joints,
+        drives=[(index[c.link], w) for c, w in zip(linkage.cranks, rates, strict=True)],
+        slider=slider,
     )
 
 
 def verifiable_models() -> tuple[str, ...]:
-    """The models that exudyn can rebuild: those that declare their ``verification`` builder
-    (:attr:`workbench.models.Model.verification`)."""
+    """The built-in models that exudyn can rebuild: those that declare their ``verification``
+    builder (:attr:`workbench.models.Model.verification`); a declared mechanism's model declares
+    it too."""
     return tuple(m for m in available_models() if get_model(m).verification is not None)
 
 
@@ -157,17 +323,32 @@ def build_mechanism(scene: Scene) -> Mechanism:
 
 
 def check_scene(scene: Scene) -> None:
-    """Raise SceneError (naming the key) unless exudyn can rebuild this scene (model and
-    friction law)."""
-    if get_model(scene.model).verification is None:
+    """Raise SceneError (naming the key) unless exudyn can rebuild this scene (model, friction
+    and contact laws, journals starting centred)."""
+    model = get_model(scene.model)
+    if model.verification is None:
         raise SceneError(
             "model.name",
-            f"exudyn verification knows the models {sorted(verifiable_models())}; got "
-            f"{scene.model!r}",
+            f"exudyn verification knows the models {sorted(verifiable_models())} and declared "
+            f"mechanisms; got {scene.model!r}",
         )
     if scene.effects["friction"] == "lugre":
         raise SceneError(
             "effects.friction",
             "'lugre' has no counterpart in exudyn's contact; verify a scene with friction "
             "'none' or 'coulomb'",
+        )
+    if scene.effects["clearance"] and scene.effects.get("contact") == "hunt_crossley":
+        raise SceneError(
+            "effects.contact",
+            "'hunt_crossley' (a constant damping) has no counterpart in exudyn's contact, whose "
+            "damping scales with the onset velocity; verify with 'lankarani_nikravesh'",
+        )
+    moved = {k: v for k, v in scene.initial.items() if v != 0.0}
+    if moved:
+        key = next(iter(moved))
+        raise SceneError(
+            f"initial.{key}",
+            f"got {moved[key]!r}; exudyn starts every journal centred and at rest in its bearing: "
+            "verify a scene without an [initial] state",
         )
