@@ -9,13 +9,15 @@ from workbench.plot._base import axis_label, display_values, plt
 
 
 def verification_figure(ds: xr.Dataset) -> plt.Figure:
-    """Torques, slider acceleration and (with clearances) contact forces of both engines.
+    """Torques, slider acceleration (where the mechanism has a slider) and (with clearances)
+    contact forces of both engines.
 
     With clearance joints a last row zooms on the first impact at each joint.
     """
     finest = str(ds.run.values[-1])
     rows = [("torque", "crank", c) for c in ds.crank.values]
-    rows.append(("slider_acceleration", None, None))
+    if "slider_acceleration" in ds:
+        rows.append(("slider_acceleration", None, None))
     joints = list(ds.joint.values) if "joint" in ds.dims else []
     rows += [("contact_force", "joint", j) for j in joints]
     n = len(rows) + (1 if joints else 0)

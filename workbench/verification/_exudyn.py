@@ -294,8 +294,11 @@ def _on_grid(t_raw: np.ndarray, record_dt: float, step: float) -> tuple[np.ndarr
     return keep, k[keep] * record_dt
 
 
-def _series(b: _Build, sensors: dict, keep: np.ndarray, t: np.ndarray) -> tuple[dict, float]:
-    """The records under the workbench's names (arrays), and the drives' largest angle error."""
+def _series(
+    b: _Build, sensors: dict, keep: np.ndarray, t: np.ndarray, joints: tuple[str, ...]
+) -> tuple[dict, float]:
+    """The records under the workbench's names (arrays; the clearance joints' in the order
+    ``joints``, the model's ``joint`` coordinate), and the drives' largest angle error."""
     mech = b.mech
 
     def data(key):
@@ -323,7 +326,7 @@ def _series(b: _Build, sensors: dict, keep: np.ndarray, t: np.ndarray) -> tuple[
     )
     per_joint: dict[str, list] = {k: [] for k in ("clearance_x", "clearance_y")}
     per_joint.update(contact_force=[], friction_force=[])
-    for j in b.contacts:
+    for j in joints:
         rel = side(f"journal_{j}") - side(f"bearing_{j}")
         e = np.hypot(rel[:, 0], rel[:, 1])
         n = rel / np.where(e > 0, e, 1.0)[:, None]
@@ -419,7 +422,7 @@ def run_exudyn(
         ) from err
     wall = _time.perf_counter() - start
     keep, t = _on_grid(b.mbs.GetSensorStoredData(sensors["drive"][0])[:, 0], record_dt, step)
-    series, angle_error = _series(b, sensors, keep, t)
+    series, angle_error = _series(b, sensors, keep, t, tuple(scene.effects["clearance"]))
     attrs = {
         "engine": f"exudyn {exu.__version__}",
         "integrator": "generalised-alpha (index 3), fixed step",

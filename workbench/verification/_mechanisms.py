@@ -264,23 +264,22 @@ def declared_mechanism(scene: Scene) -> Mechanism:
         x, y = motion.points[point].position[0]
         return (float(x), float(y))
 
-    clearances = {c.joint: c for c in linkage.clearances}
+    journals = {c.joint: c.journal for c in linkage.clearances}
     revolutes: list[tuple[int | None, int, Point]] = []
-    joints: dict[str, ClearanceJoint] = {}
     carriers = [GROUND, *names]
     for point in motion.points:
-        on = [b for b in carriers if point in linkage.points_of(b)]
-        c = clearances.get(point)
-        pinned = [b for b in on if c is None or b != c.journal]
+        pinned = [b for b in carriers if point in linkage.points_of(b) and b != journals.get(point)]
         revolutes += [(index[pinned[0]], index[b], at(point)) for b in pinned[1:]]
-        if c is not None:
-            joints[point] = clearance_joint(
-                index[c.bearing],
-                index[c.journal],
-                at(point),
-                params[f"clearance_{point}"],
-                model.joint_parameters(params, point),
-            )
+    joints = {
+        c.joint: clearance_joint(
+            index[c.bearing],
+            index[c.journal],
+            at(c.joint),
+            params[f"clearance_{c.joint}"],
+            model.joint_parameters(params, c.joint),
+        )
+        for c in linkage.clearances
+    }
     prismatics = []
     for g in linkage.groups:
         if isinstance(g, RRP):
