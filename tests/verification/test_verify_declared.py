@@ -206,15 +206,22 @@ def test_exudyn_rebuilds_a_bearing_in_the_ground_and_orders_the_joints():
 
 
 @pytest.mark.parametrize(
-    ("change", "key"),
+    ("source", "change", "key"),
     [
-        ({"effects": {"friction": "lugre"}}, "effects.friction"),
-        ({"effects": {"contact": "hunt_crossley"}}, "effects.contact"),
-        ({"initial": {"x_B": 1e-4}}, "initial.x_B"),
+        ("fourbar", {"effects": {"friction": "lugre"}}, "effects.friction"),
+        ("fourbar", {"effects": {"contact": "hunt_crossley"}}, "effects.contact"),
+        ("fourbar", {"initial": {"x_B": 1e-4}}, "initial.x_B"),
+        # the built-ins too: exudyn's damping scales with the onset velocity, and its journals
+        # start centred
+        ("ninebar", {"effects": {"contact": "hunt_crossley"}}, "effects.contact"),
+        ("ninebar", {"initial": {"vy_A": 1e-3}}, "initial.vy_A"),
     ],
 )
-def test_what_exudyn_cannot_rebuild_is_refused_naming_the_key(change, key):
-    scene = workbench.load_scene({"mechanism": tomllib.loads(FOURBAR.read_text())["mechanism"],
-                                  **change})  # fmt: skip
+def test_what_exudyn_cannot_rebuild_is_refused_naming_the_key(source, change, key):
+    if source == "fourbar":
+        model = {"mechanism": tomllib.loads(FOURBAR.read_text())["mechanism"]}
+    else:
+        model = {"model": {"name": source}}
+    scene = workbench.load_scene({**model, **change})
     with pytest.raises(workbench.SceneError, match=f"^{key}: "):
         run_exudyn(scene, t_end=1e-3, step=1e-4, record_dt=1e-4)
