@@ -46,6 +46,7 @@ from workbench.models._clearance import (
     validate_joint,
 )
 from workbench.models._declaration import CONTACT_PARAMETERS, GROUND, Linkage, to_table
+from workbench.models._declared_kinematics import Motion, kinematics
 from workbench.models._declared_source import body_rows, generated_source
 from workbench.models._mechanism import Mechanism, body_parameters, mechanism_parameters
 
@@ -90,6 +91,17 @@ class DeclaredMechanism(Mechanism):
         out = {n: params[f"{n}_{joint}"] for n in JOINT_PARAMETERS}
         out.update({n: params[n] for n in FRICTION_PARAMETERS})
         return out
+
+    def ideal_motion(self, params, time) -> Motion:
+        """The linkage's motion with ideal joints at the times ``time`` (s), every crank turning
+        at its declared multiple of ``params["omega"]`` (rad s-1)
+        (:func:`workbench.models._declared_kinematics.kinematics`)."""
+        slowest = min(abs(c.omega) for c in self.linkage.cranks)
+        cranks = tuple(
+            dataclasses.replace(c, omega=c.omega / slowest * params["omega"])
+            for c in self.linkage.cranks
+        )
+        return kinematics(dataclasses.replace(self.linkage, cranks=cranks), time)
 
     def outputs(self, effects):
         out = super().outputs(effects)

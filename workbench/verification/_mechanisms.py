@@ -12,7 +12,6 @@ t = 0 (:func:`workbench.models._declared_kinematics.kinematics`).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -20,7 +19,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from workbench.models import available_models, get_model, joint_stiffness
-from workbench.models._declaration import GROUND, RPR, RRP
 from workbench.scene import Scene, SceneError
 
 __all__ = [
@@ -229,23 +227,13 @@ def declared_mechanism(scene: Scene) -> Mechanism:
     has one (the journal's body at the bearing's place, which the other bodies carrying the
     point share), a prismatic joint along each slider's guide and each RPR group's line, a drive
     per crank and the first slider as the recorded one."""
-    from workbench.models._declared_kinematics import kinematics
-
     model = get_model(scene.model)
     params = scene.resolved_parameters
     linkage = model.linkage
-    slowest = min(abs(c.omega) for c in linkage.cranks)
-    rates = [c.omega / slowest * params["omega"] for c in linkage.cranks]
-    linkage = dataclasses.replace(
-        linkage,
-        cranks=tuple(
-            dataclasses.replace(c, omega=w) for c, w in zip(linkage.cranks, rates, strict=True)
-        ),
-    )
-    motion = kinematics(linkage, 0.0)
-    names = [b.name for b in (*linkage.links, *linkage.sliders)]
-    index: dict[str, int | None] = {n: i for i, n in enumerate(names)}
-    index[GROUND] = None
+    motion = model.ideal_motion(params, 0.0)
+    parts = linkage.bodies()  # links, then sliders, by name
+    names = list(parts)
+    index: dict[str, int] = {n: i for i, n in enumerate(names)}  # the ground: None
     links = {link.name for link in linkage.links}
     bodies = []
     for n in names:
@@ -266,14 +254,16 @@ def declared_mechanism(scene: Scene) -> Mechanism:
 
     journals = {c.joint: c.journal for c in linkage.clearances}
     revolutes: list[tuple[int | None, int, Point]] = []
-    carriers = [GROUND, *names]
     for point in motion.points:
-        pinned = [b for b in carriers if point in linkage.points_of(b) and b != journals.get(point)]
-        revolutes += [(index[pinned[0]], index[b], at(point)) for b in pinned[1:]]
+        carriers = [n for n in names if point in parts[n].points]
+        pinned = ([None] if point in linkage.ground else []) + [
+            index[n] for n in carriers if n != journals.get(point)
+        ]
+        revolutes += [(pinned[0], b, at(point)) for b in pinned[1:]]
     joints = {
         c.joint: clearance_joint(
-            index[c.bearing],
-            index[c.journal],
+            index.get(c.bearing),
+            index.get(c.journal),
             at(c.joint),
             params[f"clearance_{c.joint}"],
             model.joint_parameters(params, c.joint),
@@ -282,11 +272,11 @@ def declared_mechanism(scene: Scene) -> Mechanism:
     }
     prismatics = []
     for g in linkage.groups:
-        if isinstance(g, RRP):
-            s = next(s for s in linkage.sliders if s.name == g.slider)
+        if g.kind == "RRP":
+            s = parts[g.slider]
             u = (math.cos(s.angle), math.sin(s.angle))
             prismatics.append(Prismatic(None, index[s.name], at(s.pin), u))
-        elif isinstance(g, RPR):
+        elif g.kind == "RPR":
             a, b = at(g.line[0]), at(g.line[1])
             u = (b[0] - a[0], b[1] - a[1])
             prismatics.append(Prismatic(index[g.guide], index[g.block], at(g.pin), u))
@@ -298,21 +288,27 @@ def declared_mechanism(scene: Scene) -> Mechanism:
         com = s.centre_of_mass
         origin = (g[0] + u[0] * com[0] - u[1] * com[1], g[1] + u[1] * com[0] + u[0] * com[1])
         slider = Guide(index[s.name], origin, u, s.offset)
+    drives = [(index[c.link], float(motion.angles[c.link].velocity[0])) for c in linkage.cranks]
     return Mechanism(
         bodies=bodies,
         revolutes=revolutes,
         prismatics=prismatics,
         clearances=joints,
-        drives=[(index[c.link], w) for c, w in zip(linkage.cranks, rates, strict=True)],
+        drives=drives,
         slider=slider,
     )
 
 
 def verifiable_models() -> tuple[str, ...]:
-    """The built-in models that exudyn can rebuild: those that declare their ``verification``
-    builder (:attr:`workbench.models.Model.verification`); a declared mechanism's model declares
-    it too."""
-    return tuple(m for m in available_models() if get_model(m).verification is not None)
+    """The built-in and registered models that exudyn can rebuild: those that declare their
+    ``verification`` builder (:attr:`workbench.models.Model.verification`). Every declared
+    mechanism (a scene's ``[mechanism]`` table) can be rebuilt too; its models, made as scenes
+    declare them, are not listed."""
+    return tuple(
+        m
+        for m in available_models()
+        if get_model(m).verification is not None and getattr(get_model(m), "linkage", None) is None
+    )
 
 
 def build_mechanism(scene: Scene) -> Mechanism:
@@ -337,7 +333,7 @@ def check_scene(scene: Scene) -> None:
             "'lugre' has no counterpart in exudyn's contact; verify a scene with friction "
             "'none' or 'coulomb'",
         )
-    if scene.effects["clearance"] and scene.effects.get("contact") == "hunt_crossley":
+    if scene.effects.get("clearance") and scene.effects.get("contact") == "hunt_crossley":
         raise SceneError(
             "effects.contact",
             "'hunt_crossley' (a constant damping) has no counterpart in exudyn's contact, whose "
