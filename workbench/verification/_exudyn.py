@@ -20,10 +20,13 @@ Friction. Exudyn's contact friction is a Coulomb law regularised linearly below
 ``frictionProportionalZone`` (m/s); the workbench's modified Coulomb law (Ambrosio 2002) has no
 friction below v0 and a linear ramp up to v1. With ``friction = "coulomb"`` the comparison sets the
 regularisation zone to v1: the two laws agree outside (0, v1) only, which matters in stick-slip
-but hardly at impacts. LuGre has no exudyn counterpart and is refused.
+but hardly at impacts. LuGre has no exudyn counterpart and is refused, as is the workbench's
+Hunt-Crossley law (``effects.contact``), whose damping constant exudyn's contact does not have.
 
 Each model is described as a :class:`~workbench.verification._mechanisms.Mechanism` (bodies with
-their initial placement, joints, drives, clearance joints, the slider); :func:`run_exudyn`
+their initial placement, pins, prismatic guides, drives, clearance joints with their own
+parameters, the recorded slider if any), the built-ins by hand and a declared mechanism from its
+declaration; :func:`run_exudyn`
 builds any of them in exudyn, runs it and returns its records under the workbench's names,
 units and long names (from the model's declarations).
 """
@@ -375,9 +378,10 @@ def run_exudyn(
     ----------
     scene : Scene
         A scene of a model that exudyn rebuilds
-        (:func:`workbench.verification.verifiable_models`: ``ninebar``, ``slider_crank``): its
-        parameters, clearance joints, gravity and friction ("none" or "coulomb") are rebuilt in
-        exudyn; the run and record tables are not used.
+        (:func:`workbench.verification.verifiable_models`: ``ninebar``, ``slider_crank``) or
+        of a declared mechanism (a ``[mechanism]`` table): its parameters, clearance joints,
+        gravity and friction ("none" or "coulomb") are rebuilt in exudyn; the run and record
+        tables are not used.
     t_end : float
         End time, s.
     step : float
@@ -394,8 +398,9 @@ def run_exudyn(
     -------
     xarray.Dataset
         Dim ``time`` (s) and, under the workbench's names with the units and long names its
-        model declares, ``torque`` (dims time, crank), ``slider_position``,
-        ``slider_velocity``, ``slider_acceleration``, and with clearances ``clearance_x``,
+        model declares, ``torque`` (dims time, crank), where the mechanism has a slider
+        ``slider_position``, ``slider_velocity``, ``slider_acceleration``, and with clearances
+        ``clearance_x``,
         ``clearance_y``, ``contact_force``, ``friction_force`` (dims time, joint). Attributes:
         ``engine``, ``integrator``, ``step``, ``spectral_radius``, ``wall_time`` (s),
         ``drive_angle_error`` (rad).
@@ -403,8 +408,8 @@ def run_exudyn(
     Raises
     ------
     SceneError
-        For a model without a :class:`Mechanism` description or with LuGre friction (the
-        message names the key).
+        For a model without a :class:`Mechanism` description, LuGre friction, the
+        Hunt-Crossley contact law or an initial state (the message names the key).
     RuntimeError
         Where exudyn's Newton iteration fails at this step.
     """
