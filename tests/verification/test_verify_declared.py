@@ -1,7 +1,8 @@
 """A declared mechanism against exudyn (issue 42, items 3 and 4): exudyn rebuilds it from its
 declaration, so that ``verify`` and ``workbench verify`` take the four-bar of
-studies/mechanisms/fourbar.toml as they take the built-ins, and any linkage the declaration
-allows (RPR and RRP groups, tilted guides, several sliders, a bearing in the ground).
+studies/mechanisms/fourbar.toml (and the declared nine-bar) as they take the built-ins, and any
+linkage the declaration allows (RPR and RRP groups, tilted guides, several sliders, a bearing in
+the ground).
 
 Skipped, with the reason, where the ``verify`` extra (exudyn) is not installed.
 """
@@ -74,6 +75,36 @@ def test_fourbar_clearance_statistics_agree_over_a_cycle():
     np.testing.assert_allclose(other.mean_eccentricity, ours.mean_eccentricity, rtol=0.06)
     np.testing.assert_allclose(other.force_p95, ours.force_p95, rtol=0.5)
     np.testing.assert_allclose(other.peak_force, ours.peak_force, rtol=0.5)
+
+
+def test_declared_ninebar_agrees_with_exudyn():
+    """The nine-bar of studies/mechanisms/ninebar.toml (two cranks turning opposite ways, a
+    slider, clearances at A and B) with the parameters of studies/ninebar.toml: ideal joints
+    record by record over a cycle as the built-in's test demands, then the first impact at each
+    joint."""
+    table = tomllib.loads((ROOT / "studies" / "mechanisms" / "ninebar.toml").read_text())
+    study = tomllib.loads((ROOT / "studies" / "ninebar.toml").read_text())["parameters"]
+    params = {
+        "omega": study["omega"],
+        "clearance_A": study["clearance"],
+        "clearance_B": study["clearance"],
+    }
+    base = {"mechanism": table["mechanism"], "parameters": params, "record": {"dt": 1e-3}}
+    ideal = workbench.load_scene({**base, "effects": {"clearance": []}})
+    ds = verify(ideal, steps=(2.5e-4, 1e-4))
+    fine = ds.max_relative_error.sel(run="exudyn h=0.0001")
+    coarse = ds.max_relative_error.sel(run="exudyn h=0.00025")
+    assert float(fine.sel(series="torque")) < 1e-3
+    assert float(fine.sel(series="slider_acceleration")) < 1e-3
+    assert float(fine.sel(series="slider_position")) < 1e-9
+    assert float(fine.sel(series="torque")) < float(coarse.sel(series="torque")) / 4
+    scene = workbench.load_scene({**base, "effects": {"friction": "none"}})
+    ds = verify(scene, horizon=0.02, steps=(2e-6,))
+    ours, finest = ds.sel(run="workbench"), ds.sel(run="exudyn h=2e-06")
+    assert list(ds.joint.values) == ["A", "B"]
+    assert np.all((ours.first_impact_time > 0.005) & (ours.first_impact_time < 0.02))
+    np.testing.assert_allclose(finest.first_impact_time, ours.first_impact_time, rtol=0.01)
+    np.testing.assert_allclose(finest.first_impact_force, ours.first_impact_force, rtol=0.05)
 
 
 def test_workbench_verify_takes_the_fourbar_file(tmp_path):
