@@ -7,7 +7,7 @@ mechanisms and of any declared linkage (each model names its own:
 Only the initial placement and velocities come from the workbench's kinematics; the engine then
 holds the bodies to its own constraints. The nine-bar's placement is its public
 :func:`workbench.models.ninebar.placement`; a declared linkage's is its ideal-joint kinematics at
-t = 0 (:func:`workbench.models._declared_kinematics.kinematics`).
+t = 0 (its model's ``ideal_motion``).
 """
 
 from __future__ import annotations
