@@ -43,6 +43,12 @@ code writes.
 - ``periodic_end_hunt_crossley.nc``: the same for ``studies/periodic_end_hunt_crossley.toml``
   (c = 100 um under the Hunt-Crossley law); ``python data/regenerate.py
   --periodic-end-hunt-crossley`` (minutes on 2 workers).
+- ``fourbar_sweep.nc`` and ``fourbar_chaos_map.nc``: the declared four-bar of
+  ``studies/mechanisms/fourbar.toml`` (Coulomb friction c_f = 0.1 at its clearance joint B), a
+  continued sweep over the crank speed 30-70 rad/s up and down at c = 0.5 mm (strobe samples of
+  the clearance vector) and a 3 x 3 chaos map over the crank speed and the clearance without
+  its strobe samples; ``python data/regenerate.py --fourbar`` (``make data`` makes them too;
+  a few minutes on 2 workers). notebooks/05_your_own_mechanism.ipynb opens them.
 """
 
 from __future__ import annotations
@@ -87,6 +93,8 @@ def main() -> None:
     workbench.run_campaign(sweep, store, restart=True)
     shutil.rmtree(store.with_name(store.name + ".blocks"), ignore_errors=True)
     print("bifurcation_speed.nc")
+
+    print(*fourbar(), sep="\n")
 
 
 def upgrade(path: Path) -> Path:
@@ -161,13 +169,18 @@ def _declared_since(ds) -> list[str]:
     return added
 
 
+def without_samples(maps):
+    """A chaos map without its strobe samples (every variable over ``time``): its indicators."""
+    timed = [v for v in maps.data_vars if any(d in SERIES_DIMS for d in maps[v].dims)]
+    return maps.drop_vars([*timed, *(c for c in ("time", RECORD_TIME) if c in maps.coords)])
+
+
 def chaos_map_summary(source: Path, log: Path, target: Path) -> Path:
     """The chaos map at ``source`` without its strobe samples (every variable over ``time``),
     with the cost of its run from ``log`` (GNU ``time -v`` output and ``uptime`` lines) as
     attributes, written to ``target``."""
     maps = workbench.open_run(source)
-    timed = [v for v in maps.data_vars if any(d in SERIES_DIMS for d in maps[v].dims)]
-    out = maps.drop_vars([*timed, *(c for c in ("time", RECORD_TIME) if c in maps.coords)])
+    out = without_samples(maps)
     text = Path(log).read_text()
 
     loads = re.findall(r"load average: ([0-9.]+),", text)
@@ -241,8 +254,72 @@ def periodic_end(target: Path, workers: int = 2, study: str = "periodic_end") ->
     return target
 
 
+def fourbar_scenes() -> tuple[workbench.Scene, workbench.Scene]:
+    """The scenes of ``fourbar_sweep.nc`` and ``fourbar_chaos_map.nc``: the four-bar of
+    studies/mechanisms/fourbar.toml with Coulomb friction c_f = 0.1 at B, strobe samples of
+    the clearance vector; a continued sweep over omega 30-70 rad/s in steps of 2 rad/s (c =
+    0.5 mm, up and down, one segment each way) and a map over omega 35 / 50 / 65 rad/s and
+    c = 0.1 / 0.3 / 0.5 mm."""
+    import tomllib
+
+    with open(ROOT / "studies" / "mechanisms" / "fourbar.toml", "rb") as f:
+        table = tomllib.load(f)["mechanism"]
+    common = {
+        "mechanism": table,
+        "effects": {"friction": "coulomb"},
+        "parameters": {"friction_coefficient": 0.1},
+        "solver": {"rtol": 1e-6, "atol": 1e-6},
+        "record": {"samples_per_period": 1, "variables": ["clearance_x", "clearance_y"]},
+    }
+    sweep = {
+        **common,
+        "title": "Declared four-bar, c = 0.5 mm at B, c_f = 0.1: continued sweep over the "
+        "crank speed 30-70 rad/s, up and down",
+        "run": {"cycles": 40, "transient_cycles": 60},
+        "sweep": {
+            "omega": {"start": 30.0, "stop": 70.0, "num": 21},  # rad/s
+            "continuation": {
+                "direction": "both",
+                "along": "omega",
+                "segments": 1,
+                "transient_cycles": 20,
+            },
+        },
+    }
+    chaos = {
+        **common,
+        "title": "Declared four-bar, c_f = 0.1: chaos map over the crank speed and the "
+        "clearance at B",
+        "run": {"cycles": 100, "transient_cycles": 40},
+        "sweep": {
+            "omega": [35.0, 50.0, 65.0],  # rad/s
+            "clearance_B": [1e-4, 3e-4, 5e-4],  # m
+        },
+    }
+    return workbench.load_scene(sweep), workbench.load_scene(chaos)
+
+
+def fourbar(workers: int = 2) -> tuple[Path, Path]:
+    """``fourbar_sweep.nc`` (the continued sweep whole: a few hundred kB) and
+    ``fourbar_chaos_map.nc`` (the map's indicators) from :func:`fourbar_scenes`."""
+    import tempfile
+
+    from workbench.continuation import chaos_map, continued_sweep
+
+    sweep, chaos = fourbar_scenes()
+    swept, mapped = DATA / "fourbar_sweep.nc", DATA / "fourbar_chaos_map.nc"
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = continued_sweep(sweep, Path(tmp) / "sweep.nc", workers=workers)
+        workbench.save_run(ds, swept)
+        maps = chaos_map(chaos, Path(tmp) / "map.nc", workers=workers)
+        workbench.save_run(without_samples(maps), mapped, classic=True)
+    return swept, mapped
+
+
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--periodic-end"]:
+    if sys.argv[1:2] == ["--fourbar"]:
+        print(*fourbar(), sep="\n")
+    elif sys.argv[1:2] == ["--periodic-end"]:
         print(periodic_end(DATA / "periodic_end.nc"))
     elif sys.argv[1:2] == ["--periodic-end-hunt-crossley"]:
         study = "periodic_end_hunt_crossley"

@@ -2,7 +2,8 @@
 (nbclient); the outputs committed with it (which the docs site shows) are the ones it gives now
 (``make notebooks`` rewrites them); and its key numbers are the API's, computed here
 independently: notebook 02's Wolf exponent with its reliability flag and reasons, notebook 01's
-energy residual and peaks, notebook 03's failed points."""
+energy residual and peaks, notebook 03's failed points, notebook 05's strobe periods and
+chaos indicators of the declared four-bar and what its text says of them."""
 
 import re
 from pathlib import Path
@@ -138,6 +139,84 @@ def test_notebook_04_quotes_the_chaos_maps(executed):
         n = int(((unmet & mask) != 0).sum())
         assert (f"{name}: {n} points" in out) == (n > 0), name
     assert "shared points identical: True" in out
+
+
+def _fourbar_periods(sweep) -> dict[str, np.ndarray]:
+    """The strobe period of every point of the four-bar's continued sweep, per direction."""
+    from workbench.continuation import strobe_period
+
+    out = {}
+    for d in ("up", "down"):
+        p = sweep.sel(direction=d, joint="B")
+        xy = [p[v].transpose("omega", "record").values for v in ("clearance_x", "clearance_y")]
+        samples = np.stack(xy, axis=-1)
+        out[d] = np.array([strobe_period(row) for row in samples])
+    return out
+
+
+@pytest.mark.slow
+def test_notebook_05_quotes_the_fourbar_archives(executed):
+    """Notebook 05's printed periods and indicators are the archives', and what its text says
+    in words holds: period one, then two, then one going up, no period beyond; the motion
+    without a period one step lower coming down (two attractors at that speed); the journal on
+    the wall at period one; at the map's highest speed chaos at the two larger clearances; at
+    its middle speed a point without a period whose exponent is negative; the map's point at
+    the largest clearance and the middle speed is the up branch's motion of period one."""
+    out = _stdout(executed["05_your_own_mechanism"][1])
+    sweep = workbench.open_run(ROOT / "data" / "fourbar_sweep.nc")
+    period = _fourbar_periods(sweep)
+    w = sweep.omega.values
+    assert f"failed points: {int((sweep.status != 0).sum())} of {sweep.status.size}" in out
+    for d, row in period.items():
+        assert f"{d:>13}: " + " ".join(f"{k:3d}" for k in row) in out
+    up, down = period["up"], period["down"]
+    k = int(np.argmax(up != 1))  # the first speed going up without period one
+    assert k > 0 and up[k] == 2 and up[k + 1] == 1 and (up[k + 2 :] == 0).all()
+    assert (up[:k] == 1).all() and (down[: k + 1] == up[: k + 1]).all()
+    assert (np.flatnonzero(up != down) == [k + 1]).all() and down[k + 1] == 0
+    assert (down[k + 1 :] == 0).all()
+    assert f"the directions differ at: {w[k + 1]:.0f} rad/s" in out
+    half = sweep.record >= sweep.sizes["record"] // 2
+    ecc = np.hypot(sweep.clearance_x, sweep.clearance_y).sel(joint="B").where(half)
+    ecc = ecc / float(sweep.clearance_B)
+    for d, row in period.items():
+        e = ecc.sel(direction=d)
+        at_one = e.sel(omega=w[row == 1])
+        assert 1.0 <= float(at_one.min()) and float(at_one.max()) < 1.01  # "a hair beyond c"
+        first = w[np.argmax(row == 0)]
+        assert float(e.sel(omega=first).min()) > 0.9  # "at first ... close to the wall"
+        assert float(e.sel(omega=w[-1]).min()) < 0.5  # "they spread over the bearing"
+    maps = workbench.open_run(ROOT / "data" / "fourbar_chaos_map.nc")
+    assert f"failed points: {int((maps.status != 0).sum())} of {maps.status.size}" in out
+    method = maps.lle_method.attrs["flag_meanings"].split()
+    for w_ in maps.omega.values:
+        for c_ in maps.clearance_B.values:
+            p = maps.sel(omega=w_, clearance_B=c_)
+            lle = rf"{float(p.lle):.1f} \+- {float(p.lle_stderr):4.1f}"
+            assert re.search(
+                rf"{w_:13.0f} {c_ * 1e3:6.1f} {int(p.strobe_period):6d} {float(p.zero_one_K):5.2f}"
+                rf"\s+{lle}  {method[int(p.lle_method)]}",
+                out,
+            ), (w_, c_)
+    table = maps.transpose("clearance_B", "omega", ...)
+    periodic = table.strobe_period > 0
+    assert (table.lle.where(periodic) < 0).sum() == periodic.sum()  # negative where periodic
+    assert float(table.zero_one_K.where(periodic).max()) < 0.6  # "well below one"
+    top = table.isel(omega=-1, clearance_B=slice(1, None))  # the highest speed, larger c
+    assert (top.strobe_period == 0).all() and (top.zero_one_K > 0.9).all()
+    assert (top.lle > 3 * top.lle_stderr).all() and (top.lle_converged > 0).all()
+    assert int((table.isel(clearance_B=0).strobe_period == 0).sum()) == 0
+    middle = table.isel(omega=1, clearance_B=1)
+    assert int(middle.strobe_period) == 0 and float(middle.zero_one_K) > 0.9
+    assert float(middle.lle) < 0 and int(middle.lle_converged) > 0
+    assert int((table.strobe_period == 0).sum()) == 3  # the three points named above
+    largest = table.isel(omega=1, clearance_B=-1)
+    assert int(largest.strobe_period) == 1 and float(largest.clearance_B) == float(
+        sweep.clearance_B
+    )
+    j = int(np.flatnonzero(w == float(largest.omega))[0])
+    assert j == k + 1 and up[j] == 1 and down[j] == 0  # the two motions the sweep found
+    assert "chaotic (no period, exponent converged and positive beyond 3 standard errors): 2" in out
 
 
 def test_the_readme_counts_the_notebooks():

@@ -303,3 +303,68 @@ def test_the_end_of_the_impacting_orbit_the_docs_quote():
     assert f"at {past / math.pi:.7f} pi, has period {match.group(1)}" in section
     assert f"multiplier of modulus {largest[-1]:.0f}" in section
     assert f"took {r.attrs['measured_cpu_time'] / 60:.0f} min of CPU" in section
+
+
+def _fourbar_scenes() -> tuple[workbench.Scene, workbench.Scene]:
+    """The scenes data/regenerate.py gives the four-bar's archives (``fourbar_scenes``)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("regenerate", DATA / "regenerate.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.fourbar_scenes()
+
+
+def test_shipped_fourbar_sweep_is_what_the_code_writes(tmp_path):
+    """data/fourbar_sweep.nc (notebook 05) is the continued sweep of the scene
+    data/regenerate.py declares now, written as the code writes a continued sweep now (one
+    made now of two speeds on a short horizon has its variables, coordinates and
+    attributes)."""
+    from workbench.continuation import continued_sweep
+
+    name = "fourbar_sweep.nc"
+    assert (DATA / name).stat().st_size < 1_000_000
+    shipped = _raw(name)
+    assert shipped.attrs["format_version"] == workbench.FORMAT_VERSION
+    assert shipped.status.attrs["flag_meanings"] == STATUS_ATTRS["flag_meanings"]
+    assert (shipped.status.values == 0).all()
+    scene = workbench.scene_from_toml(shipped.attrs["scene"])
+    assert scene.to_toml() == _fourbar_scenes()[0].to_toml()
+    continuation = {**scene.continuation, "transient_cycles": 1}
+    short = scene.replace(
+        run={"cycles": 2, "transient_cycles": 1},
+        sweep={"omega": shipped.omega.values[:2].tolist(), "continuation": continuation},
+    )
+    fresh = continued_sweep(short, tmp_path / name, workers=1)
+    _same_structure(shipped, fresh, name)
+
+
+def test_shipped_fourbar_chaos_map_is_in_todays_vocabulary():
+    """data/fourbar_chaos_map.nc (notebook 05) is the chaos map of the scene data/regenerate.py
+    declares now, its indicators in today's flags (as the nine-bar's maps are checked: a fresh
+    map costs minutes)."""
+    from workbench.continuation._indicators import (
+        LLE_CONVERGED,
+        LLE_METHOD,
+        LLE_STATUS,
+        LLE_UNMET,
+    )
+
+    path = DATA / "fourbar_chaos_map.nc"
+    assert path.stat().st_size < 1_000_000
+    maps = _raw(path.name)
+    assert maps.attrs["format_version"] == workbench.FORMAT_VERSION
+    scene = workbench.scene_from_toml(maps.attrs["scene"])
+    assert scene.to_toml() == _fourbar_scenes()[1].to_toml()
+    assert maps.status.attrs["flag_meanings"] == STATUS_ATTRS["flag_meanings"]
+    assert (maps.status.values == 0).all()
+    for var, attrs in (
+        ("lle_status", LLE_STATUS),
+        ("lle_method", LLE_METHOD),
+        ("lle_converged", LLE_CONVERGED),
+        ("lle_unmet", LLE_UNMET),
+    ):
+        assert set(maps[var].attrs) == set(attrs), var
+        for key, value in attrs.items():
+            np.testing.assert_array_equal(maps[var].attrs[key], value, err_msg=f"{var} {key}")
+    assert not any("record" in maps[v].dims for v in maps.data_vars)  # no strobe samples
