@@ -13,6 +13,7 @@ import numpy as np
 
 from workbench.solver._compile import tangent_for
 from workbench.solver._problem import Problem
+from workbench.solver._tangent_numerics import scratch_size
 
 __all__ = [
     "N_META",
@@ -64,6 +65,7 @@ def tangent_problem(
     time_scale: float = 1.0,
     log_det: float = 0.0,
     reorthonormalise: float | None = None,
+    normalisation: str = "step",
 ) -> Problem:
     """The problem's state extended by the tangent vectors ``V`` (shape ``(n + na, m)``: state
     then discrete-state components, in their units) and the accumulated ``log |det S_yy|``.
@@ -89,6 +91,12 @@ def tangent_problem(
         sizes (Benettin's accumulators), and integrates the log volume they span
         (:func:`tangent_volume`). Default None: never; the vectors stay ``Phi V`` (a monodromy
         matrix). Needs the compiled loop (its ``step_end`` hook).
+    normalisation : {"step", "continuous"}
+        How the vectors' sizes are taken out into their log sizes: "step" (default) at the
+        end of every accepted step (the loop's ``step_end`` hook), the vectors following
+        their linear equations in between; "continuous" by a rate in the equations (for a
+        system integrated without the ``step_end`` hook, such as copies of this one side by
+        side). See :mod:`workbench.solver._templates.tangent_hooks`.
     """
     n, na = problem.y0.size, problem.aux0.size
     V = np.asarray(V, dtype=float)
@@ -119,12 +127,17 @@ def tangent_problem(
     vscale = np.concatenate([scale, np.ones(na)])
     atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(4 + m)])
     qr = reorthonormalise is not None
+    if normalisation not in ("step", "continuous"):
+        raise ValueError(
+            f"normalisation={normalisation!r}: allowed 'step' (the default) or 'continuous'"
+        )
+    linear = normalisation == "step"
     if qr and not float(reorthonormalise) > 0:
         raise ValueError(
             f"reorthonormalise={reorthonormalise!r}: must be a positive orthogonality defect"
         )
     meta = [n, na, m, problem.event_direction.size, problem.p.size, problem.ip.size]
-    meta += [problem.work_size, int(qr)]
+    meta += [problem.work_size, int(qr) | (2 if linear else 0)]  # flags
     return Problem(
         hooks=hooks,
         states=states,
@@ -136,7 +149,7 @@ def tangent_problem(
         event_direction=problem.event_direction,
         atol_scale=atol_scale,
         t0=problem.t0,
-        work_size=problem.work_size + 3 * n + n * na + n * n + 2 * problem.event_direction.size,
+        work_size=problem.work_size + scratch_size(n, na, m, problem.event_direction.size),
         failure=problem.failure,
     )
 
