@@ -123,9 +123,11 @@ def tangent_problem(
         _State("_log_volume", "1", "log volume spanned by the tangent vectors"),
         _State("_log_volume_memory", "1", "part of it fed back by the discrete state"),
         _State("_reorthonormalisations", "1", "re-orthonormalisations of the vectors"),
+        _State("_log_volume_before", "1", "log volume taken out at steps' ends"),
+        _State("_log_volume_memory_before", "1", "its memory part taken out at steps' ends"),
     )
     vscale = np.concatenate([scale, np.ones(na)])
-    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(4 + m)])
+    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(6 + m)])
     qr = reorthonormalise is not None
     if normalisation not in ("step", "continuous"):
         raise ValueError(
@@ -141,7 +143,7 @@ def tangent_problem(
     return Problem(
         hooks=hooks,
         states=states,
-        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size, [0.0, 0.0, 0.0]]),
+        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size, np.zeros(5)]),
         p=np.concatenate([problem.p, scale, w, [time_scale, float(reorthonormalise or 0.0)]]),
         ip=np.concatenate([problem.ip, np.array(meta, dtype=np.int64)]),
         aux0=problem.aux0,
@@ -173,7 +175,7 @@ def tangent_volume(Y: np.ndarray, n: int, na: int, m: int) -> tuple[float, float
     back between events (see :mod:`workbench.solver._templates.tangent_hooks`; zeros without); and
     the number of re-orthonormalisations."""
     k = n + m * (n + na) + 1 + m
-    return float(Y[k]), float(Y[k + 1]), int(Y[k + 2])
+    return float(Y[k] + Y[k + 3]), float(Y[k + 1] + Y[k + 4]), int(Y[k + 2])
 
 
 def tangent_growths(tangent: Problem, Y: np.ndarray) -> np.ndarray:

@@ -2,13 +2,16 @@
 specialised per model by :func:`workbench.solver._compile.tangent_for`).
 
 The state of the tangent system is ``Y = [y (n), U (m columns of nx = n + na), L, l (m), W, M,
-K]``: the model's state ``y``; ``m`` tangent vectors of the *extended* state ``x = (y, aux)``
-(the discrete state ``aux`` is part of the state the future depends on: a contact's held onset
-velocity sets its damping), each stored as a direction ``u`` of unit size and its log size ``l``
-(the tangent vector is ``v = e^l u``); ``L``, the sum of ``log |det S_yy|`` over the events so far
+K, W0, M0]``: the model's state ``y``; ``m`` tangent vectors of the *extended* state ``x = (y,
+aux)`` (the discrete state ``aux`` is part of the state the future depends on: a contact's held
+onset velocity sets its damping), each stored as a direction ``u`` of unit size and its log
+size ``l`` (``v = e^l u``); ``L``, the sum of ``log |det S_yy|`` over the events so far
 (the state block of each saltation matrix); with re-orthonormalisation (below) the log volume
 ``W`` the vectors span and the part ``M`` of it that the discrete state fed back between events,
-and the count ``K`` of re-orthonormalisations. Sizes, angles and volumes are those of the state
+and the count ``K`` of re-orthonormalisations (with ``normalisation="step"`` ``W`` and ``M``
+are integrated from 0 in every step, their values taken out into ``W0`` and ``M0`` at its end, so
+that the solver controls the error of each step's increment, not of the whole accumulated
+volume: the volume is ``W0 + W``). Sizes, angles and volumes are those of the state
 divided by its scales ``s`` and the discrete state by its scales ``s_a`` (a discrete state that
 the flow does not depend on, such as a counter, has none and is left out: see
 :mod:`workbench.solver._tangent_numerics`).
@@ -310,11 +313,10 @@ def rhs(t, Y, p, ip, aux, work, dY):
                     if carried[k] > 0.0:
                         acc += ja[i * na + k] * Y[b + n + k]
                 Dm[c * n + i] = acc
-    iv = n + m * nx + 1 + m  # W, M, K
+    iv = n + m * nx + 1 + m  # W, M, K and the parts of W and M taken out at steps' ends
     dY[n + m * nx] = 0.0
-    dY[iv] = 0.0
-    dY[iv + 1] = 0.0
-    dY[iv + 2] = 0.0
+    for i in range(iv, iv + 5):
+        dY[i] = 0.0
     if volume:
         dY[iv], dY[iv + 1] = volume_rates(Y, n, nx, m, w, D, Dm, memory, Q, R, DR, DmR)
     if _linear(ip):
@@ -420,6 +422,12 @@ def step_end(t, Y, p, ip, aux, work, dY):
                 Y[il + c] += math.log(size)
     if linear:
         _linear_rates(n, nx, m, L, il, dY)
+        iv = il + m  # W and M start every step from 0 (their error then scales with the step's
+        # increment, not with the whole accumulated volume)
+        Y[iv + 3] += Y[iv]
+        Y[iv + 4] += Y[iv + 1]
+        Y[iv] = 0.0
+        Y[iv + 1] = 0.0
     else:
         _normalised_rates(Y, n, nx, m, w, L, il, dY)
     return 1
