@@ -153,6 +153,11 @@ def tangent_problem(
         t0=problem.t0,
         work_size=problem.work_size + scratch_size(n, na, m, problem.event_direction.size),
         failure=problem.failure,
+        # the state's own blocks, then each tangent vector and the accumulators apart, so that
+        # neither dilutes the state's error (nor one vector another's)
+        error_blocks=np.concatenate(
+            [problem.error_blocks, n + (n + na) * np.arange(1, m + 1), [len(states)]]
+        ),
     )
 
 
