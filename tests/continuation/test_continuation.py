@@ -472,9 +472,10 @@ def test_monodromy_by_copies_agrees_with_the_tangent_system(scene, value, rtol):
 def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
     """Why ``monodromy="auto"`` takes copies for the mechanisms: on the nine-bar's orbit in
     lasting contact at omega = 1.5 pi (Fig. 32's scene) the tangent system, whose Jacobian is
-    differenced along every column, makes the step control take several times the bare model's
-    steps per crank cycle, where the copies take about the bare model's. docs/continuation.md
-    quotes the counts."""
+    differenced along every column (two model evaluations per column and evaluation), takes
+    more steps per crank cycle than the bare model, where the copies take about the bare
+    model's. Neither may take fewer: each step holds the model's own states to the tolerance
+    (:attr:`workbench.solver.Problem.error_blocks`). docs/continuation.md quotes the counts."""
     import re
 
     scene = workbench.load_scene(ROOT / "studies" / "bifurcation_speed" / "sweep.toml")
@@ -486,7 +487,8 @@ def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
         y, aux = strobe.initial(w)
         steps["bare"] = int(strobe(y, aux, w, tangent=False).stats["steps"])
         steps[monodromy] = int(strobe(y, aux, w).stats["steps"])
-    assert steps["tangent"] > 3 * steps["bare"] and steps["copies"] < 1.1 * steps["bare"]
+    assert steps["tangent"] > 1.2 * steps["bare"]
+    assert 0.9 * steps["bare"] < steps["copies"] < 1.1 * steps["bare"]
     page = " ".join((ROOT / "docs" / "continuation.md").read_text().split())
     quoted = re.search(r"1\.5 pi, ([\d ]+) against ([\d ]+) steps per crank cycle, where the "
                        r"copies take ([\d ]+) \(", page)  # fmt: skip

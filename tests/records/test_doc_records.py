@@ -80,23 +80,6 @@ def _e(token: str) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-#: the hand-written section of benchmarks/NOTES.md on the tangent's re-orthonormalisation
-DEFECT_SECTION = "The tangent system re-orthonormalised at step ends"
-
-
-def defect_record() -> tuple[str, str, str, str]:
-    """That section's title, the commit it was measured at, and the steps per cycle it gives
-    for ``defect`` 10 and 1 (8 exponents over 0.1 cycle)."""
-    text = " ".join(NOTES.read_text().split())
-    found = re.search(rf"## {DEFECT_SECTION} .*? runs were measured at (\w+),", text)
-    d10, d1 = re.search(
-        r"\(`--cycles 0\.1 --exponents 8 --defect D`\): D = 10 ([\d ]+?) steps and .*?; "
-        r"D = 1 ([\d.e]+) and",
-        text,
-    ).groups()
-    return DEFECT_SECTION, found.group(1), d10, d1
-
-
 # -- benchmarks/tangent_speed.py ------------------------------------------------------------------
 #: the columns of a run's row as the script prints them (figure, format): CPU s/cyc, x plain,
 #: steps/cyc, rej/cyc, evals/cyc, events/cyc, QR/cyc, sum, volume rate, rel
@@ -150,20 +133,28 @@ def _newest(records: list[dict], cycles: str, rtol: str, defect: str, run: str) 
     ][-1]
 
 
-def test_the_tangent_cost_is_the_newest_tangent_speed_record():
-    """docs/analysis.md, "What the tangent system costs": the newest record with 1, 4 and 8
-    exponents at the scene's rtol and the default defect; the 2-cycle steps from the newest
-    records of that window; the defect of 1 from the hand-written measurement it names; the
-    located-event "before" from the record that says so."""
-    page = _page("analysis.md")
-    records = _tangent_records()
-    runs = ("m = 1", "m = 4", "m = 8")
-    full = [
+def _full(records: list[dict], cycles: str) -> dict:
+    """The newest record of a window (cycles, rtol 1e-6, the default defect 10) with the
+    plain run and 1, 4 and 8 exponents."""
+    return [
         r
         for r in records
-        if {"plain", *runs} <= r["rows"].keys() and (r["rtol"], r["defect"]) == ("1e-06", "10")
+        if {"plain", *RUNS} <= r["rows"].keys()
+        and (r["cycles"], r["rtol"], r["defect"]) == (cycles, "1e-06", "10")
     ][-1]
-    plain, rows = full["rows"]["plain"], [full["rows"][run] for run in runs]
+
+
+RUNS = ("m = 1", "m = 4", "m = 8")
+
+
+def test_the_tangent_cost_is_the_newest_tangent_speed_record():
+    """docs/analysis.md, "What the tangent system costs": the newest record with 1, 4 and 8
+    exponents at the scene's rtol and the default defect over 2 cycles, and the record before
+    issue 39's rework of the tangent system that it compares with."""
+    page = _page("analysis.md")
+    records = _tangent_records()
+    full = _full(records, "2")
+    plain, rows = full["rows"]["plain"], [full["rows"][run] for run in RUNS]
     assert float(full["t0"]) == 20.0  # after the scene's 20 transient cycles of 1 s
     assert f"at rtol 1e-6, {full['cycles']} cycles after the 20 transient cycles" in page
     assert f"with 1, 4 and 8 exponents, at {full['commit']} in `{full['file']}`;" in page
@@ -174,78 +165,42 @@ def test_the_tangent_cost_is_the_newest_tangent_speed_record():
         f"{_and(_n(r[STEPS]) for r in rows)} steps, with {_and(_n(r[QR]) for r in rows)} "
         "re-orthonormalisations per cycle"
     ) in page
-
-    two = {run: _newest(records, "2", "1e-06", "10", run) for run in ("plain", *runs)}
-    assert {r["t0"] for r in two.values()} == {full["t0"]}  # the same start
-    events = (two["plain"]["rows"]["plain"][EVENTS], plain[EVENTS])
-    assert f"(the model's events: {_n(events[0])} per cycle against {_n(events[1])})" in page
-    steps = _and(_n(two[run]["rows"][run][STEPS]) for run in runs)
-    assert f"exponents took {steps} steps per cycle" in page
-    assert two["m = 4"]["commit"] == two["m = 8"]["commit"]
+    (before,) = [r for r in records if "before issue 39 item 3" in r["note"]]
+    assert (before["cycles"], before["rtol"], before["defect"]) == ("2", "1e-06", "10")
+    old = [before["rows"][run] for run in RUNS]
     assert (
-        f"(the newest records of that window: 1 exponent at {two['m = 1']['commit']}, 4 and 8 "
-        f"at {two['m = 8']['commit']})"
-    ) in page
-
-    section, measured_at, d10, d1 = defect_record()
-    assert (
-        f"a `defect` of 1 took {d1} steps per cycle against {d10} at 10, with 8 exponents over "
-        f'0.1 cycle, measured at {measured_at}: `benchmarks/RESULTS.md`, "{section}")'
-    ) in page
-
-    (before,) = [r for r in records if "re-orthonormalisation by a located event" in r["note"]]
-    assert before["cycles"] == "2" and (before["rtol"], before["defect"]) == ("1e-06", "10")
-    old, new = before["rows"]["m = 8"], two["m = 8"]["rows"]["m = 8"]
-    assert (
-        f"8 exponents over the 2 cycles took {old[CPU]} s and {_n(old[STEPS])} steps per cycle "
-        f"(the record at {before['commit']} in `{before['file']}`), against {new[CPU]} s and "
-        f"{_n(new[STEPS])} steps "
-        f"at step ends (at {two['m = 8']['commit']})"
+        f"the record at {before['commit']} in `{before['file']}`), the same window cost "
+        f"{_and(_n(r[RATIO]) for r in old)} times the model, with sum checks "
+        f"{_and(_e(r[REL]) for r in old)}"
     ) in page
 
 
 def test_the_sum_checks_are_the_newest_tangent_speed_records():
-    """docs/analysis.md, "The sum check": each window's sum check, re-orthonormalisations and
-    steps from the newest record of that window, and the commits it names."""
+    """docs/analysis.md, "The sum check": each window's sum checks from the newest record of
+    that window, and the commits it names."""
     page = _page("analysis.md")
     records = _tangent_records()
+    two, half = _full(records, "2"), _full(records, "0.5")
+    short = _newest(records, "0.05", "1e-06", "10", "m = 8")
+    tight = _newest(records, "2", "1e-08", "10", "m = 4")
+    assert len({r["commit"].removesuffix("-dirty") for r in (two, half, short, tight)}) == 1
+    assert f"the newest records of each window, at {two['commit'].removesuffix('-dirty')};" in page
 
     def rel(r, run="m = 4"):
         return _e(r["rows"][run][REL])
 
-    short = _newest(records, "0.05", "1e-06", "10", "m = 8")
-    half, two = (_newest(records, c, "1e-06", "10", "m = 8") for c in ("0.5", "2"))
-    # the 0.05-cycle window is
-    # tests/analysis/test_lyapunov.py::test_ninebar_spectrum_sum_check_closes's
     assert (
-        f"close to {rel(short, 'm = 8')} over 0.05 cycles (`tests/analysis/test_lyapunov.py`)"
+        f"1, 4 and 8 exponents close to {_and(rel(two, run) for run in RUNS)} over 2 cycles and "
+        f"to {_and(rel(half, run) for run in RUNS)} over 0.5 cycles"
+    ) in page
+    # the 0.05-cycle window is tests/analysis/test_lyapunov.py's sum-check test's
+    assert (
+        f"all 8 close to {rel(short, 'm = 8')} over 0.05 cycles (`tests/analysis/test_lyapunov.py`)"
         in page
     )
-    assert f"to {rel(half, 'm = 8')} over 0.5 cycles and to {rel(two, 'm = 8')} over 2" in page
-    assert f"the newest records of those windows, at {half['commit']} and {two['commit']};" in page
-
-    a = _newest(records, "2", "1e-06", "10", "m = 4")
-    b = _newest(records, "2", "1e-08", "10", "m = 4")
-    c = _newest(records, "0.5", "1e-06", "10", "m = 4")
-    assert (
-        f"same 2 cycles {rel(a)} at rtol 1e-6 and {rel(b)} at 1e-8 (at {a['commit']} and "
-        f"{b['commit']}), over the 0.5 cycles {rel(c)} at rtol 1e-6"
-    ) in page
-    qr = [r["rows"]["m = 4"][QR] for r in (a, b, c)]
-    assert (
-        f"re-orthonormalised only {qr[0]} and {qr[1]} times per cycle over the 2 cycles, "
-        f"{qr[2]} over the 0.5"
-    ) in page
-
-    d = _newest(records, "0.5", "1e-06", "3", "m = 4")
-    e = _newest(records, "0.5", "1e-08", "3", "m = 4")
-    assert d["commit"] == e["commit"]
-    assert f"close to {rel(d)} at rtol 1e-6 and {rel(e)} at 1e-8 (at {d['commit']}:" in page
-    steps = (d["rows"]["m = 4"][STEPS], c["rows"]["m = 4"][STEPS])
-    assert (
-        f"for {_n(steps[0])} steps per cycle at rtol 1e-6 against {_n(steps[1])} with the "
-        "default defect"
-    ) in page
+    row = half["rows"]["m = 4"]
+    assert f"({row[7]} 1/s against a volume rate of {row[8]} 1/s)" in page
+    assert f"at rtol 1e-8 the 4 exponents close to {rel(tight)} over the 2 cycles" in page
 
 
 # -- benchmarks/lle.py ---------------------------------------------------------------------------

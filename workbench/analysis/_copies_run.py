@@ -66,7 +66,9 @@ def follow_copies(
         u /= np.linalg.norm(u)
         base = pb
         if variational:
-            base = tangent_problem(pb, np.concatenate([u * scale, np.zeros(na)])[:, None])
+            base = tangent_problem(
+                pb, np.concatenate([u * scale, np.zeros(na)])[:, None], normalisation="continuous"
+            )
         Y = np.tile(base.y0, (k, 1))
         Y[1:, n:] = 0.0  # only the fiducial copy carries the tangent vector
         Y[1:, :n] += separations[:, None] * u[None, :] * scale[None, :]

@@ -158,7 +158,9 @@ def integrate(
         return RunResult(t_rec, np.empty((t_rec.size, 0)), AUX, stats0, time=float(t_rec[-1]))
     k = kernel_for(problem.hooks)
     mid = _METHOD_IDS[method]
-    settings = Settings(mid, float(rtol), atol_arr, float(max_step), int(max_steps), t_rec)
+    settings = Settings(
+        mid, float(rtol), atol_arr, float(max_step), int(max_steps), t_rec, problem.error_blocks
+    )
     hooks = hooks_of(problem)
     state = allocate(problem, t_rec.size)
     implicit = _implicit(problem, settings)

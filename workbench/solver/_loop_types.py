@@ -106,6 +106,7 @@ class Settings(NamedTuple):
     max_step: float  # s
     max_steps: int  # accepted steps
     t_rec: np.ndarray  # record times, s, ascending
+    blocks: np.ndarray  # int64 boundaries of the error norm's blocks (Problem.error_blocks)
 
 
 class Hooks(NamedTuple):
@@ -162,6 +163,7 @@ class Implicit(NamedTuple):
     rtol: float  # the run's tolerances (see workbench.solver._radau)
     atol: np.ndarray
     jac_scale: np.ndarray  # state scales: finite-difference steps, stiffness norms
+    blocks: np.ndarray  # int64 boundaries of the error norm's blocks (Problem.error_blocks)
     J: np.ndarray
     LUr: np.ndarray
     pivr: np.ndarray
@@ -195,6 +197,7 @@ def implicit_of(problem, rtol: float, atol: np.ndarray, jac_scale: np.ndarray, m
         rtol=float(rtol),
         atol=np.ascontiguousarray(atol, dtype=np.float64),
         jac_scale=np.ascontiguousarray(jac_scale, dtype=np.float64),
+        blocks=problem.error_blocks,
         J=np.zeros((n, n)),
         LUr=np.zeros((n, n)),
         pivr=np.zeros(n, np.int64),

@@ -71,20 +71,34 @@ def stage_point(K, a, s, h, y, out):
 
 
 @njit(cache=True, nogil=True)
-def error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
+def error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay, blocks):
     """Scaled RMS error estimate of the step (Hairer et al. 1993, Eq. II.4.11; DOP853's
     combination of its 5th- and 3rd-order estimators; for DOPRI5 and ARK548 the difference of
-    the 5th- and 4th-order solutions).
+    the 5th- and 4th-order solutions), the largest over the state's blocks (boundaries
+    ``blocks``, see :attr:`workbench.solver.Problem.error_blocks`).
 
     For ARK548 the stiff states' estimates are filtered by (1 + h gamma a)^-1, the diagonal form
     of Hairer & Wanner's (1996, Sec. IV.8) (I - h gamma J)^-1: the embedded solution is not
     L-stable, so the raw difference stays O(1) for |h a| >> 1 where both solutions are exact
     to the tolerance, and would bound the step by the decay rate again."""
-    n = y.size
+    worst = 0.0
+    for b in range(blocks.size - 1):
+        lo = blocks[b]
+        hi = blocks[b + 1]
+        err = _block_error(method, K, h, y, y_new, rtol, atol, stiff_idx, decay, lo, hi)
+        if not err <= worst:  # a NaN block wins
+            worst = err
+    return worst
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _block_error(method, K, h, y, y_new, rtol, atol, stiff_idx, decay, lo, hi):
+    """:func:`error_norm` of the states ``lo:hi``."""
+    n = hi - lo
     if method == DOP853:
         e5 = 0.0
         e3 = 0.0
-        for i in range(n):
+        for i in range(lo, hi):
             sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
             a5 = 0.0
             a3 = 0.0
@@ -98,7 +112,7 @@ def error_norm(method, K, h, y, y_new, rtol, atol, stiff_idx, decay):
         return abs(h) * e5 / np.sqrt((e5 + 0.01 * e3) * n)
     E = ARK_E if method == ARK548 else RK45_E
     acc = 0.0
-    for i in range(n):
+    for i in range(lo, hi):
         sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
         e = 0.0
         for j in range(E.size):

@@ -73,6 +73,12 @@ class Problem:
         where the solver puts ``h gamma`` (s) for which ``rhs`` replaces ``y[k]`` by
         ``(y[k] + h gamma r_k) / (1 + h gamma a_k)`` (0 outside implicit stages); see
         :mod:`workbench.solver._templates.integration_loop`.
+    error_blocks : ndarray of int64, optional
+        Boundaries ``0 = b_0 < b_1 < ... < b_k = n`` of the blocks of the state whose scaled RMS
+        error each step must keep below 1: the step's error is the largest block's (default
+        one block, the whole state). A derived system whose extra states must not dilute the
+        error of the original ones (tangent vectors beside the state, copies side by side) gives
+        each its own block, as CVODES does for sensitivities (Serban & Hindmarsh 2005).
     data : dict
         Model-private values needed later by the model's ``derive`` (the solver ignores them).
     """
@@ -93,6 +99,7 @@ class Problem:
     stiff_states: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     stiff_slots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     implicit_slot: int = -1
+    error_blocks: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.y0 = np.ascontiguousarray(self.y0, dtype=np.float64)
@@ -106,6 +113,15 @@ class Problem:
         if self.aux_scale is None:
             self.aux_scale = np.full(self.aux0.shape, np.inf)
         self.aux_scale = np.ascontiguousarray(self.aux_scale, dtype=np.float64)
+        n = self.y0.size
+        if self.error_blocks is None:
+            self.error_blocks = np.array([0, n], dtype=np.int64)
+        self.error_blocks = np.ascontiguousarray(self.error_blocks, dtype=np.int64)
+        b = self.error_blocks
+        if b.ndim != 1 or b.size < 2 or b[0] != 0 or b[-1] != n or np.any(np.diff(b) <= 0):
+            raise ValueError(
+                f"error_blocks {b!r}: must rise strictly from 0 to the state's size {n}"
+            )
         self.stiff_states = np.ascontiguousarray(self.stiff_states, dtype=np.int64)
         self.stiff_slots = np.ascontiguousarray(self.stiff_slots, dtype=np.int64)
         if self.stiff_states.shape != self.stiff_slots.shape or (

@@ -234,14 +234,19 @@ def refine_error(f1, ez, LUr, pivr, e):
 
 
 @njit(cache=True, nogil=True)
-def scaled_rms(e, y, y_new, rtol, atol):
-    """RMS of e / (atol + rtol max(|y|, |y_new|))."""
-    n = e.size
-    acc = 0.0
-    for i in range(n):
-        sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
-        acc += (e[i] / sc) ** 2
-    return math.sqrt(acc / n)
+def scaled_rms(e, y, y_new, rtol, atol, blocks):
+    """RMS of e / (atol + rtol max(|y|, |y_new|)), the largest over the state's blocks
+    (boundaries ``blocks``, see :attr:`workbench.solver.Problem.error_blocks`)."""
+    worst = 0.0
+    for b in range(blocks.size - 1):
+        acc = 0.0
+        for i in range(blocks[b], blocks[b + 1]):
+            sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
+            acc += (e[i] / sc) ** 2
+        err = math.sqrt(acc / (blocks[b + 1] - blocks[b]))
+        if not err <= worst:  # a NaN block wins
+            worst = err
+    return worst
 
 
 @njit(cache=True, nogil=True)

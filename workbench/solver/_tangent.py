@@ -13,6 +13,7 @@ import numpy as np
 
 from workbench.solver._compile import tangent_for
 from workbench.solver._problem import Problem
+from workbench.solver._tangent_numerics import scratch_size
 
 __all__ = [
     "N_META",
@@ -64,6 +65,7 @@ def tangent_problem(
     time_scale: float = 1.0,
     log_det: float = 0.0,
     reorthonormalise: float | None = None,
+    normalisation: str = "step",
 ) -> Problem:
     """The problem's state extended by the tangent vectors ``V`` (shape ``(n + na, m)``: state
     then discrete-state components, in their units) and the accumulated ``log |det S_yy|``.
@@ -89,6 +91,12 @@ def tangent_problem(
         sizes (Benettin's accumulators), and integrates the log volume they span
         (:func:`tangent_volume`). Default None: never; the vectors stay ``Phi V`` (a monodromy
         matrix). Needs the compiled loop (its ``step_end`` hook).
+    normalisation : {"step", "continuous"}
+        How the vectors' sizes are taken out into their log sizes: "step" (default) at the
+        end of every accepted step (the loop's ``step_end`` hook), the vectors following
+        their linear equations in between; "continuous" by a rate in the equations (for a
+        system integrated without the ``step_end`` hook, such as copies of this one side by
+        side). See :mod:`workbench.solver._templates.tangent_hooks`.
     """
     n, na = problem.y0.size, problem.aux0.size
     V = np.asarray(V, dtype=float)
@@ -115,20 +123,27 @@ def tangent_problem(
         _State("_log_volume", "1", "log volume spanned by the tangent vectors"),
         _State("_log_volume_memory", "1", "part of it fed back by the discrete state"),
         _State("_reorthonormalisations", "1", "re-orthonormalisations of the vectors"),
+        _State("_log_volume_before", "1", "log volume taken out at steps' ends"),
+        _State("_log_volume_memory_before", "1", "its memory part taken out at steps' ends"),
     )
     vscale = np.concatenate([scale, np.ones(na)])
-    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(4 + m)])
+    atol_scale = np.concatenate([scale, np.tile(vscale, m), np.ones(6 + m)])
     qr = reorthonormalise is not None
+    if normalisation not in ("step", "continuous"):
+        raise ValueError(
+            f"normalisation={normalisation!r}: allowed 'step' (the default) or 'continuous'"
+        )
+    linear = normalisation == "step"
     if qr and not float(reorthonormalise) > 0:
         raise ValueError(
             f"reorthonormalise={reorthonormalise!r}: must be a positive orthogonality defect"
         )
     meta = [n, na, m, problem.event_direction.size, problem.p.size, problem.ip.size]
-    meta += [problem.work_size, int(qr)]
+    meta += [problem.work_size, int(qr) | (2 if linear else 0)]  # flags
     return Problem(
         hooks=hooks,
         states=states,
-        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size, [0.0, 0.0, 0.0]]),
+        y0=np.concatenate([problem.y0, U.T.ravel(), [log_det], log_size, np.zeros(5)]),
         p=np.concatenate([problem.p, scale, w, [time_scale, float(reorthonormalise or 0.0)]]),
         ip=np.concatenate([problem.ip, np.array(meta, dtype=np.int64)]),
         aux0=problem.aux0,
@@ -136,8 +151,13 @@ def tangent_problem(
         event_direction=problem.event_direction,
         atol_scale=atol_scale,
         t0=problem.t0,
-        work_size=problem.work_size + 3 * n + n * na + n * n + 2 * problem.event_direction.size,
+        work_size=problem.work_size + scratch_size(n, na, m, problem.event_direction.size),
         failure=problem.failure,
+        # the state's own blocks, then each tangent vector and the accumulators apart, so that
+        # neither dilutes the state's error (nor one vector another's)
+        error_blocks=np.concatenate(
+            [problem.error_blocks, n + (n + na) * np.arange(1, m + 1), [len(states)]]
+        ),
     )
 
 
@@ -160,7 +180,7 @@ def tangent_volume(Y: np.ndarray, n: int, na: int, m: int) -> tuple[float, float
     back between events (see :mod:`workbench.solver._templates.tangent_hooks`; zeros without); and
     the number of re-orthonormalisations."""
     k = n + m * (n + na) + 1 + m
-    return float(Y[k]), float(Y[k + 1]), int(Y[k + 2])
+    return float(Y[k] + Y[k + 3]), float(Y[k + 1] + Y[k + 4]), int(Y[k + 2])
 
 
 def tangent_growths(tangent: Problem, Y: np.ndarray) -> np.ndarray:

@@ -318,7 +318,7 @@ def _explicit_attempts(method, t, t_end, h_abs, f_inside, s, m, st, w):
             last_code = code
             err = np.inf
         else:
-            err = error_norm(method, K, h, y, y_new, s.rtol, s.atol, stiff_idx, decay)
+            err = error_norm(method, K, h, y, y_new, s.rtol, s.atol, stiff_idx, decay, s.blocks)
             if not np.isfinite(err):
                 ctrl[CT_NONFINITE] = 1.0
                 err = np.inf

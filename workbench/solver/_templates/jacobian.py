@@ -90,10 +90,12 @@ def fd_aux_jacobian(t, y, p, ip, aux, work, need, yd, fp, fm, Ja):
         if not need[k] or a0 == 0.0 or not math.isfinite(a0):
             continue
         h = step(a0, 0.0)
-        yd[:] = y
+        for i in range(n):  # a loop, not a slice copy: callable without reference counting
+            yd[i] = y[i]
         aux[k] = a0 + h
         c1 = rhs(t, yd, p, ip, aux, work, fp)
-        yd[:] = y
+        for i in range(n):
+            yd[i] = y[i]
         aux[k] = a0 - h
         c2 = rhs(t, yd, p, ip, aux, work, fm)
         aux[k] = a0

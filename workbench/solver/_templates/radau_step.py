@@ -215,7 +215,7 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
         for i in range(n):
             y_new[i] = y[i] + im.Z[2, i]
         error_vector(im.Z, st.f, h, im.LUr, im.pivr, im.ez, im.e)
-        err = scaled_rms(im.e, y, y_new, im.rtol, im.atol)
+        err = scaled_rms(im.e, y, y_new, im.rtol, im.atol, im.blocks)
         if err >= 1.0 and (rejected or rc[RC_H_ACC] == 0.0):
             for i in range(n):
                 ytmp[i] = y[i] + im.e[i]
@@ -224,7 +224,7 @@ def _radau_attempts(t, t_end, h_abs, f_inside, s, m, st, im, w):
             code = rhs(t, ytmp, p, ip, st.aux, work, im.Fs[0])
             if code == 0 or code == EVENT_INSIDE_STEP:
                 refine_error(im.Fs[0], im.ez, im.LUr, im.pivr, im.e)
-                err = scaled_rms(im.e, y, y_new, im.rtol, im.atol)
+                err = scaled_rms(im.e, y, y_new, im.rtol, im.atol, im.blocks)
         if not np.isfinite(err):
             st.ctrl[CT_NONFINITE] = 1.0
             err = 1e10

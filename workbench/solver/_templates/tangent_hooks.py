@@ -2,13 +2,16 @@
 specialised per model by :func:`workbench.solver._compile.tangent_for`).
 
 The state of the tangent system is ``Y = [y (n), U (m columns of nx = n + na), L, l (m), W, M,
-K]``: the model's state ``y``; ``m`` tangent vectors of the *extended* state ``x = (y, aux)``
-(the discrete state ``aux`` is part of the state the future depends on: a contact's held onset
-velocity sets its damping), each stored as a direction ``u`` of unit size and its log size ``l``
-(the tangent vector is ``v = e^l u``); ``L``, the sum of ``log |det S_yy|`` over the events so far
+K, W0, M0]``: the model's state ``y``; ``m`` tangent vectors of the *extended* state ``x = (y,
+aux)`` (the discrete state ``aux`` is part of the state the future depends on: a contact's held
+onset velocity sets its damping), each stored as a direction ``u`` of unit size and its log
+size ``l`` (``v = e^l u``); ``L``, the sum of ``log |det S_yy|`` over the events so far
 (the state block of each saltation matrix); with re-orthonormalisation (below) the log volume
 ``W`` the vectors span and the part ``M`` of it that the discrete state fed back between events,
-and the count ``K`` of re-orthonormalisations. Sizes, angles and volumes are those of the state
+and the count ``K`` of re-orthonormalisations (with ``normalisation="step"`` ``W`` and ``M``
+are integrated from 0 in every step, their values taken out into ``W0`` and ``M0`` at its end, so
+that the solver controls the error of each step's increment, not of the whole accumulated
+volume: the volume is ``W0 + W``). Sizes, angles and volumes are those of the state
 divided by its scales ``s`` and the discrete state by its scales ``s_a`` (a discrete state that
 the flow does not depend on, such as a counter, has none and is left out: see
 :mod:`workbench.solver._tangent_numerics`).
@@ -17,25 +20,32 @@ Between events ``dy/dt = f(t, y, aux)`` and for each column ``v = (v_y, v_a)``
 
     dv_y/dt = J_y v_y + J_a v_a,        dv_a/dt = 0,
 
-with ``J_y = df/dy`` from the model's Jacobian (its analytic ``jacobian`` hook, or a central
-difference of ``rhs`` along ``v_y``: two evaluations per column, with the step DIRECTION_STEP,
-shortened near event surfaces) and ``J_a = df/daux`` by central differences over the discrete
-states that a column carries and that are active (``aux_k != 0``; a zero discrete state means
-"inactive", e.g. no contact, and is not differenced). Written for ``v = e^l u`` with any rate
-``a(t)`` of the log size this is
+with ``J_y = df/dy`` and ``J_a = df/daux``. Each column's rate ``J_y v_y + J_a v_a`` is a
+directional derivative: from the model's analytic ``jacobian`` hook (``J_a`` by central
+differences over the discrete states that a column carries and that are active: ``aux_k != 0``,
+a zero discrete state means "inactive", e.g. no contact), else one central difference of ``rhs``
+along ``(v_y, v_a)`` (the state and the carried active discrete states displaced together: two
+evaluations per column, with the step DIRECTION_STEP, shortened near event surfaces).
+
+Each vector is stored as a direction ``u`` and its log size ``l`` (``v = e^l u``). By default
+(``normalisation="step"``) ``u`` follows the linear equations above between the ends of the
+solver's steps, and at the end of every accepted step (the loop's ``step_end`` hook) its size is
+taken out into ``l`` (``u`` scaled to unit size, its derivative likewise: a change of basis of a
+linear system, no evaluation and no restart). The solver then controls the error of every
+component relative to the vector's size (``atol s_i`` is ``atol`` times it), which is what the
+accuracy of a direction means: a vector that grows by e^20 between re-orthonormalisations (the
+nine-bar's chaos does so within a fraction of a second) would otherwise hold components far
+below the rounding of its derivative, and the step size would collapse. The tangent system's
+own rates are then those of the model's Jacobian, and the steps those the model takes to the
+same tolerance. With ``normalisation="continuous"`` (for a system integrated without the
+``step_end`` hook, such as copies of it side by side) the size is taken out by a rate instead:
 
     du/dt = (J_y u_y + J_a u_a, 0) - a u,        dl/dt = a,
 
-and the system takes ``a = <u, du/dt + a u> / <u, u>``, the rate at which the size of ``u`` would
-change: ``u`` keeps its size (1 from the start and after every event) while ``l`` carries the
-growth (continuous normalisation, e.g. Geist, Parlitz & Lauterborn 1990, Prog. Theor. Phys. 83,
-875). Why: the solver controls the error of every component relative to its own size, with the
-absolute floor ``atol s_i``. A tangent vector that grows by e^20 between re-orthonormalisations
-(the nine-bar's chaos does so within a fraction of a second) holds components some 1e9 smaller
-than its size, whose tolerance lies far below the rounding of its derivative (which scales with
-the vector's size): the step size then collapsed to the smallest step where the model's own run
-integrates fine. With the size split off every component is measured against the vector's size
-(``atol s_i`` is ``atol`` times the size), which is what the accuracy of a direction means.
+with ``a = <u, du/dt + a u> / <u, u>`` (continuous normalisation, e.g. Geist, Parlitz &
+Lauterborn 1990, Prog. Theor. Phys. 83, 875), which keeps the size of ``u`` but shifts the
+rates of its other components by ``-a``: up to twice the spectral radius of the Jacobian, and
+steps to match.
 
 At an event with event function ``g`` and reset ``x+ = R(t, x-)`` every column jumps by the
 saltation matrix (Müller 1995, Chaos Solitons Fractals 5, 1671; Dellago, Posch & Hoover 1996,
@@ -62,7 +72,7 @@ location in time. Nor is the change of basis a discontinuity of the flow: the ta
 are linear, so the linear part of the directions' derivative at the step's end transforms by the
 same ``R^-1`` (:func:`step_end`), the next step starts from it (first-same-as-last, no
 evaluation) with the step size the controller chose, and every component keeps its error scale
-(the directions have unit size before and after). An event located in time (as this system did
+(the directions have unit size after). An event located in time (as this system did
 before) cost the dense output's three stages, the evaluation after it and the rest of the step
 at every re-orthonormalisation. Without re-orthonormalisation the vectors stay ``Phi V`` (a
 monodromy matrix).
@@ -79,8 +89,10 @@ check of the spectrum's sum.
 Layout (set by :func:`workbench.solver._tangent.tangent_problem`): ``p = [model p, s (n), w
 (nx), time scale, D_max]`` with the state scales ``s`` (state units), the weights ``w`` of the
 inner product (``1 / s^2``, ``1 / s_a^2`` or 0) and a time scale (s) for the difference steps;
-``ip = [model ip, n, na, m, ne, len(model p), len(model ip), model work size, re-orthonormalise
-(0/1)]``; ``work = [model work, scratch]``; the kernel's ``aux`` is the model's.
+``ip = [model ip, n, na, m, ne, len(model p), len(model ip), model work size, flags]`` (flags:
+1 re-orthonormalise, 2 normalise at steps' ends); ``work = [model work, scratch]`` (the scratch
+laid out by :func:`workbench.solver._tangent_numerics.scratch`, so that the hooks called at
+every evaluation allocate nothing); the kernel's ``aux`` is the model's.
 """
 
 from __future__ import annotations
@@ -96,6 +108,7 @@ from workbench.solver._tangent_numerics import (
     defect,
     gram_schmidt,
     normalise,
+    scratch,
     transform_rates,
     volume_rates,
 )
@@ -119,7 +132,10 @@ N_META = 8
 #: Jacobian): 1e-4 of each state's size. The difference's rounding error, eps |f| / step, enters
 #: the tangent's rate as noise that no step size integrates away; at the cube-root step
 #: eps^(1/3) ~ 6e-6 it held the nine-bar's tangent run in contact to ~1e-6 s steps at rtol 1e-10
-#: (190 515 steps over 0.2 s where the model takes 2 073; 3 396 now).
+#: (190 515 steps over 0.2 s where the model takes 2 073; 3 396 at 1e-4). A forward difference
+#: (one evaluation) is no substitute: its truncation error is first order in the step, which
+#: near a contact (Hertz: delta^1.5) biased the free journal's tangent map by 7.6e-4 at 1e-4,
+#: and a shorter step's noise took 100 times the model's steps at rtol 1e-10.
 DIRECTION_STEP = 1e-4
 #: Near an event surface the step is shortened so that the stencil changes no event function by
 #: more than SURFACE_FRACTION of its value: at a contact's onset and end the rhs varies on the
@@ -129,6 +145,10 @@ DIRECTION_STEP = 1e-4
 #: MIN_STEP_FACTOR times the step, whose rounding noise would return.
 SURFACE_FRACTION = 0.02
 MIN_STEP_FACTOR = 1e-3
+#: largest change of an active discrete state across the stencil, relative to its value (the
+#: stencil shortens where a direction's discrete-state component would move it further: a
+#: grazing contact's onset velocity)
+AUX_FRACTION = 1e-3
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -150,122 +170,186 @@ def _layout(p, ip, work):
 @njit(cache=True, nogil=True, inline="always")
 def _reorthonormalising(ip):
     """Whether the system re-orthonormalises its vectors (and integrates their volume)."""
-    return ip[ip.size - 1] != 0
+    return (ip[ip.size - 1] & 1) != 0
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _normalised_rates(Y, n, nx, na, m, w, D, il, dY):
-    """Continuous normalisation: from the rates ``D`` (n x m) of the vectors' state blocks, the
-    rates of the normalised vectors u (their memory blocks included) and of their log sizes l
-    (at ``il``): l takes the growth rate a of u, and u loses it."""
+def _linear(ip):
+    """Whether the vectors follow their linear equations, their sizes taken out at every
+    step's end (else: continuously normalised)."""
+    return (ip[ip.size - 1] & 2) != 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _linear_rates(n, nx, m, D, il, dY):
+    """The directions' rates under the linear flow, from ``D`` (m x n by rows, flat: a row per
+    vector, its state components; the discrete state's are zero), and their log sizes' (zero:
+    the sizes are taken out at steps' ends and events)."""
+    for c in range(m):
+        b = n + c * nx
+        for i in range(n):
+            dY[b + i] = D[c * n + i]
+        for k in range(n, nx):
+            dY[b + k] = 0.0
+        dY[il + c] = 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _carried(Y, n, nx, m, w, aux, k):
+    """Whether discrete state k enters the vectors' rates: weighted (the flow depends on it),
+    active (nonzero and finite: a zero discrete state means "inactive", e.g. no contact) and
+    nonzero in some direction."""
+    if not (w[n + k] > 0.0 and aux[k] != 0.0 and math.isfinite(aux[k])):
+        return False
+    for c in range(m):
+        if Y[n + c * nx + n + k] != 0.0:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _normalised_rates(Y, n, nx, m, w, D, il, dY):
+    """Continuous normalisation: from the rates ``D`` of the vectors' state blocks (m x n by
+    rows, flat: a row per vector), the rates of the normalised directions u (their
+    discrete-state blocks included) and of their log sizes l (at ``il``): l takes the growth
+    rate a of u, and u loses it."""
     for c in range(m):
         b = n + c * nx
         size = column_dot(Y, b, b, nx, w)
         rate = 0.0
         for i in range(n):
-            rate += w[i] * Y[b + i] * D[i, c]
+            rate += w[i] * Y[b + i] * D[c * n + i]
         a = rate / size if size > 0.0 else 0.0
         for i in range(n):
-            dY[b + i] = D[i, c] - a * Y[b + i]
-        for k in range(na):
-            dY[b + n + k] = -a * Y[b + n + k]
+            dY[b + i] = D[c * n + i] - a * Y[b + i]
+        for k in range(n, nx):
+            dY[b + k] = -a * Y[b + k]
         dY[il + c] = a
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def rhs(t, Y, p, ip, aux, work, dY):
     n, na, m, ne, pm, ipm, wm, scale, w, _, _ = _layout(p, ip, work)
     nx = n + na
     y = Y[:n]
-    code = model_rhs(t, y, pm, ipm, aux, wm, dY[:n])
+    f0 = dY[:n]
+    code = model_rhs(t, y, pm, ipm, aux, wm, f0)
     if code > 0:
         return code
-    o = wm.size
-    yd = work[o : o + n]
-    fp = work[o + n : o + 2 * n]
-    fm = work[o + 2 * n : o + 3 * n]
-    ja = work[o + 3 * n : o + 3 * n + n * na]
-    jy = work[o + 3 * n + n * na : o + 3 * n + n * na + n * n]
-    ge = o + 3 * n + n * na + n * n
-    g0 = work[ge : ge + ne]  # event functions at y, and at a point of a difference stencil
-    gd = work[ge + ne : ge + 2 * ne]
-    if ne > 0 and not HAS_ANALYTIC:
-        model_event_values(t, y, pm, ipm, aux, wm, g0)
+    yd, fp, fm, ja, jy, D, Dm, DR, DmR, _, Q, R, _, a0, carried, g0, gd = scratch(
+        work, wm.size, n, na, m, ne
+    )
     volume = _reorthonormalising(ip)
-    D = np.zeros((nx, m))  # the directions' rates before the normalisation (state rows)
-    Dm = np.zeros((n, m))  # their discrete state's share
-    # J_a: columns of the active discrete states that some tangent vector carries
-    need = np.zeros(na, np.bool_)
+    memory = volume and m == n  # the discrete state's share of the volume: all n vectors only
+    any_carried = False
     for k in range(na):
-        for c in range(m):
-            if Y[n + c * nx + n + k] != 0.0:
-                need[k] = True
-    jam = ja.reshape((n, na))
-    c1 = fd_aux_jacobian(t, y, pm, ipm, aux, wm, need, yd, fp, fm, jam)
-    if c1 > 0:
-        return c1
-    if HAS_ANALYTIC:
-        jm = jy.reshape((n, n))
-        c1 = jacobian(t, y, pm, ipm, aux, wm, scale, jm)
+        a0[k] = aux[k]
+        carried[k] = 1.0 if _carried(Y, n, nx, m, w, aux, k) else 0.0
+        any_carried = any_carried or carried[k] > 0.0
+    if any_carried and (HAS_ANALYTIC or memory):  # J_a's columns of the carried states
+        c1 = fd_aux_jacobian(t, y, pm, ipm, aux, wm, carried, yd, fp, fm, ja.reshape((n, na)))
         if c1 > 0:
             return c1
-    for c in range(m):
-        b = n + c * nx
-        if HAS_ANALYTIC:
+    if ne > 0 and not HAS_ANALYTIC:
+        model_event_values(t, y, pm, ipm, aux, wm, g0)
+    if HAS_ANALYTIC:
+        c1 = jacobian(t, y, pm, ipm, aux, wm, scale, jy.reshape((n, n)))
+        if c1 > 0:
+            return c1
+        for c in range(m):
+            b = n + c * nx
             for i in range(n):
                 acc = 0.0
                 for j in range(n):
                     acc += jy[i * n + j] * Y[b + j]
-                D[i, c] = acc
-        else:
-            nv = 0.0
+                for k in range(na):
+                    if carried[k] > 0.0:
+                        acc += ja[i * na + k] * Y[b + n + k]
+                D[c * n + i] = acc
+    else:
+        # one central difference per vector along (u_y, u_a): J_y u_y + J_a u_a in two
+        # evaluations
+        for c in range(m):
+            b = n + c * nx
+            acc = 0.0
             for j in range(n):
-                nv += (Y[b + j] / scale[j]) ** 2
-            nv = math.sqrt(nv)
-            if nv > 0.0:
-                eps = DIRECTION_STEP / nv
-                if ne > 0:
-                    eps = _near_surface_step(t, y, Y[b : b + n], eps, pm, ipm, aux, wm, g0, gd, yd)
-                for j in range(n):
-                    yd[j] = y[j] + eps * Y[b + j]
-                c1 = model_rhs(t, yd, pm, ipm, aux, wm, fp)
-                for j in range(n):
-                    yd[j] = y[j] - eps * Y[b + j]
-                c2 = model_rhs(t, yd, pm, ipm, aux, wm, fm)
-                if c1 > 0:
-                    return c1
-                if c2 > 0:
-                    return c2
+                acc += (Y[b + j] / scale[j]) ** 2
+            for k in range(na):
+                if carried[k] > 0.0:
+                    acc += w[n + k] * Y[b + n + k] * Y[b + n + k]
+            size = math.sqrt(acc)
+            if not size > 0.0:
                 for i in range(n):
-                    D[i, c] = (fp[i] - fm[i]) / (2.0 * eps)
-        for k in range(na):
-            va = Y[b + n + k]
-            if va != 0.0:
-                for i in range(n):
-                    D[i, c] += ja[i * na + k] * va
-                    Dm[i, c] += ja[i * na + k] * va
-    iv = n + m * nx + 1 + m  # W, M, K
+                    D[c * n + i] = 0.0
+                continue
+            eps = DIRECTION_STEP / size
+            for k in range(na):
+                if carried[k] > 0.0:
+                    change = eps * abs(Y[b + n + k])
+                    allowed = AUX_FRACTION * abs(a0[k])
+                    if change > allowed:
+                        eps *= allowed / change
+            if ne > 0:
+                eps = _near_surface_step(t, y, Y, b, eps, carried, a0, pm, ipm, aux, wm, g0, gd, yd)
+            _displace(y, Y, b, eps, carried, a0, aux, yd)
+            c1 = model_rhs(t, yd, pm, ipm, aux, wm, fp)
+            _displace(y, Y, b, -eps, carried, a0, aux, yd)
+            c2 = model_rhs(t, yd, pm, ipm, aux, wm, fm)
+            for k in range(na):
+                aux[k] = a0[k]
+            if c1 > 0:
+                return c1
+            if c2 > 0:
+                return c2
+            inv = 0.5 / eps
+            for i in range(n):
+                D[c * n + i] = (fp[i] - fm[i]) * inv
+    if memory:
+        for c in range(m):
+            b = n + c * nx
+            for i in range(n):
+                acc = 0.0
+                for k in range(na):
+                    if carried[k] > 0.0:
+                        acc += ja[i * na + k] * Y[b + n + k]
+                Dm[c * n + i] = acc
+    iv = n + m * nx + 1 + m  # W, M, K and the parts of W and M taken out at steps' ends
     dY[n + m * nx] = 0.0
-    dY[iv] = 0.0
-    dY[iv + 1] = 0.0
-    dY[iv + 2] = 0.0
+    for i in range(iv, iv + 5):
+        dY[i] = 0.0
     if volume:
-        dY[iv], dY[iv + 1] = volume_rates(Y, n, nx, m, w, D, Dm)
-    _normalised_rates(Y, n, nx, na, m, w, D, n + m * nx + 1, dY)
+        dY[iv], dY[iv + 1] = volume_rates(Y, n, nx, m, w, D, Dm, memory, Q, R, DR, DmR)
+    if _linear(ip):
+        _linear_rates(n, nx, m, D, n + m * nx + 1, dY)
+    else:
+        _normalised_rates(Y, n, nx, m, w, D, n + m * nx + 1, dY)
     return code
 
 
-@njit(cache=True, nogil=True)
-def _near_surface_step(t, y, v, eps, pm, ipm, aux, wm, g0, gd, yd):
-    """The difference step along ``v`` (a multiple of it), shortened so that no event function
-    changes by more than SURFACE_FRACTION of its value at ``y`` (``g0``) across the stencil:
-    near a contact's onset and end the rhs varies on the scale of the penetration itself
-    (Hertz: delta^1.5), and a longer stencil would bias the derivative. ``gd``, ``yd``:
-    scratch."""
+@njit(cache=True, nogil=True, inline="always")
+def _displace(y, Y, b, h, carried, a0, aux, yd):
+    """``yd = y + h u_y`` and the carried discrete states ``aux = a0 + h u_a`` for the column
+    ``u`` at ``Y[b]``."""
+    n = y.size
+    for j in range(n):
+        yd[j] = y[j] + h * Y[b + j]
+    for k in range(a0.size):
+        if carried[k] > 0.0:
+            aux[k] = a0[k] + h * Y[b + n + k]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _near_surface_step(t, y, Y, b, eps, carried, a0, pm, ipm, aux, wm, g0, gd, yd):
+    """The difference step along the column at ``Y[b]`` (a multiple of ``eps``), shortened so
+    that no event function changes by more than SURFACE_FRACTION of its value at ``y``
+    (``g0``) across the stencil: near a contact's onset and end the rhs varies on the scale
+    of the penetration itself (Hertz: delta^1.5), and a longer stencil would bias the
+    derivative. ``gd``, ``yd``: scratch; ``aux`` is restored to ``a0``."""
     for _ in range(2):  # g is close to linear across the stencil: one correction suffices
-        for j in range(y.size):
-            yd[j] = y[j] + eps * v[j]
+        _displace(y, Y, b, eps, carried, a0, aux, yd)
         model_event_values(t, yd, pm, ipm, aux, wm, gd)
+        for k in range(a0.size):
+            aux[k] = a0[k]
         factor = 1.0
         for k in range(g0.size):
             change = abs(gd[k] - g0[k])
@@ -295,41 +379,57 @@ def _reset(k, t, y, a, pm, ipm, wm, out):
     out[n:] = ac
 
 
-@njit(cache=True, nogil=True)
-def _reorthonormalise(Y, n, nx, m, w, R):
-    """Gram-Schmidt on the directions (``U <- U R^-1``, ``R`` written), their log sizes taking
-    log R_kk; counted."""
-    gram_schmidt(Y, n, nx, m, w, n + m * nx + 1, R)
-    Y[n + m * nx + 1 + m + 2] += 1.0
-
-
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def step_end(t, Y, p, ip, aux, work, dY):
     """At the end of an accepted step (the loop's ``step_end`` hook), with the state ``Y`` and
     its derivative ``dY`` there: where the directions' orthogonality defect exceeds D_max,
-    re-orthonormalise them and transform ``dY`` alike, without an evaluation. Returns 1 where
-    it did, else 0.
+    re-orthonormalise them (``U <- U R^-1``, ``l_k += log R_kk``); else, for vectors on the
+    model's steps, take their sizes out into their log sizes (``R`` diagonal). ``dY``
+    transforms alike, without an evaluation. Returns 1 where the representation changed, else
+    0.
 
-    ``U <- U R^-1`` is a change of basis of the span of a linear system: the linear part of
-    each direction's rate, ``L(u_c) = du_c/dt + a_c u_c = (J_y u_y + J_a u_a, 0)``, transforms
-    by the same ``R^-1``, the new directions' rates ``a`` follow from it, and the rates of the
-    volume ``W`` and of its memory part ``M`` (traces on the span) do not change."""
-    n, na, m, _, _, _, _, _, w, _, d_max = _layout(p, ip, work)
-    if not _reorthonormalising(ip):
-        return 0
+    Both are changes of basis of the span of a linear system: the linear part of each
+    direction's rate, ``L(u_c) = du_c/dt + a_c u_c = (J_y u_y + J_a u_a, 0)`` (``a_c = 0`` on
+    the model's steps), transforms by the same ``R^-1``, the new directions' rates follow from
+    it, and the rates of the volume ``W`` and of its memory part ``M`` (traces on the span) do
+    not change."""
+    n, na, m, ne, _, _, wm, _, w, _, d_max = _layout(p, ip, work)
     nx = n + na
-    if not defect(Y, n, nx, m, w) > d_max:
+    linear = _linear(ip)
+    _, _, _, _, _, _, _, _, _, L, _, R, G, _, _, _, _ = scratch(work, wm.size, n, na, m, ne)
+    orthonormalise = m > 1 and _reorthonormalising(ip) and defect(Y, n, nx, m, w, G) > d_max
+    if not (orthonormalise or linear):
         return 0
     il = n + m * nx + 1
-    L = np.empty((n, m))  # the state rows; the discrete state's are zero
-    for c in range(m):
+    for c in range(m):  # the state rows; the discrete state's are zero
         b = n + c * nx
         for i in range(n):
-            L[i, c] = dY[b + i] + dY[il + c] * Y[b + i]
-    R = np.empty((m, m))
-    _reorthonormalise(Y, n, nx, m, w, R)
-    transform_rates(L, R)
-    _normalised_rates(Y, n, nx, na, m, w, L, il, dY)
+            L[c * n + i] = dY[b + i] + dY[il + c] * Y[b + i]
+    if orthonormalise:
+        gram_schmidt(Y, n, nx, m, w, il, R)
+        Y[il + m + 2] += 1.0
+        transform_rates(L, R, m, n)
+    else:
+        for c in range(m):
+            b = n + c * nx
+            size = math.sqrt(column_dot(Y, b, b, nx, w))
+            if size > 0.0 and math.isfinite(size):
+                inv = 1.0 / size
+                for j in range(nx):
+                    Y[b + j] *= inv
+                for i in range(n):
+                    L[c * n + i] *= inv
+                Y[il + c] += math.log(size)
+    if linear:
+        _linear_rates(n, nx, m, L, il, dY)
+        iv = il + m  # W and M start every step from 0 (their error then scales with the step's
+        # increment, not with the whole accumulated volume)
+        Y[iv + 3] += Y[iv]
+        Y[iv + 4] += Y[iv + 1]
+        Y[iv] = 0.0
+        Y[iv + 1] = 0.0
+    else:
+        _normalised_rates(Y, n, nx, m, w, L, il, dY)
     return 1
 
 
@@ -443,6 +543,7 @@ def apply_event(k, t, Y, p, ip, aux, work):
         normalise(Y, n + c * nx, nx, w, n + m * nx + 1 + c)
     # a saltation can leave the defect beyond D_max (the loop evaluates the derivative after an
     # event: nothing to transform)
-    if volume and defect(Y, n, nx, m, w) > d_max:
-        _reorthonormalise(Y, n, nx, m, w, np.empty((m, m)))
+    if volume and defect(Y, n, nx, m, w, np.empty(m * m)) > d_max:
+        gram_schmidt(Y, n, nx, m, w, n + m * nx + 1, np.empty(m * m))
+        Y[n + m * nx + 1 + m + 2] += 1.0
     return stop
