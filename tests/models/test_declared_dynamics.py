@@ -114,6 +114,39 @@ def test_ninebar_clearance_states_until_the_first_impacts():
         assert np.abs(a[v].values[:first] - b[v].values[:first]).max() <= 1e-6 * C
 
 
+@pytest.mark.chaotic
+def test_ninebar_clearance_states_over_a_fifth_of_a_cycle_within_the_builtins_own_spread():
+    """Over the first 0.2 cycle, through the impacts, the declared nine-bar differs from the
+    built-in no more than the built-in differs from itself when its tolerance is tightened
+    tenfold. Within 1e-6 of c, as issue 42 item 4 words it, is below what double precision
+    resolves here: the impacts multiply every difference, and the built-in's own clearance
+    vectors at rtol 1e-11 and 1e-12 differ by about 8e-3 c, no less than at 1e-10 and 1e-11
+    once the integration's error is below the rounding's (measured on one processor: declared
+    against built-in 7.4e-3 c at rtol 1e-11; the built-in against itself 7.9e-3 c). Rounding
+    sets these figures, so another processor gets others of the same size: the test allows 3x."""
+    study = ninebar_study()
+    variables = ["clearance_x", "clearance_y"]
+    runs = {}
+    for rtol in (1e-11, 1e-12):
+        solver = {"method": "dop853", "rtol": rtol, "atol": rtol}
+        runs[rtol] = pair(
+            "ninebar", dict(study["effects"]), {"cycles": 1}, [*variables, "penetration"], solver,
+            dict(study["parameters"]),
+        )  # fmt: skip
+    window = slice(0, 401)  # the first 0.2 cycle: 400 of the cycle's 2000 samples
+
+    def spread(a, b):
+        return max(np.abs(a[v].values[window] - b[v].values[window]).max() for v in variables)
+
+    builtin, declared = runs[1e-11]
+    first = int(np.argmax((builtin.penetration.values > 0).any(axis=1)))
+    assert first < 300  # the window holds the impacts, not only the free flight
+    own = spread(builtin, runs[1e-12][0])
+    twin = spread(builtin, declared)
+    assert 0 < own < 0.1 * C  # the built-in's own spread: the rounding's, far below c
+    assert twin <= 3.0 * own, (twin / C, own / C)
+
+
 def _problems(name: str, friction: str, energy: bool):
     """The built-in's and the declared twin's problems; ``energy``: with the driver-work and
     dissipation quadratures (and, under LuGre, the friction-law ones), else the clearance states
