@@ -81,6 +81,8 @@ def test_blocks_must_partition_the_state():
         0,
         3,
     ]
+    # a problem without states (a mechanism with ideal joints) has no block
+    assert list(Problem(hooks="x", states=(), y0=np.zeros(0), p=np.zeros(0)).error_blocks) == [0]
 
 
 def test_a_tangent_run_keeps_the_models_own_accuracy():

@@ -74,7 +74,7 @@ class Problem:
         ``(y[k] + h gamma r_k) / (1 + h gamma a_k)`` (0 outside implicit stages); see
         :mod:`workbench.solver._templates.integration_loop`.
     error_blocks : ndarray of int64, optional
-        Boundaries ``0 = b_0 < b_1 < ... < b_k = n`` of the blocks of the state whose scaled RMS
+        Boundaries ``0 = b_0 < b_1 < ... < b_k = n`` (``[0]`` where n = 0) of the blocks of the state whose scaled RMS
         error each step must keep below 1: the step's error is the largest block's (default
         one block, the whole state). A derived system whose extra states must not dilute the
         error of the original ones (tangent vectors beside the state, copies side by side) gives
@@ -114,11 +114,11 @@ class Problem:
             self.aux_scale = np.full(self.aux0.shape, np.inf)
         self.aux_scale = np.ascontiguousarray(self.aux_scale, dtype=np.float64)
         n = self.y0.size
-        if self.error_blocks is None:
-            self.error_blocks = np.array([0, n], dtype=np.int64)
+        if self.error_blocks is None:  # one block; none for a problem without states
+            self.error_blocks = np.array([0, n] if n else [0], dtype=np.int64)
         self.error_blocks = np.ascontiguousarray(self.error_blocks, dtype=np.int64)
         b = self.error_blocks
-        if b.ndim != 1 or b.size < 2 or b[0] != 0 or b[-1] != n or np.any(np.diff(b) <= 0):
+        if b.ndim != 1 or b.size < 1 or b[0] != 0 or b[-1] != n or np.any(np.diff(b) <= 0):
             raise ValueError(
                 f"error_blocks {b!r}: must rise strictly from 0 to the state's size {n}"
             )
