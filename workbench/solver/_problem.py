@@ -74,11 +74,12 @@ class Problem:
         ``(y[k] + h gamma r_k) / (1 + h gamma a_k)`` (0 outside implicit stages); see
         :mod:`workbench.solver._templates.integration_loop`.
     error_blocks : ndarray of int64, optional
-        Boundaries ``0 = b_0 < b_1 < ... < b_k = n`` (``[0]`` where n = 0) of the blocks of the state whose scaled RMS
-        error each step must keep below 1: the step's error is the largest block's (default
-        one block, the whole state). A derived system whose extra states must not dilute the
-        error of the original ones (tangent vectors beside the state, copies side by side) gives
-        each its own block, as CVODES does for sensitivities (Serban & Hindmarsh 2005).
+        Boundaries ``0 = b_0 < b_1 < ... < b_k = n`` of the blocks of the state whose scaled
+        RMS error each step must keep below 1: the step's error is the largest block's
+        (default one block, the whole state; ``[0]``, no block, where n = 0). A derived
+        system whose extra states must not dilute the error of the original ones (tangent
+        vectors beside the state) gives each its own block, as CVODES does for sensitivities
+        (Serban & Hindmarsh 2005).
     data : dict
         Model-private values needed later by the model's ``derive`` (the solver ignores them).
     """
