@@ -230,8 +230,9 @@ def declared_model(linkage: Linkage) -> type[DeclaredMechanism]:
     Raises
     ------
     SceneError
-        A declaration without a clearance joint, or whose joints declare different friction
-        parameters.
+        A declaration without a clearance joint, whose joints declare different friction
+        parameters, or with a torque-driven crank (declared and checked, but its dynamics,
+        with the crank's angle and speed as states, are not generated yet).
     """
     digest = _digest(linkage)
     with _LOCK:
@@ -244,6 +245,13 @@ def declared_model(linkage: Linkage) -> type[DeclaredMechanism]:
                 "got none; a declared mechanism's dynamics needs at least one clearance joint "
                 "(switch it off with effects.clearance = [] for ideal joints)",
             )
+        for c in linkage.cranks:
+            if c.torque_driven:
+                raise SceneError(
+                    f"{c.key}.drive",
+                    "got 'torque'; the dynamics of a torque-driven crank are not available "
+                    'yet (only declared): drive it at its constant speed (drive = "speed")',
+                )
         parameters = _parameters(linkage)
         joints = tuple(c.joint for c in linkage.clearances)
         has_friction = any(c.friction_coefficient > 0 for c in linkage.clearances)
