@@ -6,6 +6,7 @@ crank's angle and speed as states, the energy balance of the four-bar with ideal
 with the clearance at B, and a motor-driven pendulum against scipy's solution of its ODE."""
 
 import copy
+import importlib
 import math
 import tomllib
 from pathlib import Path
@@ -16,9 +17,11 @@ import tomli_w
 from scipy.integrate import simpson, solve_ivp
 
 import workbench
+from workbench import load_scene
 from workbench._errors import SceneError
 from workbench.models._declaration import Crank, from_table, to_table
 from workbench.models._declare import parse_mechanism
+from workbench.run import prepare
 
 MECHANISMS = Path(__file__).resolve().parents[2] / "studies" / "mechanisms"
 #: a DC motor on the four-bar's crank: 2 N m at stall, 40 rad s-1 without load
@@ -272,3 +275,51 @@ def test_an_unknown_body_is_named_with_the_kinds_in_the_plural():
         "mechanism.clearances[B].bearing: got 'rocket', no link or slider of that name; the "
         "links and sliders: crank, coupler, rocker"
     )
+
+
+@pytest.mark.parametrize(
+    ("effects", "energy"),
+    [
+        ({"clearance": []}, True),
+        ({"clearance": ["B"], "friction": "none"}, True),
+        ({"clearance": ["B"], "friction": "coulomb"}, False),
+        ({"clearance": ["B"], "friction": "lugre"}, True),
+    ],
+)
+def test_the_lean_right_hand_side_equals_the_record_time_one(effects, energy):
+    """At random states (crank angle and speed, clearance vectors in and out of contact), the
+    lean right-hand side equals the record-time evaluation's (the motor's torque in both)."""
+    table = fourbar(**MOTOR)
+    table["clearances"][0]["friction_coefficient"] = 0.1
+    scene = load_scene(
+        {
+            "mechanism": table,
+            "effects": effects,
+            "run": {"duration": 0.1},
+            "record": {"dt": 1e-3, "variables": ["driver_work"] if energy else ["torque"]},
+        }
+    )
+    problem = prepare(scene).problem
+    hooks = importlib.import_module(problem.hooks)
+    nj = len(effects["clearance"])
+    nf = 2 * nj + 1
+    c = 0.5e-3  # m
+    rng = np.random.default_rng(7)
+    n = problem.y0.size
+    assert n >= 2 * nf
+    for _ in range(100):
+        y = np.zeros(n)
+        y[2 * nj], y[nf + 2 * nj] = rng.uniform(0, 2 * np.pi), rng.uniform(-40, 40)
+        if nj:
+            angle, e = rng.uniform(0, 2 * np.pi), c * rng.uniform(0.9, 1.02)
+            y[0:2] = e * np.cos(angle), e * np.sin(angle)
+            y[nf : nf + 2] = rng.normal(size=2) * 8 * c
+        aux = rng.uniform(0, 0.01, problem.aux0.size) * (rng.uniform() > 0.2)
+        lean, record = np.zeros(n), np.zeros(n)
+        work = np.zeros(problem.work_size)
+        code = hooks.rhs(0.0, y.copy(), problem.p, problem.ip, aux, work, lean)
+        ref = hooks.rhs_reference(
+            0.0, y.copy(), problem.p, problem.ip, aux, np.zeros(problem.work_size), record
+        )
+        assert code == ref
+        assert np.abs(lean - record).max() <= 1e-12 * np.abs(record).max()
