@@ -17,8 +17,8 @@ Conventions:
   ``angle0 + omega t``. The cranks' speeds are integer multiples of the slowest one's, so that
   the motion repeats after a turn of the slowest crank (its *cycle*). A crank declared with
   ``drive = "torque"`` is driven by a motor's torque instead (:class:`Crank`), ``omega`` its
-  initial speed; the declaration checks it, the generated dynamics do not yet integrate it
-  (:func:`workbench.models._declared_model.declared_model` refuses it).
+  initial speed: its angle and speed are then states, and the motion has no period
+  (:mod:`workbench.models._declared_model`).
 - A *slider* translates along a fixed guide, the line through a ground point at the angle
   ``angle``; its frame sits at its pin (a point of its own) with +X along the guide, and its
   position is ``offset + (pin - guide point) . u``.

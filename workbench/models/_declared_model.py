@@ -12,7 +12,15 @@ continuation, analysis and archives look up.
 Parameters (SI), each defaulting to the declaration's value:
 
 - ``omega``: the speed of the slowest crank (rad s-1); every crank turns at its declared multiple
-  of it (the declared signs kept), so that the forcing period is 2 pi / omega;
+  of it (the declared signs kept), so that the forcing period is 2 pi / omega. A crank that a
+  motor drives (``drive = "torque"``, the linkage's only crank) starts at that speed instead:
+  its angle (rad) and speed (rad s-1) are states after the clearance vectors and their rates,
+  its coordinate a free one with the motor's torque as generalised force, its recorded torque
+  the motor's, the driver work the integral of that torque times the crank's speed; the model
+  then has no forcing period (a run lasts a ``duration``; cycles, strobes and the analyses that
+  need a period are refused as for any autonomous model), and at most one joint has a
+  clearance at once (the free coordinates' 4 x 4 solve). The motor's constants are compiled
+  into the hooks like the geometry;
 - ``gravity``, ``gravity_angle``; ``mass_<body>`` of every link and slider and
   ``inertia_<link>`` of every link;
 - per clearance joint J: ``clearance_J`` and the contact parameters ``<name>_J`` of

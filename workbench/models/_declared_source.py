@@ -18,13 +18,17 @@ mechanism's ``_dynamics`` module defines by hand (:mod:`workbench.models.ninebar
 
 Coordinates q: the cranks' angles (rad) in their declared order, then the clearance vector
 (journal centre minus bearing centre, m) of every declared clearance joint, in order; a joint
-whose clearance is off keeps its vector at 0 (an ideal pin). A point of a body sits where the
-body that solved it first (its *owner*, or the ground) has it, moved by the clearance vector d
-when a clearance joins the two bodies there: + d on the journal's side, - d on the bearing's.
-So a group's known point, read as the body that the group solves carries it, and a group's own
-joint (an RRR's common point, an RRP's slider pin) with a clearance between its two bodies, are
-the dyad's inputs shifted by d (an RRR's second known point by + d when its first link carries
-the journal, an RRP's known point by - d when its link does).
+whose clearance is off keeps its vector at 0 (an ideal pin). A motor-driven crank (the only
+crank) is a free coordinate, last among the free ones (``ip[IP.motor]``: its angle's index in
+the state), with the motor's torque, compiled in, as generalised force.
+
+A point of a body sits where the body that solved it first (its *owner*, or the ground) has it,
+moved by the clearance vector d when a clearance joins the two bodies there: + d on the
+journal's side, - d on the bearing's. So a group's known point, read as the body that the group
+solves carries it, and a group's own joint (an RRR's common point, an RRP's slider pin) with a
+clearance between its two bodies, are the dyad's inputs shifted by d (an RRR's second known
+point by + d when its first link carries the journal, an RRP's known point by - d when its link
+does).
 
 Rows of the bodies (``pos``, ``J``, ...): the links, the sliders, then two rows without mass: a
 marker whose x is the first slider's position along its guide (what the record reads as the
