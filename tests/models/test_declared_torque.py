@@ -171,6 +171,18 @@ def test_a_motor_and_two_clearance_joints_are_refused():
     )
 
 
+def test_verify_refuses_a_motor_driven_crank():
+    from workbench.verification._mechanisms import declared_mechanism
+
+    scene = load_scene({"mechanism": fourbar(**MOTOR), "run": {"duration": 0.1}})
+    with pytest.raises(SceneError) as info:
+        declared_mechanism(scene)
+    assert str(info.value) == (
+        "mechanism.cranks[crank].drive: got 'torque'; the exudyn model drives its cranks at "
+        'constant speeds: verify the linkage with drive = "speed"'
+    )
+
+
 # ================================================================================================
 # the dynamics
 # ================================================================================================
