@@ -15,7 +15,10 @@ Conventions:
   whose angle is the link's angle (counter-clockwise from +X, rad).
 - A *crank* turns a link about a ground point at a constant speed: the link's angle is
   ``angle0 + omega t``. The cranks' speeds are integer multiples of the slowest one's, so that
-  the motion repeats after a turn of the slowest crank (its *cycle*).
+  the motion repeats after a turn of the slowest crank (its *cycle*). A crank declared with
+  ``drive = "torque"`` is driven by a motor's torque instead (:class:`Crank`), ``omega`` its
+  initial speed: its angle and speed are then states, and the motion has no period
+  (:mod:`workbench.models._declared_model`).
 - A *slider* translates along a fixed guide, the line through a ground point at the angle
   ``angle``; its frame sits at its pin (a point of its own) with +X along the guide, and its
   position is ``offset + (pin - guide point) . u``.
@@ -49,6 +52,7 @@ from workbench._errors import SceneError
 from workbench.models._clearance import contact_parameters, validate_joint
 
 __all__ = [
+    "DRIVES",
     "GROUND",
     "RPR",
     "RRP",
@@ -194,10 +198,22 @@ class Slider(_Part):
         )
 
 
+#: how a crank is driven: at its constant speed, or by a motor's torque
+DRIVES = ("speed", "torque")
+
+
 @dataclass(frozen=True, kw_only=True)
 class Crank(_Part):
-    """A link driven about the ground point ``pivot`` (one of its points) at the constant speed
-    ``omega`` (rad s-1, counter-clockwise positive): its angle is ``angle0 + omega t`` (rad)."""
+    """A link driven about the ground point ``pivot`` (one of its points), counter-clockwise
+    positive.
+
+    ``drive = "speed"`` (the default): it turns at the constant speed ``omega`` (rad s-1), its
+    angle is ``angle0 + omega t`` (rad). ``drive = "torque"``: a motor with the linear
+    characteristic of a DC motor drives it, tau = stall_torque (1 - theta_dot / no_load_speed)
+    (N m; ``no_load_speed`` rad s-1, infinite by default: a constant torque), ``omega`` being
+    its speed at t = 0 (rad s-1); only a torque-driven crank has ``stall_torque`` and
+    ``no_load_speed``.
+    """
 
     section = "cranks"
     named_by = "link"
@@ -206,6 +222,14 @@ class Crank(_Part):
     pivot: str
     omega: float
     angle0: float = 0.0
+    drive: str = "speed"
+    stall_torque: float | None = None
+    no_load_speed: float | None = None
+
+    @property
+    def torque_driven(self) -> bool:
+        """Whether a motor's torque drives the crank (its speed is then a state)."""
+        return self.drive == "torque"
 
     def __post_init__(self) -> None:
         key = self._named()
@@ -217,6 +241,38 @@ class Crank(_Part):
         )
         if self.omega == 0:
             raise SceneError(f"{key}.omega", "got 0 rad s-1; a driven crank turns (omega != 0)")
+        if self.drive not in DRIVES:
+            raise SceneError(
+                f"{key}.drive",
+                f"got {self.drive!r}; a crank's drive is one of {', '.join(map(repr, DRIVES))}",
+            )
+        if not self.torque_driven:
+            for field in ("stall_torque", "no_load_speed"):
+                if getattr(self, field) is not None:
+                    raise SceneError(
+                        f"{key}.{field}",
+                        f"got {getattr(self, field)!r}; only a torque-driven crank has it "
+                        '(set drive = "torque", or remove it)',
+                    )
+            return
+        if self.stall_torque is None:
+            raise SceneError(
+                f"{key}.stall_torque",
+                'missing; a crank with drive = "torque" declares its motor\'s stall torque (N m)',
+            )
+        _set(self, stall_torque=_number(self.stall_torque, f"{key}.stall_torque", "N m"))
+        speed = math.inf if self.no_load_speed is None else self.no_load_speed
+        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed > 0:
+            raise SceneError(
+                f"{key}.no_load_speed",
+                f"got {speed!r}; a motor's no-load speed is positive (rad s-1), or inf for a "
+                "constant torque",
+            )
+        _set(self, no_load_speed=float(speed))
+
+    def motor_torque(self, speed: float) -> float:
+        """The torque (N m) the crank's motor applies at the crank speed ``speed`` (rad s-1)."""
+        return self.stall_torque * (1.0 - speed / self.no_load_speed)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -483,10 +539,10 @@ class Linkage:
     def _body(self, name: str, key: str, sliders: bool = True) -> Link | Slider:
         body = self.bodies().get(name)
         if body is None or (isinstance(body, Slider) and not sliders):
-            kinds = "link or slider" if sliders else "link"
+            kind, kinds = ("link or slider", "links and sliders") if sliders else ("link", "links")
             names = [b.name for b in self.links] + ([s.name for s in self.sliders] * sliders)
             raise SceneError(
-                key, f"got {name!r}, no {kinds} of that name; the {kinds}s: {', '.join(names)}"
+                key, f"got {name!r}, no {kind} of that name; the {kinds}: {', '.join(names)}"
             )
         return body
 
@@ -712,6 +768,10 @@ def to_table(linkage: Linkage) -> dict[str, Any]:
         for part in getattr(linkage, name):
             row = {"kind": part.kind} if name == "groups" else {}
             row.update({f.name: _plain(getattr(part, f.name)) for f in dataclasses.fields(part)})
+            if name == "cranks" and not part.torque_driven:
+                # a constant-speed crank's table as before the drive existed (the same digest)
+                for field in ("drive", "stall_torque", "no_load_speed"):
+                    del row[field]
             rows.append(row)
         out[name] = rows
     return out

@@ -12,7 +12,15 @@ continuation, analysis and archives look up.
 Parameters (SI), each defaulting to the declaration's value:
 
 - ``omega``: the speed of the slowest crank (rad s-1); every crank turns at its declared multiple
-  of it (the declared signs kept), so that the forcing period is 2 pi / omega;
+  of it (the declared signs kept), so that the forcing period is 2 pi / omega. A crank that a
+  motor drives (``drive = "torque"``, the linkage's only crank) starts at that speed instead:
+  its angle (rad) and speed (rad s-1) are states after the clearance vectors and their rates,
+  its coordinate a free one with the motor's torque as generalised force, its recorded torque
+  the motor's, the driver work the integral of that torque times the crank's speed; the model
+  then has no forcing period (a run lasts a ``duration``; cycles, strobes and the analyses that
+  need a period are refused as for any autonomous model), and at most one joint has a
+  clearance at once (the free coordinates' 4 x 4 solve). The motor's constants are compiled
+  into the hooks like the geometry;
 - ``gravity``, ``gravity_angle``; ``mass_<body>`` of every link and slider and
   ``inertia_<link>`` of every link;
 - per clearance joint J: ``clearance_J`` and the contact parameters ``<name>_J`` of
@@ -42,13 +50,20 @@ from workbench.models._clearance import (
     CONTACT_EFFECT,
     FRICTION_EFFECT,
     contact_law,
+    energy_outputs,
     joint_block,
     validate_joint,
 )
 from workbench.models._declaration import CONTACT_PARAMETERS, GROUND, Linkage, to_table
 from workbench.models._declared_kinematics import Motion, kinematics
 from workbench.models._declared_source import body_rows, generated_source
-from workbench.models._mechanism import Mechanism, body_parameters, mechanism_parameters
+from workbench.models._mechanism import (
+    Mechanism,
+    body_parameters,
+    mechanism_parameters,
+    mechanism_problem,
+    motor_states,
+)
 
 __all__ = ["FRICTION_PARAMETERS", "JOINT_PARAMETERS", "DeclaredMechanism", "declared_model"]
 
@@ -103,11 +118,54 @@ class DeclaredMechanism(Mechanism):
         )
         return kinematics(dataclasses.replace(self.linkage, cranks=cranks), time)
 
+    def motors(self, params) -> tuple[tuple[str, int, float, float], ...]:
+        """The motor-driven cranks: (label, index in q, initial angle (rad), initial speed
+        (rad s-1): the crank's declared multiple of ``params["omega"]``)."""
+        slowest = min(abs(c.omega) for c in self.linkage.cranks)
+        return tuple(
+            (c.link, k, c.angle0, c.omega / slowest * params["omega"])
+            for k, c in enumerate(self.linkage.cranks)
+            if c.torque_driven
+        )
+
+    def states(self, effects):
+        present = [j for j in self.joints if j in effects["clearance"]]
+        # the motors' initial angle and speed do not name the states
+        motors = tuple((c.link, 0, 0.0, 0.0) for c in self.linkage.cranks if c.torque_driven)
+        return tuple(motor_states(super().states(effects), present, motors))
+
     def outputs(self, effects):
         out = super().outputs(effects)
+        if self.motors({"omega": 1.0}) and not effects["clearance"]:
+            out = (*out, *energy_outputs())  # the motor's work with ideal joints
         if self.linkage.sliders:
             return out
         return tuple(q for q in out if not q.name.startswith("slider_"))
+
+    def forcing_period(self, params):
+        """2 pi / omega (s) for cranks that turn at constant speeds; None (an autonomous
+        system: no forcing period for strobes, transients in periods or cycles) where a
+        motor drives the crank, whose speed is then a state."""
+        if self.motors(params):
+            return None
+        return super().forcing_period(params)
+
+    def problem(self, params, effects, initial, requested):
+        return mechanism_problem(
+            hooks=self.dynamics.__name__,
+            effects=effects,
+            initial=initial,
+            requested=requested,
+            joints=self.joints,
+            clearances=self.clearances(params),
+            omega=params["omega"],
+            p=self.pack(params, effects),
+            IP=self.dynamics.IP,
+            work=self.dynamics.W,
+            n_driven=len(self.cranks),
+            assembly=self.assembly,
+            motors=self.motors(params),
+        )
 
     def validate(self, params, effects):
         for j in self.joints:
@@ -121,6 +179,12 @@ class DeclaredMechanism(Mechanism):
                 "effects.clearance",
                 f"got {list(effects['clearance'])!r}; at most {MAX_CLEARANCES} joints of a "
                 "declared mechanism have a clearance at once (choose among them)",
+            )
+        if self.motors(params) and len(effects["clearance"]) > MAX_CLEARANCES - 1:
+            raise SceneError(
+                "effects.clearance",
+                f"got {list(effects['clearance'])!r}; with a motor-driven crank (a free "
+                f"coordinate too) at most {MAX_CLEARANCES - 1} joint has a clearance at once",
             )
 
     def pack(self, params, effects):
@@ -230,8 +294,8 @@ def declared_model(linkage: Linkage) -> type[DeclaredMechanism]:
     Raises
     ------
     SceneError
-        A declaration without a clearance joint, or whose joints declare different friction
-        parameters.
+        A declaration without a clearance joint, whose joints declare different friction
+        parameters, or a motor-driven crank among several cranks.
     """
     digest = _digest(linkage)
     with _LOCK:
@@ -244,6 +308,14 @@ def declared_model(linkage: Linkage) -> type[DeclaredMechanism]:
                 "got none; a declared mechanism's dynamics needs at least one clearance joint "
                 "(switch it off with effects.clearance = [] for ideal joints)",
             )
+        for c in linkage.cranks:
+            if c.torque_driven and len(linkage.cranks) > 1:
+                raise SceneError(
+                    f"{c.key}.drive",
+                    f"got 'torque' with {len(linkage.cranks)} cranks; a motor drives a "
+                    "linkage of one crank (declare the others' speeds, or drive this one at "
+                    'its speed: drive = "speed")',
+                )
         parameters = _parameters(linkage)
         joints = tuple(c.joint for c in linkage.clearances)
         has_friction = any(c.friction_coefficient > 0 for c in linkage.clearances)

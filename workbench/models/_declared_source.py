@@ -18,13 +18,17 @@ mechanism's ``_dynamics`` module defines by hand (:mod:`workbench.models.ninebar
 
 Coordinates q: the cranks' angles (rad) in their declared order, then the clearance vector
 (journal centre minus bearing centre, m) of every declared clearance joint, in order; a joint
-whose clearance is off keeps its vector at 0 (an ideal pin). A point of a body sits where the
-body that solved it first (its *owner*, or the ground) has it, moved by the clearance vector d
-when a clearance joins the two bodies there: + d on the journal's side, - d on the bearing's.
-So a group's known point, read as the body that the group solves carries it, and a group's own
-joint (an RRR's common point, an RRP's slider pin) with a clearance between its two bodies, are
-the dyad's inputs shifted by d (an RRR's second known point by + d when its first link carries
-the journal, an RRP's known point by - d when its link does).
+whose clearance is off keeps its vector at 0 (an ideal pin). A motor-driven crank (the only
+crank) is a free coordinate, last among the free ones (``ip[IP.motor]``: its angle's index in
+the state), with the motor's torque, compiled in, as generalised force.
+
+A point of a body sits where the body that solved it first (its *owner*, or the ground) has it,
+moved by the clearance vector d when a clearance joins the two bodies there: + d on the
+journal's side, - d on the bearing's. So a group's known point, read as the body that the group
+solves carries it, and a group's own joint (an RRR's common point, an RRP's slider pin) with a
+clearance between its two bodies, are the dyad's inputs shifted by d (an RRR's second known
+point by + d when its first link carries the journal, an RRP's known point by - d when its link
+does).
 
 Rows of the bodies (``pos``, ``J``, ...): the links, the sliders, then two rows without mass: a
 marker whose x is the first slider's position along its guide (what the record reads as the
@@ -662,12 +666,15 @@ def _centroids(rows: int, placement: list[str], state: list[str]) -> str:
     )
 
 
-def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
+def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]], motor: str | None = None) -> str:
     """The text of the lean right-hand side ``rhs`` (see :func:`generated_source`); ``cranks``:
-    per crank the expressions of its angle and rate at t."""
+    per crank the expressions of its angle and rate at t; ``motor``: the expression of the
+    torque (N m) of the motor that drives the first crank, whose angle and speed are then free
+    coordinates after the clearance vectors (None: every crank turns at its speed)."""
     e = _Emitter(linkage)
     nj, nc, nb = len(linkage.clearances), e.nc, len(e.rows)
     nq = nc + 2 * nj
+    nm = 0 if motor is None else 1
     lines: list[str] = []
 
     def say(line: str = "", indent: int = 1) -> None:
@@ -679,9 +686,13 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
     say('only what the integration reads (the free columns, the contact forces, a 4 x 4 solve)."""')
     say("omega = p[P.omega]")
     say("nf = ip[IP.nf]")
+    if motor is not None:
+        say("im = ip[IP.motor]")
     for k, (angle, rate) in enumerate(cranks):
         say(f"th{k} = {angle}")
         say(f"om{k} = {rate}")
+    if motor is not None:
+        say(f"tau = {motor}")
     for j in range(nj):
         say(f"k{j} = ip[IP.slot + {j}]")
         say(f"h{j} = 1.0 if k{j} >= 0 else 0.0")
@@ -701,7 +712,7 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
     say("acc = _bias(state, inner)")
     say("cen = _centroids(state)")
     for f in range(4):
-        if f < 2 * nj:
+        if f < 2 * nj + nm:
             say(f"f{f} = ip[IP.free + {f}]")
             unit = _tuple([f"1.0 if f{f} == {i} else 0.0" for i in range(nq)])
             say(f"c{f} = _velocities(state, {unit})[0]")
@@ -733,8 +744,13 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
     moving = [
         e.rows[b.name]
         for b in (*linkage.links, *linkage.sliders)
-        if not any(c.link == b.name and not e.shift(c.link, c.pivot) for c in linkage.cranks)
+        if not any(
+            c.link == b.name and not c.torque_driven and not e.shift(c.link, c.pivot)
+            for c in linkage.cranks
+        )
     ]
+    if motor is not None:  # the motor's generalised force: its torque on the crank's link
+        forces.append(f"column_force({{c}}, {e.rows[linkage.cranks[0].link]}, 0.0, 0.0, tau)")
 
     def mass(a: str, c: str) -> str:
         return " + ".join(f"pass_term(p, P, {a}, {c}, {b}, 0.0, 0.0)" for b in moving)
@@ -743,11 +759,20 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
         inertia = " + ".join(f"pass_term(p, P, {c}, acc, {b}, gx, gy)" for b in moving)
         return " + ".join(f.format(c=c) for f in forces) + f" - ({inertia})"
 
-    say("pad = 1.0 if nf < 4 else 0.0  # a single joint's 2 x 2 system padded with identity rows")
+    if motor is None:
+        pad = "pad = 1.0 if nf < 4 else 0.0  # a single joint's 2 x 2 system padded with identity"
+        say(f"{pad} rows")
+        pads = {2: "pad", 3: "pad"}
+    else:
+        say("# the system of the nf free coordinates padded with identity rows")
+        pads = {r: f"pad{r}" for r in range(1, 4)}
+        for r in pads:
+            say(f"pad{r} = 1.0 if nf <= {r} else 0.0")
     say("ok, a0, a1, a2, a3 = spd4_solve(")
     for r in range(4):
         for col in range(r + 1):
-            say(f"{mass(f'c{r}', f'c{col}')}" + (" + pad" if r == col and r >= 2 else "") + ",", 2)
+            pad = f" + {pads[r]}" if r == col and r in pads else ""
+            say(f"{mass(f'c{r}', f'c{col}')}{pad},", 2)
     for r in range(4):
         say(f"{residual(f'c{r}')},", 2)
     say(")")
@@ -761,10 +786,15 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
     say("for i in range(nf):")
     say("dydt[i] = y[nf + i]", 2)
     say("dydt[nf] = a0")
-    say("dydt[nf + 1] = a1")
-    say("if nf == 4:")
-    say("dydt[nf + 2] = a2", 2)
-    say("dydt[nf + 3] = a3", 2)
+    if motor is None:
+        say("dydt[nf + 1] = a1")
+        say("if nf == 4:")
+        say("dydt[nf + 2] = a2", 2)
+        say("dydt[nf + 3] = a3", 2)
+    else:
+        for r in range(1, 4):
+            say(f"if nf > {r}:")
+            say(f"dydt[nf + {r}] = a{r}", 2)
     for j in range(nj):
         say(f"if iz{j} >= 0:")
         say(f"y[iz{j}] = z{j}  # solved in an implicit stage (unchanged otherwise)", 2)
@@ -781,9 +811,12 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
     joint_forces = _tuple(
         [_tuple([f"jx{j}", f"jy{j}", f"bx{j}", f"by{j}", f"fx{j}", f"fy{j}"]) for j in range(nj)]
     )
-    say(f"power = driver_power({masses}, {inertias}, gx, gy,", 2)
-    say(f"_velocities(state, {driven})[0], cen, acc, (c0, c1, c2, c3), (a0, a1, a2, a3),", 3)
-    say(f"{joint_forces}, MECHANISM.journal, MECHANISM.bearing)", 3)
+    if motor is None:
+        say(f"power = driver_power({masses}, {inertias}, gx, gy,", 2)
+        say(f"_velocities(state, {driven})[0], cen, acc, (c0, c1, c2, c3), (a0, a1, a2, a3),", 3)
+        say(f"{joint_forces}, MECHANISM.journal, MECHANISM.bearing)", 3)
+    else:
+        say("power = tau * om0  # the motor's power, W", 2)
     say("if not math.isfinite(power):", 2)
     say("return CODE_NONFINITE", 3)
     say("dydt[iw] = power", 2)
@@ -793,6 +826,13 @@ def _lean_rhs(linkage: Linkage, cranks: list[tuple[str, str]]) -> str:
     say("return EVENT_INSIDE_STEP  # in contact, with no onset velocity held (held_onset)", 2)
     say("return 0")
     return "\n".join(lines) + "\n"
+
+
+def _motor(crank, speed: str) -> str:
+    """The expression of the torque (N m) of a crank's motor at the crank speed ``speed``."""
+    if math.isinf(crank.no_load_speed):
+        return _f(crank.stall_torque)
+    return f"{_f(crank.stall_torque)} * (1.0 - {speed} / {_f(crank.no_load_speed)})"
 
 
 def generated_source(linkage: Linkage) -> str:
@@ -815,7 +855,12 @@ def generated_source(linkage: Linkage) -> str:
     slowest = min(abs(c.omega) for c in linkage.cranks)
     angles = []
     cranks = []
+    motor = None
     for k, c in enumerate(linkage.cranks):
+        if c.torque_driven:  # the first and only crank (declared_model checks)
+            angles.append(("y[im]", "y[nf + im]"))
+            motor = _motor(c, "om0")
+            continue
         ratio = _f(c.omega / slowest)
         angles.append((f"{_f(c.angle0)} + {ratio} * omega * t", f"{ratio} * omega"))
         cranks.append(f"    q[{k}] = {angles[-1][0]}")
@@ -834,6 +879,17 @@ def generated_source(linkage: Linkage) -> str:
         points=tuple(range(nj)),
     )
     evaluate = _EVALUATE.format(cranks="\n".join(cranks), marker=rows[MARKER], offset=_f(offset))
+    if motor is not None:
+        header = header.replace(
+            'IP = layout("DeclaredIndices", index_fields(N_JOINTS))',
+            'IP = layout(\n    "DeclaredIndices",\n'
+            '    [*index_fields(N_JOINTS)[:-1], ("free", 2 * N_JOINTS + 1), ("motor", 1)],\n)',
+        ).replace("    evaluate_mechanism,\n", "    evaluate_driven,\n")
+        evaluate = evaluate.replace(
+            "    return evaluate_mechanism(y, p, ip, aux, work, MECHANISM, kin, slider)",
+            f"    tau = {_motor(linkage.cranks[0], 'qd[0]')}\n"
+            "    return evaluate_driven(y, p, ip, aux, work, MECHANISM, kin, slider, 0, tau)",
+        )
     return (
         "\n\n".join(
             [
@@ -842,7 +898,7 @@ def generated_source(linkage: Linkage) -> str:
                 _centroids(len(rows), placement, state).rstrip("\n"),
                 _kinematics(nc + 2 * nj).strip("\n"),
                 evaluate.strip("\n"),
-                _lean_rhs(linkage, angles).rstrip("\n"),
+                _lean_rhs(linkage, angles, motor).rstrip("\n"),
             ]
         ).replace("\n\n@njit", "\n\n\n@njit")
         + "\n"

@@ -172,8 +172,9 @@ def mechanism_outputs(effects: Mapping[str, Any], slider: str) -> tuple[Quantity
 def state_scales(states, clearance: float, omega: float) -> np.ndarray:
     """Characteristic size of each state for the solver's atol: the clearance c (m) for
     lengths, c omega (m s-1) for rates, 1 J for the energy quadratures, TIME_SCALE (s) for
-    the friction-law quadratures (:mod:`workbench.models._friction_report`)."""
-    size = {"m": clearance, "m s-1": clearance * omega, "s": TIME_SCALE}
+    the friction-law quadratures (:mod:`workbench.models._friction_report`), 1 rad for a
+    motor-driven crank's angle and omega (rad s-1) for its speed."""
+    size = {"m": clearance, "m s-1": clearance * omega, "s": TIME_SCALE, "rad s-1": omega}
     return np.array([size.get(q.units, 1.0) for q in states])
 
 
@@ -211,6 +212,17 @@ def mechanism_parameters(
     }
 
 
+def motor_states(states, present, motors) -> list[Quantity]:
+    """The clearance joints' ``states`` (:func:`clearance_states` of the joints ``present``)
+    with the angle (rad) of every motor-driven crank of ``motors`` (label first) after the
+    clearance vectors and its speed (rad s-1) after their rates."""
+    n = 2 * len(present)
+    angles = [Quantity(f"crank_angle_{m[0]}", "rad", f"angle of crank {m[0]}") for m in motors]
+    speeds = [Quantity(f"crank_speed_{m[0]}", "rad s-1", f"speed of crank {m[0]}") for m in motors]
+    states = list(states)
+    return [*states[:n], *angles, *states[n : 2 * n], *speeds, *states[2 * n :]]
+
+
 def mechanism_problem(
     *,
     hooks: str,
@@ -225,6 +237,7 @@ def mechanism_problem(
     work: Layout,
     n_driven: int,
     assembly: str,
+    motors: tuple[tuple[str, int, float, float], ...] = (),
 ) -> Problem:
     """The solver's problem for a crank-driven mechanism with clearance joints.
 
@@ -256,6 +269,11 @@ def mechanism_problem(
         q[n_driven + 2 j].
     assembly : str
         Why this mechanism cannot be assembled (for the failure messages).
+    motors : tuple of (str, int, float, float), optional
+        The cranks that a motor drives: (label, index in q, initial angle (rad), initial speed
+        (rad s-1)). Their angles follow the clearance vectors in the state and in the free
+        coordinates (``ip[IP.motor + m]`` gives the m-th one's index in y), their speeds the
+        clearance rates (:func:`motor_states`).
 
     Returns
     -------
@@ -269,20 +287,26 @@ def mechanism_problem(
     """
     present = [j for j in joints if j in effects["clearance"]]
     lugre = effects["friction"] == "lugre"
-    energy = bool(present) and ("driver_work" in requested or "dissipated_energy" in requested)
+    moving = bool(present) or bool(motors)
+    energy = moving and ("driver_work" in requested or "dissipated_energy" in requested)
     timed = lugre and any(q.name in requested for q in diagnostic_outputs())
-    states = list(clearance_states(present, effects["friction"]))
-    y0 = [float(initial.get(q.name, 0.0)) for q in states]
+    states = motor_states(clearance_states(present, effects["friction"]), present, motors)
+    start = {
+        q.name: v for m in motors for q, v in zip(motor_states([], [], (m,)), m[2:], strict=True)
+    }
+    y0 = [float(initial.get(q.name, start.get(q.name, 0.0))) for q in states]
     if timed:
         states += diagnostic_states(present)
         y0 += [0.0, 0.0] * len(present)
     if energy:
         states += ENERGY_STATES
         y0 += [0.0, 0.0]
-    nf = 2 * len(present)
+    nf = 2 * len(present) + len(motors)
     n = len(joints)
     has, slot, z, mu = [0] * n, [-1] * n, [-1] * n, [-1] * n
-    free = [-1] * (2 * n)
+    free = [-1] * (2 * n + len(motors))
+    for m, (_, k, _, _) in enumerate(motors):
+        free[2 * len(present) + m] = k
     n_z = len(present) if lugre else 0
     for i, name in enumerate(present):
         j = joints.index(name)
@@ -304,6 +328,7 @@ def mechanism_problem(
             "w": 2 * nf + n_z + (2 * len(present) if timed else 0) if energy else -1,
             "nf": nf,
             "free": free,
+            **({"motor": [2 * len(present) + m for m in range(len(motors))]} if motors else {}),
         },
         fill=-1,
         dtype=np.int64,
@@ -370,10 +395,10 @@ def mechanism_derive(
         if im.max() >= 0:
             for k, q in enumerate(diagnostic_outputs()):
                 out[q.name] = np.stack([Y[:, im[j] + k] - Y[0, im[j] + k] for j in cols], axis=1)
-        iw = problem.ip[IP.w]
-        if iw >= 0:
-            out["driver_work"] = Y[:, iw] - Y[0, iw]
-            out["dissipated_energy"] = Y[:, iw + 1] - Y[0, iw + 1]
+    iw = problem.ip[IP.w]
+    if iw >= 0:  # with a clearance joint or a motor
+        out["driver_work"] = Y[:, iw] - Y[0, iw]
+        out["dissipated_energy"] = Y[:, iw + 1] - Y[0, iw + 1]
     out["torque"] = ws[:, record.block("tau")]
     out["slider_position"] = ws[:, record.slider]
     out["slider_velocity"] = ws[:, record.slider + 1]

@@ -240,6 +240,13 @@ def solve_free(M, h, Q, free, nf, qdd):
 
 @njit(cache=True)
 def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
+    """The record-time evaluation of a mechanism whose cranks turn at constant speeds:
+    :func:`evaluate_driven` without a motor."""
+    return evaluate_driven(y, p, ip, aux, work, mech, kin, slider, -1, 0.0)
+
+
+@njit(cache=True)
+def evaluate_driven(y, p, ip, aux, work, mech, kin, slider, motor, torque):
     """The record-time evaluation of a mechanism whose kinematics at (q, qd) are in ``kin``.
 
     Parameters
@@ -257,6 +264,11 @@ def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
     slider : ~workbench.models._record_types.Slider
         The slider's record is slider.offset + slider.sign x of that body's centroid (m), and
         its rates.
+    motor : int
+        The driven coordinate that a motor drives (-1: none): a free coordinate, the
+        generalised force ``torque`` (N m) on it, whose recorded torque is ``torque``.
+    torque : float
+        The motor's torque, N m.
 
     Returns
     -------
@@ -332,6 +344,8 @@ def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
         pe += eel
     nf = ip[IP.nf]
     qdd = work[W.qdd : W.qdd + nq]
+    if motor >= 0:
+        Q[motor] += torque
     if nf > 0 and not solve_free(M, h, Q, ip[IP.free : IP.free + nf], nf, qdd):
         return CODE_SINGULAR
     # driving torques (reactions): tau_d = M_d. qdd + h_d - Q_d
@@ -340,6 +354,8 @@ def evaluate_mechanism(y, p, ip, aux, work, mech, kin, slider):
         s = h[d] - Q[d]
         for k in range(nq):
             s += M[d, k] * qdd[k]
+        if d == motor:
+            s = torque  # the applied torque (its row, a free one, is solved)
         work[W.tau + d] = s
         p_drive += s * qd[d]
     b = slider.body

@@ -230,6 +230,13 @@ def declared_mechanism(scene: Scene) -> Mechanism:
     model = get_model(scene.model)
     params = scene.resolved_parameters
     linkage = model.linkage
+    for c in linkage.cranks:
+        if c.torque_driven:
+            raise SceneError(
+                f"{c.key}.drive",
+                "got 'torque'; the exudyn model drives its cranks at constant speeds: verify "
+                'the linkage with drive = "speed"',
+            )
     motion = model.ideal_motion(params, 0.0)
     parts = linkage.bodies()  # links, then sliders, by name
     names = list(parts)
