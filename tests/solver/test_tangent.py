@@ -54,21 +54,25 @@ def test_both_normalisations_give_one_tangent_map_through_impacts():
     assert np.abs(M_step - M_cont).max() < 1e-6 * np.abs(M_cont).max()
 
 
-@pytest.mark.chaotic
 def test_vectors_on_the_model_steps_cost_fewer_steps_than_continuous_normalisation():
-    """The chaos case (A+B, c = 0.1 mm, omega = 2 pi, c_f = 0.01) over 1 s after 20 s, rtol 1e-6:
-    continuously normalised, a direction's components other than its own rate move at the
-    Jacobian's rates minus that rate, up to twice its spectral radius, and the steps follow
-    (measured: 19 506 steps for four vectors, 9 702 for one, where the model takes 6 069);
-    normalised at the steps' ends the vectors' rates are the Jacobian's (16 876 and 9 581).
-    Chaotic: the window differs per processor, so the test asserts the ratios, with margin."""
-    pb = _problem(ROOT / "studies/chaos/chaos.toml")
-    t0 = 20.0
+    """The nine-bar's orbit in lasting contact at omega = 1.5 pi (Fig. 32's scene: c = 0.1 mm,
+    c_f = 0.01), one cycle after 30, rtol 1e-6: continuously normalised, a direction's
+    components other than its own rate move at the Jacobian's rates minus that rate, up to
+    twice its spectral radius, and the steps follow (measured: 70 706 steps for four vectors,
+    7 278 for one, where the model takes 3 082); normalised at the steps' ends the vectors'
+    rates are the Jacobian's (7 471 and 6 637). A periodic orbit without events, so that
+    another processor's rounding does not take the runs to other trajectories (over a chaotic
+    window each vector's own error block made the two normalisations' counts differ by less
+    than the windows' spread)."""
+    scene = load_scene(ROOT / "studies/bifurcation_speed/sweep.toml").replace(sweep={})
+    pb = _problem(scene.with_parameters(omega=1.5 * np.pi))
+    period = 2.0 * np.pi / (1.5 * np.pi)
+    t0 = 30 * period
     res = integrate(pb, np.array([t0]), rtol=1e-6, atol=1e-6)
     start = dataclasses.replace(pb, y0=res.Y[-1].copy(), aux0=res.AUX[-1].copy(), t0=t0)
     n, na = start.y0.size, start.aux0.size
     Q, _ = np.linalg.qr(np.random.default_rng(0).standard_normal((n, n)))
-    t1 = np.array([t0 + 1.0])
+    t1 = np.array([t0 + period])
     plain = integrate(start, t1, rtol=1e-6, atol=1e-6).stats["steps"]
     steps = {}
     for m in (1, 4):
@@ -78,6 +82,7 @@ def test_vectors_on_the_model_steps_cost_fewer_steps_than_continuous_normalisati
             tp = tangent_problem(start, V, reorthonormalise=10.0, normalisation=how)
             r = integrate(tp, t1, rtol=1e-6, atol=1e-6)
             assert r.status.name == "OK", r.message
+            assert r.stats["events"] == 0  # the lasting contact: a smooth orbit
             steps[m, how] = r.stats["steps"]
-    assert steps[4, "step"] < 0.95 * steps[4, "continuous"], (steps, plain)
-    assert steps[1, "step"] < 1.05 * steps[1, "continuous"], (steps, plain)
+    assert steps[4, "step"] < 0.2 * steps[4, "continuous"], (steps, plain)
+    assert steps[1, "step"] < 0.95 * steps[1, "continuous"], (steps, plain)
