@@ -61,7 +61,6 @@ from workbench.models._mechanism import (
     Mechanism,
     body_parameters,
     mechanism_parameters,
-    mechanism_problem,
     motor_states,
 )
 
@@ -149,23 +148,6 @@ class DeclaredMechanism(Mechanism):
         if self.motors(params):
             return None
         return super().forcing_period(params)
-
-    def problem(self, params, effects, initial, requested):
-        return mechanism_problem(
-            hooks=self.dynamics.__name__,
-            effects=effects,
-            initial=initial,
-            requested=requested,
-            joints=self.joints,
-            clearances=self.clearances(params),
-            omega=params["omega"],
-            p=self.pack(params, effects),
-            IP=self.dynamics.IP,
-            work=self.dynamics.W,
-            n_driven=len(self.cranks),
-            assembly=self.assembly,
-            motors=self.motors(params),
-        )
 
     def validate(self, params, effects):
         for j in self.joints:

@@ -107,6 +107,11 @@ class Mechanism(Model):
         """The float parameters in the layout ``dynamics.P``."""
         raise NotImplementedError
 
+    def motors(self, params) -> tuple[tuple[str, int, float, float], ...]:
+        """The motor-driven cranks (see :func:`mechanism_problem`'s ``motors``): none; every
+        crank turns at its constant speed."""
+        return ()
+
     def problem(self, params, effects, initial, requested):
         return mechanism_problem(
             hooks=self.dynamics.__name__,
@@ -121,6 +126,7 @@ class Mechanism(Model):
             work=self.dynamics.W,
             n_driven=len(self.cranks),
             assembly=self.assembly,
+            motors=self.motors(params),
         )
 
     def derive(self, problem, t, Y, AUX, requested):
