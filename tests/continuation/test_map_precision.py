@@ -5,6 +5,7 @@ runs on a reproducible random subset of the map's points, whose agreement the ma
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +23,8 @@ from workbench.continuation._indicators import (
     subset_key,
 )
 from workbench.run import integrate, prepare
+
+ROOT = Path(__file__).resolve().parents[2]
 
 DUFFING = {
     "model": {"name": "duffing"},
@@ -309,3 +312,38 @@ def test_a_map_along_an_axis_seeds_newton_from_the_previous_periodic_point(tmp_p
     assert carried.attrs["lle_full_points"] == 3
     with pytest.raises(ValueError, match="along='omega'"):
         chaos_map(scene, tmp_path / "x.nc", along="omega")
+
+
+def test_a_settled_mechanism_points_floquet_exponent_takes_one_integration(monkeypatch):
+    """Fast protocol, monodromy by copies: the nine-bar's period-1 orbit at omega = 1.5 pi, c =
+    80 um (studies/chaos_maps/omega_clearance.toml). The run has settled (multiplier ~0.41 per
+    cycle over 40 cycles), so Newton's step from its end is below SETTLED and the exponent comes
+    from one integration of the copies (the monodromy and its check at a 100x larger forward
+    step together). It equals the exponent of the orbit Newton finds from the same state at the
+    map's full precision (rtol 1e-9, Newton to 1e-8, central differences, the check a second
+    integration) within the fast check's error. From a state 1e-3 (scaled) off the orbit,
+    Newton runs first and finds the same exponent."""
+    from workbench.continuation import _strobe
+    from workbench.continuation._exponent import SETTLED, floquet_exponent
+
+    scene = workbench.load_scene(ROOT / "studies" / "chaos_maps" / "omega_clearance.toml")
+    point = scene.replace(sweep={}, run={"cycles": 10, "transient_cycles": 40})
+    point = point.with_parameters(omega=1.5 * math.pi, clearance=8e-5)
+    run = workbench.simulate(point)
+    y, aux = np.asarray(run.attrs["end_state"]), run.attrs["end_discrete_state"]
+    counter = StepCounter(monkeypatch)
+    fast = floquet_exponent(point, period=1, state=y, discrete_state=aux, fast=True)
+    assert counter.runs == 1 and fast.evaluations == 1 and fast.converged
+    full = floquet_exponent(point, period=1, state=y, discrete_state=aux)
+    assert full.evaluations >= 2 and full.converged  # Newton's iterations, then the check
+    assert 0 < fast.error < 0.01 * abs(fast.value)  # the forward pair's O(100 h) truncation
+    assert abs(fast.value - full.value) <= 2 * math.hypot(fast.error, full.error)
+    assert -0.7 < fast.value < -0.6  # ln 0.414 / (2 / 1.5 s)
+    s = _strobe.StrobeMap(point, None).scale()
+    off = floquet_exponent(
+        point, period=1, state=y + 10 * SETTLED * s, discrete_state=aux, fast=True
+    )
+    assert off.evaluations >= 2
+    assert abs(off.value - fast.value) <= 2 * math.hypot(off.error, fast.error)
+    with pytest.raises(ValueError, match=r"check=0\.5: must be a factor > 1"):
+        _strobe.StrobeMap(point, None, check=0.5)

@@ -53,7 +53,13 @@ import numpy as np
 
 from workbench.analysis import lle_from_equations, lyapunov_spectrum
 from workbench.analysis._convergence import TARGET, TRUST, ConvergenceWarning
-from workbench.continuation._newton import NewtonFailure, orbit_at
+from workbench.continuation._newton import (
+    NewtonFailure,
+    OrbitPoint,
+    newton_step,
+    orbit_at,
+    residual,
+)
 from workbench.continuation._strobe import StrobeMap
 from workbench.run import prepare
 from workbench.scene import Scene
@@ -86,6 +92,15 @@ CHECK_FACTOR = 100.0
 #: a largest multiplier that falls by more than this factor when the copies' step grows by
 #: CHECK_FACTOR was the differences' noise
 NOISE_DROP = 10.0
+#: the fast protocol's map tolerance (at most the scene's rtol): a map point's Floquet exponent
+#: needs the multipliers to a few per cent, not an orbit to 1e-8 of its size
+FAST_RTOL = 1e-8
+#: the fast protocol takes the state the run ended in as the orbit where Newton's step from it
+#: is at most this (scaled units: each state by its characteristic size): the run has settled
+#: onto the orbit to that distance, and the monodromy there is the orbit's to that order
+SETTLED = 1e-4
+#: the fast protocol's Newton tolerance (scaled residual) where the run has not settled
+FAST_ORBIT_TOLERANCE = 1e-6
 #: the convergence conditions of a trajectory estimator a map point does not run (its cost):
 #: they are left out of ``converged`` (every other condition must hold); per protocol
 #: (:data:`PROTOCOLS`), then per method
@@ -200,6 +215,7 @@ def floquet_exponent(
     discrete_state=None,
     start_cycles: int | None = None,
     seed=None,
+    fast: bool = False,
 ) -> PointExponent:
     """``ln |mu_max| / (k T)`` of the period-``k`` orbit Newton finds from ``state`` (state
     units; default the state after ``start_cycles`` forcing periods of the scene, default its
@@ -210,8 +226,20 @@ def floquet_exponent(
     :attr:`PointExponent.orbit`), where Newton starts first; its orbit is taken when Newton
     converges there to the orbit ``state`` lies on (within :data:`SEED_MATCH` of each state's
     characteristic size) within :data:`SEED_ITERATIONS` iterations, else Newton starts again
-    from ``state``."""
+    from ``state``.
+
+    ``fast`` (a map's own precision, with ``state`` where the point's run ended; copies only):
+    the map at :data:`FAST_RTOL` with the monodromy and its check from one integration
+    (forward differences at the copies' step and at :data:`CHECK_FACTOR` times it,
+    :class:`~workbench.continuation._strobe.StrobeMap`'s ``check``), evaluated first at
+    ``state``: where Newton's step from there is at most :data:`SETTLED` the run has settled
+    and that evaluation is the orbit's (one integration in all); else Newton (seed first) to
+    :data:`FAST_ORBIT_TOLERANCE`."""
     smap = StrobeMap(scene, None, periods=period)
+    fast = fast and state is not None and smap.monodromy == "copies"
+    if fast:
+        rtol = min(float(smap.scene.solver["rtol"]), FAST_RTOL)
+        smap = StrobeMap(scene, None, periods=period, rtol=rtol, check=CHECK_FACTOR)
     if state is None:
         y, aux = smap.initial(math.nan, start_cycles)
     else:
@@ -220,28 +248,26 @@ def floquet_exponent(
         if discrete_state is not None:
             aux = np.asarray(discrete_state, dtype=float)
     span = period * smap.prepared(math.nan).period
-    pt, evaluations = None, 0
-    if seed is not None and state is not None:
-        try:
-            pt = orbit_at(
-                smap, seed[0], seed[1], math.nan, tolerance=ORBIT_TOLERANCE,
-                max_iterations=SEED_ITERATIONS,
-            )  # fmt: skip
-        except (NewtonFailure, SolverError, FloatingPointError, ValueError):
-            pt = None  # evaluations of a failed Newton are not counted (it raised)
-        else:
-            evaluations = pt.evaluations
-            if np.max(np.abs(pt.y - y) / smap.scale()) > SEED_MATCH:
-                pt = None  # another orbit (or another phase of this one): not the run's
-    seeded = pt is not None
+    tolerance = FAST_ORBIT_TOLERANCE if fast else ORBIT_TOLERANCE
+    pt, evaluations, seeded = None, 0, False
+    if fast:
+        v = smap(y, aux, math.nan)
+        evaluations = 1
+        G = residual(v, y, aux, smap.scale())
+        if float(np.max(np.abs(newton_step(v, G)))) <= SETTLED:
+            pt = OrbitPoint(math.nan, y, aux, v, 0, float(np.max(np.abs(G))), evaluations=1)
     if pt is None:
-        pt = orbit_at(smap, y, aux, math.nan, tolerance=ORBIT_TOLERANCE)
-        evaluations += pt.evaluations
+        pt, seeded, used = _orbit(smap, y, aux, seed if state is not None else None, tolerance)
+        evaluations += used
     mu, lam = _largest(pt.value.M, span)
     found = {"orbit": (pt.y.copy(), pt.aux.copy()), "seeded": seeded, "evaluations": evaluations}
     if smap.monodromy == "copies":
-        coarse = StrobeMap(scene, None, periods=period, step=smap.step * CHECK_FACTOR)
-        mu_c, lam_c = _largest(coarse(pt.y, pt.aux, math.nan).M, span)
+        if fast:
+            M_c, check_step = pt.value.M_check, f"{smap.step * CHECK_FACTOR:g}, forward differences"
+        else:
+            coarse = StrobeMap(scene, None, periods=period, step=smap.step * CHECK_FACTOR)
+            M_c, check_step = coarse(pt.y, pt.aux, math.nan).M, f"{coarse.step:g}"
+        mu_c, lam_c = _largest(M_c, span)
         if mu_c < mu / NOISE_DROP:
             return PointExponent(
                 lam_c,
@@ -250,10 +276,10 @@ def floquet_exponent(
                 bound=True,
                 **found,
                 detail=f"largest multiplier {mu:.3g} at step {smap.step:g}, {mu_c:.3g} at "
-                f"{coarse.step:g}: below the differences' noise; the exponent is at most "
+                f"{check_step}: below the differences' noise; the exponent is at most "
                 f"{lam_c:.4g} 1/s",
             )
-        check = f"a {CHECK_FACTOR:g}x larger copies' step ({coarse.step:g})"
+        check = f"a {CHECK_FACTOR:g}x larger copies' step ({check_step})"
     else:
         tight = StrobeMap(scene, None, periods=period, rtol=smap.rtol / CHECK_FACTOR)
         lam_c = _largest(
@@ -272,6 +298,29 @@ def floquet_exponent(
         detail=f"floquet check: the exponent reads {lam:.4g} 1/s and {lam_c:.4g} at {check}: "
         f"it moved by {error / max(abs(lam), 1e-300):.0%} (allowed {TRUST:.0%})",
     )
+
+
+def _orbit(smap: StrobeMap, y, aux, seed, tolerance: float) -> tuple[OrbitPoint, bool, int]:
+    """Newton's orbit from ``seed`` (taken where it converges within SEED_ITERATIONS to the
+    orbit (y, aux) lies on, :func:`floquet_exponent`), else from (y, aux): the orbit, whether
+    the seed gave it, and the map evaluations of the Newton runs that converged."""
+    pt, evaluations = None, 0
+    if seed is not None:
+        try:
+            pt = orbit_at(
+                smap, seed[0], seed[1], math.nan, tolerance=tolerance,
+                max_iterations=SEED_ITERATIONS,
+            )  # fmt: skip
+        except (NewtonFailure, SolverError, FloatingPointError, ValueError):
+            pt = None  # evaluations of a failed Newton are not counted (it raised)
+        else:
+            evaluations = pt.evaluations
+            if np.max(np.abs(pt.y - y) / smap.scale()) > SEED_MATCH:
+                pt = None  # another orbit (or another phase of this one): not the run's
+    if pt is not None:
+        return pt, True, evaluations
+    pt = orbit_at(smap, y, aux, math.nan, tolerance=tolerance)
+    return pt, False, evaluations + pt.evaluations
 
 
 def point_exponent(
@@ -358,6 +407,7 @@ def point_exponent(
                     discrete_state=discrete_state,
                     start_cycles=start_cycles,
                     seed=seed,
+                    fast=fast,
                 )
             )
         except (NewtonFailure, SolverError, FloatingPointError, ValueError) as exc:

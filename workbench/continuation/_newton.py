@@ -21,7 +21,16 @@ from workbench.continuation._strobe import MapValue, StrobeMap
 from workbench.scene import SceneError
 from workbench.solver import SolverError
 
-__all__ = ["NewtonFailure", "OrbitPoint", "correct", "next_step", "orbit_at", "tangent"]
+__all__ = [
+    "NewtonFailure",
+    "OrbitPoint",
+    "correct",
+    "newton_step",
+    "next_step",
+    "orbit_at",
+    "residual",
+    "tangent",
+]
 
 
 class NewtonFailure(WorkbenchError, RuntimeError):
@@ -58,7 +67,9 @@ class OrbitPoint:
         return np.concatenate([self.y / s, self.aux[live], [self.p / pscale]])
 
 
-def _residual(v: MapValue, y, aux, s) -> np.ndarray:
+def residual(v: MapValue, y, aux, s) -> np.ndarray:
+    """The orbit condition ``P^k(y, aux) - (y, aux)`` in the scaled unknowns (the states
+    divided by their sizes ``s``, the live discrete states in their units)."""
     live = v.live
     return np.concatenate([(v.y1 - y) / s, v.aux1[live] - aux[live]])
 
@@ -86,13 +97,13 @@ def orbit_at(
     y, aux = np.array(y, float), np.array(aux, float)
     for it in range(max_iterations + 1):
         v = _evaluate(smap, y, aux, p)
-        G = _residual(v, y, aux, s)
+        G = residual(v, y, aux, s)
         r = float(np.max(np.abs(G)))
         if r < tolerance:
             return OrbitPoint(p, y, aux, v, it, r, evaluations=it + 1)
         if it == max_iterations:
             break
-        step = _solve(v.M - np.eye(v.M.shape[0]), -G)
+        step = newton_step(v, G)
         y = y + s * step[: y.size]
         aux[v.live] = aux[v.live] + step[y.size :]
     raise NewtonFailure(
@@ -100,6 +111,12 @@ def orbit_at(
         f"(scaled residual {r:.3g}, tolerance {tolerance:.3g}); start closer to the orbit (a "
         "longer transient, or the state of a continued sweep) or loosen the tolerance"
     )
+
+
+def newton_step(value: MapValue, G: np.ndarray) -> np.ndarray:
+    """Newton's step at fixed parameter from a map value with its Jacobian and its residual
+    ``G`` (:func:`residual`): the solution of ``(M - I) step = -G`` in the scaled unknowns."""
+    return _solve(value.M - np.eye(value.M.shape[0]), -G)
 
 
 def _solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -136,7 +153,7 @@ def correct(
     for it in range(max_iterations + 1):
         v = _evaluate(smap, y, aux, p)
         evaluations += 1
-        G = _residual(v, y, aux, s)
+        G = residual(v, y, aux, s)
         r = float(np.max(np.abs(G)))
         u = np.concatenate([y / s, aux[v.live], [p / pscale]])
         if u.size != tau.size:

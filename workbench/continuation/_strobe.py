@@ -84,7 +84,9 @@ class MapValue:
     ``y1``, ``aux1``: the state and discrete state after ``k`` periods; ``live``: indices of
     the live discrete states; ``M``: the Jacobian of the map in the scaled unknowns
     ``(y / s, aux[live] / sa)`` (None without the tangent system); ``events``: events located
-    over the ``k`` periods; ``stats``: solver statistics."""
+    over the ``k`` periods; ``stats``: solver statistics; ``M_check``: the same Jacobian at
+    the map's ``check`` times larger step (copies with a ``check``, see :class:`StrobeMap`;
+    else None)."""
 
     y1: np.ndarray
     aux1: np.ndarray
@@ -92,6 +94,7 @@ class MapValue:
     M: np.ndarray | None
     events: int
     stats: dict
+    M_check: np.ndarray | None = None
 
 
 def _active(aux: np.ndarray, problem) -> np.ndarray:
@@ -120,6 +123,12 @@ class StrobeMap:
         ``"tangent"``, ``"copies"`` or ``"auto"`` (see the module docstring).
     step : float
         Central-difference step of the copies (scaled units; discrete states: relative).
+    check : float, optional
+        Copies only: instead of central differences at ``step``, forward differences at
+        ``step`` and at ``check * step`` from the same copies (as many as the central ones), so
+        that one integration gives the monodromy (``MapValue.M``, error O(step)) and its check
+        at the larger step (``MapValue.M_check``): a true multiplier is the same in both, the
+        differences' noise (which goes as 1 / step) is ``check`` times smaller in the second.
 
     Attributes
     ----------
@@ -144,11 +153,18 @@ class StrobeMap:
         rtol: float | None = None,
         monodromy: str = "auto",
         step: float = COPIES_STEP,
+        check: float | None = None,
     ) -> None:
         scene = load_scene(scene)
         if not 0 < step < 1:
             raise ValueError(f"step={step!r}: must be a scaled step in (0, 1)")
+        if check is not None and not (check > 1 and check * step < 1):
+            raise ValueError(
+                f"check={check!r}: must be a factor > 1 that keeps check * step ({step:g}) "
+                "below 1 (scaled), or None for central differences"
+            )
         self.step = float(step)
+        self.check = None if check is None else float(check)
         self._samples, self._refine = SAMPLES, True  # the contact sequences' density
         self.scene: Scene = scene.replace(sweep={}) if scene.sweep else scene
         self.parameter = parameter
@@ -205,6 +221,7 @@ class StrobeMap:
             rtol=self.rtol,
             monodromy=self.monodromy,
             step=self.step,
+            check=self.check,
         )
 
     def with_rtol(self, rtol: float) -> StrobeMap:
@@ -216,6 +233,7 @@ class StrobeMap:
             rtol=rtol,
             monodromy=self.monodromy,
             step=self.step,
+            check=self.check,
         )
 
     def _like(self, *args, **kwargs) -> StrobeMap:
@@ -289,8 +307,9 @@ class StrobeMap:
             return MapValue(y1, aux1, live, None, int(res.stats["events"]), res.stats)
         s = state_scale(pb)
         m = n + active.size
+        W_check = None
         if self.monodromy == "copies":
-            y1, aux1, W, events, stats = self._copies(start, active, t_end)
+            y1, aux1, W, events, stats, W_check = self._copies(start, active, t_end)
         else:
             V = np.zeros((n + na, m))
             V[:n, :n] = np.diag(s)
@@ -314,27 +333,35 @@ class StrobeMap:
         rows = np.concatenate([W[:n], W[n + live]], axis=0)
         scale_rows = np.concatenate([s, np.ones(live.size)])
         M = rows[:, keep_cols] / scale_rows[:, None]
-        return MapValue(y1, aux1, live, M, events, stats)
+        M_check = None
+        if W_check is not None:
+            rows_c = np.concatenate([W_check[:n], W_check[n + live]], axis=0)
+            M_check = rows_c[:, keep_cols] / scale_rows[:, None]
+        return MapValue(y1, aux1, live, M, events, stats, M_check)
 
     def _copies(self, start, active: np.ndarray, t_end: float):
         """The map and its Jacobian columns (extended state per unknown: the states scaled, the
         active discrete states in their units) by central differences of copies integrated in
-        one step sequence."""
+        one step sequence; with :attr:`check`, forward differences at ``step`` and, as the last
+        returned item (else None), at ``check * step``, from copies started at both."""
         n, na = start.y0.size, start.aux0.size
         s = state_scale(start)
         h = self.step
+        # per unknown, two copies: +h and -h (central), or +h and +check h (forward pair)
+        signs = (1.0, -1.0) if self.check is None else (1.0, self.check)
         rows_y = [start.y0]
         rows_a = [start.aux0]
         steps = []
         for j in range(n):
-            d = np.zeros(n)
-            d[j] = h * s[j]
-            rows_y += [start.y0 + d, start.y0 - d]
-            rows_a += [start.aux0, start.aux0]
+            for sign in signs:
+                d = np.zeros(n)
+                d[j] = sign * h * s[j]
+                rows_y.append(start.y0 + d)
+                rows_a.append(start.aux0)
             steps.append(h)
         for k in active:
             ha = h * abs(start.aux0[k])
-            for sign in (1.0, -1.0):
+            for sign in signs:
                 a = start.aux0.copy()
                 a[k] += sign * ha
                 rows_y.append(start.y0)
@@ -346,10 +373,15 @@ class StrobeMap:
         Yc, Ac, _, _ = split_copies(res.Y[-1], res.AUX[-1], k_copies)
         X = np.concatenate([Yc, Ac], axis=1)
         W = np.empty((n + na, len(steps)))
+        W_check = None if self.check is None else np.empty_like(W)
         for c, step in enumerate(steps):
-            W[:, c] = (X[1 + 2 * c] - X[2 + 2 * c]) / (2.0 * step)
+            if W_check is None:
+                W[:, c] = (X[1 + 2 * c] - X[2 + 2 * c]) / (2.0 * step)
+            else:
+                W[:, c] = (X[1 + 2 * c] - X[0]) / step
+                W_check[:, c] = (X[2 + 2 * c] - X[0]) / (self.check * step)
         events = int(round(res.stats["events"] / k_copies))
-        return Yc[0].copy(), Ac[0].copy(), W, events, res.stats
+        return Yc[0].copy(), Ac[0].copy(), W, events, res.stats, W_check
 
     def parameter_derivative(
         self, y: np.ndarray, aux: np.ndarray, p: float, live: np.ndarray, pscale: float
@@ -409,7 +441,7 @@ class StrobeMap:
         if not jacobian:
             res = self._solve(start, float(t))
             return res.Y[-1].copy(), res.AUX[-1].copy(), None, active
-        y1, aux1, W, _, _ = self._copies(start, active, float(t))
+        y1, aux1, W, _, _, _ = self._copies(start, active, float(t))
         return y1, aux1, W, active
 
     def orbit_samples(self, y: np.ndarray, aux: np.ndarray, p: float) -> np.ndarray:
