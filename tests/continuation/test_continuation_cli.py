@@ -115,6 +115,45 @@ def test_orbit_curve_holds_both_parameters_along_the_curve(tmp_path, capsys):
     map_fig = tmp_path / "map.png"
     assert main([*args, "--overwrite", "--figure", str(map_fig), "--map", str(mapfile)]) == 0
     assert map_fig.stat().st_size > 10_000
+    # and drawn by the chaos map's own command over the map it computes (--curve, repeatable)
+    sweep = {"gamma": [0.25, 0.27], "omega": [1.15, 1.25]}
+    mapped = {"record": {"samples_per_period": 1}, "run": {"cycles": 100, "transient_cycles": 100}}
+    scene = _scene_file(tmp_path, dict(DUFFING, sweep=sweep, **mapped), name="map.toml")
+    drawn = tmp_path / "drawn.png"
+    cmd = ["chaos-map", scene, "-o", str(tmp_path / "cm.nc"), "--workers", "1", "-q"]
+    assert main([*cmd, "--figure", str(drawn), "--curve", str(out), "--curve", str(out)]) == 0
+    assert drawn.stat().st_size > 10_000
+
+
+def test_chaos_map_curve_errors_are_one_line_before_the_map_runs(tmp_path, capsys):
+    """``--curve`` needs ``--figure``, an existing file, and a curve in the map's two
+    parameters; each refused in one line before any point runs."""
+    import xarray as xr
+
+    from workbench.archive import save_run
+
+    sweep = {"gamma": [0.25, 0.27], "delta": [0.3, 0.25]}
+    mapped = {"record": {"samples_per_period": 1}, "run": {"cycles": 100, "transient_cycles": 100}}
+    scene = _scene_file(tmp_path, dict(DUFFING, sweep=sweep, **mapped))
+    other = xr.Dataset(
+        {"gamma": ("curve_point", [0.26, 0.27], {"units": "1"})},
+        attrs={"continuation_parameter": "gamma", "curve_parameter": "omega"},
+    )
+    curve = str(save_run(other, tmp_path / "curve.nc"))
+    out = tmp_path / "m.nc"
+    cases = [
+        (["--curve", curve], "--curve draws on the map's figure: give --figure PNG too"),
+        (["--figure", str(tmp_path / "m.png"), "--curve", "none.nc"], "--curve 'none.nc': no such"),
+        (
+            ["--figure", str(tmp_path / "m.png"), "--curve", curve],
+            "a curve in ['gamma', 'omega'], the map is over ['delta', 'gamma']",
+        ),
+    ]
+    for extra, message in cases:
+        assert main(["chaos-map", scene, "-o", str(out), "-q", *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+        assert not out.exists()
 
 
 @pytest.mark.parametrize(

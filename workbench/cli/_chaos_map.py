@@ -25,6 +25,7 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
     check_store_output(args.output)
     if args.figure:
         check_output_file(args.figure, "--figure", overwrite=True)
+    curves = _curves(args, scene)
     compile_kernel(scene, quiet=args.quiet)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", r"\d+ of \d+ campaign points failed")
@@ -64,12 +65,38 @@ def _cmd_chaos_map(args: argparse.Namespace) -> int:
 
         scales = {d: 1 / math.pi for d in ds.attrs["campaign_dims"].split() if d == "omega"}
         labels = {"omega": "crank speed omega / pi"} if scales else {}
-        save_figure(
-            chaos_map_figure(ds, scales=scales, labels=labels), args.figure, dpi=150, close=True
-        )
+        fig = chaos_map_figure(ds, scales=scales, labels=labels, curves=curves)
+        save_figure(fig, args.figure, dpi=150, close=True)
         print(f"figure: {args.figure}")
     print(f"-> {Path(args.output)}")
     return campaign_exit_code(ds["status"].values)
+
+
+def _curves(args: argparse.Namespace, scene) -> list:
+    """The ``--curve`` archives (curves of bifurcations in two parameters), checked before the
+    map runs: each readable and in the map's two swept parameters, and ``--figure`` given."""
+    from workbench.archive import open_run
+    from workbench.cli._exit_codes import UsageError
+
+    if not args.curve:
+        return []
+    if not args.figure:
+        raise UsageError("--curve draws on the map's figure: give --figure PNG too")
+    dims = set(scene.sweep) - {"continuation"}
+    curves = []
+    for path in args.curve:
+        if not Path(path).is_file():
+            raise UsageError(f"--curve {path!r}: no such file; give a netCDF curve archive")
+        c = open_run(path)
+        pair = {c.attrs.get("continuation_parameter"), c.attrs.get("curve_parameter")}
+        if pair != dims:
+            raise UsageError(
+                f"--curve {path!r}: a curve in {sorted(str(p) for p in pair)!r}, the map is "
+                f"over {sorted(dims)!r}; give a curve of workbench.continuation.continue_curve "
+                "in the map's two parameters"
+            )
+        curves.append(c)
+    return curves
 
 
 def _fraction(text: str) -> float:
@@ -116,6 +143,14 @@ def register_cli(sub) -> None:
         metavar="NAME",
         help="carry state along this swept parameter (upwards, as a continued sweep): each "
         "point's run starts where the previous one ended and Newton from its periodic orbit",
+    )
+    p.add_argument(
+        "--curve",
+        action="append",
+        metavar="NC",
+        help="draw this curve of bifurcations in the map's two parameters on the figure "
+        "(netCDF of workbench.continuation.continue_curve or 'workbench orbit --curve'; "
+        "repeat for more)",
     )
     add_quiet(p)
     p.set_defaults(func=_cmd_chaos_map)
