@@ -429,8 +429,8 @@ def test_an_exponents_unmet_conditions():
     """Which conditions of an estimator's ``failed`` text count against a map's exponent: all
     but those the map leaves out on purpose (the run at rtol / 100); a bound and
     a failed run are never converged; an unknown condition is 'other', not ignored."""
+    from workbench.analysis._exponent import NOT_RUN, UNMET, _unmet
     from workbench.continuation import PointExponent
-    from workbench.continuation._exponent import NOT_RUN, UNMET, _unmet
 
     text = "variants: spread 6.1 %\ntolerance check: not run (check=False)"
     assert _unmet(text, NOT_RUN["copies"]) == ("variants",)

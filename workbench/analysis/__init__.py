@@ -1,9 +1,9 @@
 """Analysis of runs: phase portraits, Poincaré sections, delay and embedding selection, largest
 Lyapunov exponents (Wolf et al. 1985; Rosenstein et al. 1993 via nolds; from the equations,
 Benettin et al. 1980: two trajectories, and the spectrum from the variational equations with
-saltation at events), the 0-1 test for chaos and bifurcation diagrams; a series with nothing to
-analyse (:func:`no_dynamics`) and one that cannot be told from linear noise
-(:func:`surrogate_test`) are said so.
+saltation at events; the largest one by protocol, :func:`largest_exponent`), the 0-1 test
+for chaos and bifurcation diagrams; a series with nothing to analyse (:func:`no_dynamics`)
+and one that cannot be told from linear noise (:func:`surrogate_test`) are said so.
 
 Every estimator accepts numpy arrays and xarray DataArrays (a ``time`` coordinate gives dt) and
 returns an ``xarray.Dataset`` with units: the chosen value and the evidence behind it. The
@@ -25,6 +25,7 @@ from workbench.analysis._broadcast import over_parameters
 from workbench.analysis._convergence import ConvergenceWarning
 from workbench.analysis._degenerate import no_dynamics
 from workbench.analysis._embedding import embed
+from workbench.analysis._exponent import LargestExponent, largest_exponent
 from workbench.analysis._lyapunov import lyapunov_spectrum
 from workbench.analysis._sections import crossing_section, phase_portrait, poincare_section
 from workbench.analysis._stability import floquet, floquet_sweep, jacobian_spectrum
@@ -41,6 +42,7 @@ zero_one_test = over_parameters(_zero_one.zero_one_test)
 
 __all__ = [
     "ConvergenceWarning",
+    "LargestExponent",
     "bifurcation_diagram",
     "crossing_section",
     "delay_acf",
@@ -51,6 +53,7 @@ __all__ = [
     "floquet",
     "floquet_sweep",
     "jacobian_spectrum",
+    "largest_exponent",
     "lle_from_equations",
     "lyapunov_spectrum",
     "no_dynamics",

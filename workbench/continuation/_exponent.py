@@ -28,31 +28,36 @@ The Floquet exponent is ``converged`` where it is not a bound and its check move
 :data:`~workbench.analysis._convergence.TRUST` (20 %) of its value.
 
 Elsewhere (no period up to 16: chaotic, quasi-periodic or a long period) the exponent is the
-variational one for a model with an analytic Jacobian
-(:func:`workbench.analysis.lyapunov_spectrum`) or the two-trajectory one (the mechanisms,
-:func:`workbench.analysis.lle_from_equations`) with the variational exponent carried by the
-same trajectories as its check, with its batch-means standard error: the step control holds
-the copies' differences only to rtol of the states' size, not of the separation; the tangent
-vector in the error norm holds them to rtol of themselves, at the price of more steps
-(docs/continuation.md, "Chaos maps", gives what both read on the chaotic nine-bar).
-Their runs use DOP853 where the scene's method is implicit or ``auto``: those solve with the
-model's Jacobian, not the derived system's. A point's budget leaves out one check of each
-estimator (:data:`NOT_RUN`: the run at rtol / 100; the fast protocol of a map,
-:data:`PROTOCOLS`, also the separation and growth variants, :data:`FAST_NOT_RUN`); the
-estimate is ``converged`` where every condition its estimator did run holds (error target,
-variants, the variational exponent, the sum check), and ``unmet`` names those that did not.
+trajectory method's, by the analysis layer's pipeline
+(:func:`workbench.analysis.largest_exponent`: its method choice, its protocols and what
+each leaves out, its result type): the variational exponent for a model with an analytic
+Jacobian, the two-trajectory one with the variational exponent on the same trajectories as
+its check for the mechanisms (docs/continuation.md, "Chaos maps", gives what both read on
+the chaotic nine-bar).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from workbench.analysis import lle_from_equations, lyapunov_spectrum
-from workbench.analysis._convergence import TARGET, TRUST, ConvergenceWarning
+from workbench.analysis import _exponent as pipeline
+from workbench.analysis._convergence import TRUST
+from workbench.analysis._exponent import (
+    FAST_NOT_RUN,
+    MAP_SIGN,
+    MAP_TARGET,
+    NOT_RUN,
+    PROTOCOLS,
+    UNMET,
+    exponent_method,
+    measure_exponent,
+    protocol_knobs,
+    warn_unconverged,
+)
+from workbench.analysis._exponent import LargestExponent as PointExponent
 from workbench.continuation._newton import (
     NewtonFailure,
     OrbitPoint,
@@ -61,11 +66,22 @@ from workbench.continuation._newton import (
     residual,
 )
 from workbench.continuation._strobe import StrobeMap
-from workbench.run import prepare
 from workbench.scene import Scene
-from workbench.solver import SolverError, jacobian_for
+from workbench.solver import SolverError
 
-__all__ = ["MAP_SIGN", "MAP_TARGET", "PointExponent", "exponent_method", "point_exponent"]
+# the analysis layer's names a chaos map's indicators and older code import from here
+__all__ = [
+    "FAST_NOT_RUN",
+    "MAP_SIGN",
+    "MAP_TARGET",
+    "METHODS",
+    "NOT_RUN",
+    "PROTOCOLS",
+    "UNMET",
+    "PointExponent",
+    "exponent_method",
+    "point_exponent",
+]
 
 #: how a point's exponent was measured (the flag values of ``lle_method``)
 METHODS = {
@@ -73,11 +89,7 @@ METHODS = {
     "method from the settled state (workbench.continuation.periodic_orbit); error: its change "
     "with a 100x larger copies' step (tangent system: at a 100x tighter tolerance); an upper "
     "bound where the multipliers are below the differences' noise",
-    "variational": "variational equations with saltation, QR (workbench.analysis."
-    "lyapunov_spectrum); error: batch means",
-    "copies": "linearised two-trajectory method, copies in one step sequence with the "
-    "variational exponent on the same trajectories as its check (workbench.analysis."
-    "lle_from_equations); error: batch means",
+    **pipeline.METHODS,
 }
 #: Newton's tolerance for the orbit (scaled residual)
 ORBIT_TOLERANCE = 1e-8
@@ -101,105 +113,6 @@ FAST_RTOL = 1e-8
 SETTLED = 1e-4
 #: the fast protocol's Newton tolerance (scaled residual) where the run has not settled
 FAST_ORBIT_TOLERANCE = 1e-6
-#: the convergence conditions of a trajectory estimator a map point does not run (its cost):
-#: they are left out of ``converged`` (every other condition must hold); per protocol
-#: (:data:`PROTOCOLS`), then per method
-NOT_RUN = {"variational": ("tolerance check",), "copies": ("tolerance check",)}
-FAST_NOT_RUN = {"variational": ("tolerance check",), "copies": ("tolerance check", "variants")}
-#: the protocols of a point's exponent: ``full`` (four independent starts after the scene's
-#: transient, the separation and growth variants, the 3 % error target; Newton from the state
-#: after the transient and the recorded cycles, integrated again) and ``fast`` (a map's own
-#: precision: one start from where the point's run ended, the estimate's copy alone, the error
-#: target MAP_TARGET or the sign decided beyond MAP_SIGN standard errors, whichever first;
-#: Newton from where the run ended)
-PROTOCOLS = ("full", "fast")
-#: the fast protocol's default relative error target
-MAP_TARGET = 0.1
-#: the fast protocol's default sign rule: the window stops growing where |value| exceeds this
-#: many standard errors
-MAP_SIGN = 3.0
-#: why an exponent is not converged, in the order of the bits of ``PointExponent.unmet_code``
-#: (the trajectory estimators' condition names, Floquet's check, the bound, a failed run, any
-#: condition not named here, and the copies' variational check, added last so that the older
-#: bits keep their meaning)
-UNMET = (
-    "error target",
-    "variants",
-    "tolerance check",
-    "sum check",
-    "floquet check",
-    "upper bound",
-    "failed",
-    "other",
-    "variational",
-)
-
-
-@dataclass(frozen=True)
-class PointExponent:
-    """The largest exponent of one point: ``value`` and ``error`` (s-1), ``method`` (a key of
-    :data:`METHODS`), ``failed`` (no estimate: the runs failed; value NaN), ``bound`` (the
-    value is only an upper bound: the multipliers are below the noise of the differences;
-    error NaN), ``detail`` (why Floquet's value was not taken, what failed, or the
-    trajectory method's unmet convergence conditions), ``unmet`` (the names, from
-    :data:`UNMET`, of the conditions that did not hold; empty where the estimate converged),
-    ``rule`` (a trajectory estimate's stopping rule that held: ``"error target"`` or
-    ``"sign"``; empty for Floquet's and where neither held)."""
-
-    value: float
-    error: float
-    method: str
-    failed: bool = False
-    detail: str = ""
-    bound: bool = False
-    unmet: tuple[str, ...] = ()
-    rule: str = ""
-    #: Floquet's: the orbit's state and discrete state at the strobe (to seed a neighbour's
-    #: Newton), whether Newton started from a given seed, and its map evaluations
-    orbit: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
-    seeded: bool = False
-    evaluations: int = 0
-
-    def __post_init__(self):
-        unmet = tuple(u for u in self.unmet if u != "failed")
-        if self.failed:
-            unmet += ("failed",)
-        if self.bound and "upper bound" not in unmet:
-            unmet += ("upper bound",)
-        if any(u not in UNMET for u in unmet):
-            raise ValueError(f"unmet={self.unmet!r}: each must be one of {UNMET!r}")
-        object.__setattr__(self, "unmet", unmet)
-
-    @property
-    def converged(self) -> bool:
-        """Every convergence condition that was run holds (not a bound, not failed)."""
-        return not self.unmet
-
-    @property
-    def converged_code(self) -> int:
-        """The flag ``lle_converged``: 0 not converged, 1 converged (the error target met, or
-        Floquet's check), 2 converged on the sign rule (the sign decided, the error target not
-        met; every other condition holds)."""
-        if not self.converged:
-            return 0
-        return 2 if self.rule == "sign" else 1
-
-    @property
-    def unmet_code(self) -> int:
-        """``unmet`` as bits: bit i set where ``UNMET[i]`` did not hold (0: converged)."""
-        return sum(1 << UNMET.index(u) for u in self.unmet)
-
-
-def exponent_method(scene: Scene) -> str:
-    """The trajectory method for a scene: ``"variational"`` for a model with an analytic
-    Jacobian, else ``"copies"``."""
-    hooks = prepare(scene.replace(sweep={}) if scene.sweep else scene, variables=()).problem.hooks
-    return "variational" if jacobian_for(hooks).HAS_ANALYTIC else "copies"
-
-
-def _explicit(scene: Scene) -> str | None:
-    method = scene.solver["method"]
-    return None if method in ("dop853", "dopri5") else "dop853"
 
 
 def _largest(M: np.ndarray, span: float) -> tuple[float, float]:
@@ -382,24 +295,18 @@ def point_exponent(
         A neighbouring point's periodic orbit at the strobe (:attr:`PointExponent.orbit`),
         where Newton starts first (:func:`floquet_exponent`; from ``state`` when it fails).
     """
-    if protocol not in PROTOCOLS:
-        raise ValueError(f"protocol={protocol!r}: must be one of {PROTOCOLS!r}")
     fast = protocol == "fast"
     if fast and (state is None or start_time is None):
         raise ValueError(
             "protocol='fast' starts where the point's run ended: pass state and start_time "
             "(the run's end_state and end_time)"
         )
-    if not fast and sign is not None:
-        raise ValueError(f"sign={sign!r}: the full protocol has no sign rule; use protocol='fast'")
-    if target is None:
-        target = MAP_TARGET if fast else TARGET
-    if fast and sign is None:
-        sign = MAP_SIGN
+    start = None if start_time is None else (start_time, state, discrete_state)
+    protocol_knobs(protocol, target=target, sign=sign, start=start)
     notes = ""
     if period >= 1:
         try:
-            return _warn_unconverged(
+            return warn_unconverged(
                 floquet_exponent(
                     scene,
                     period=period,
@@ -412,69 +319,7 @@ def point_exponent(
             )
         except (NewtonFailure, SolverError, FloatingPointError, ValueError) as exc:
             notes = f"no period-{period} orbit by Newton ({str(exc)[:160]}); "
-    method = exponent_method(scene)
-    try:
-        with warnings.catch_warnings():
-            # the estimators warn on any condition they did not check, also on those a map
-            # skips on purpose (NOT_RUN); the point warns below only where one that ran failed
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            start = (start_time, state, discrete_state) if fast else None
-            value, error, unmet, rule = _trajectory_exponent(
-                scene, method, cycles, target=target, sign=sign, start=start
-            )
-    except (SolverError, FloatingPointError, ValueError) as exc:
-        return PointExponent(math.nan, math.nan, method, True, notes + str(exc)[:200])
-    skipped = (FAST_NOT_RUN if fast else NOT_RUN)[method]
-    point = PointExponent(
-        value, error, method, False, notes + unmet, unmet=_unmet(unmet, skipped), rule=rule
+    point = measure_exponent(
+        scene, cycles=cycles, protocol=protocol, target=target, sign=sign, start=start
     )
-    return _warn_unconverged(point)
-
-
-def _warn_unconverged(point: PointExponent) -> PointExponent:
-    """``point``, with a :class:`~workbench.analysis.ConvergenceWarning` naming its unmet
-    conditions where it did not converge."""
-    if not point.converged:
-        warnings.warn(
-            f"the {point.method} exponent {point.value:.4g} +- {point.error:.2g} 1/s has not "
-            f"converged: {', '.join(point.unmet)} ({point.detail[:200]})",
-            ConvergenceWarning,
-            stacklevel=3,
-        )
-    return point
-
-
-def _trajectory_exponent(
-    scene: Scene, method: str, cycles: int, *, target: float, sign=None, start=None
-) -> tuple[float, float, str, str]:
-    """The exponent (s-1), its batch-means error (s-1), the estimator's ``failed`` text and
-    the stopping rule that held ("" where none did), by ``method`` ("variational" or
-    "copies") over ``cycles`` forcing periods after the scene's transient, without the checks
-    of :data:`NOT_RUN`; with ``start`` (t, y, aux), the fast protocol: one start from there,
-    the estimate's copy alone (:data:`FAST_NOT_RUN`)."""
-    if method == "variational":
-        spec = lyapunov_spectrum(
-            scene, exponents=1, cycles=cycles, check=False, method=_explicit(scene),
-            target=target, sign=sign, start=start,
-        )  # fmt: skip
-        rule = _rule(spec.attrs["stopped_by"])
-        return float(spec.exponent[0]), float(spec.stderr[0]), spec.attrs["failed"], rule
-    fast = {} if start is None else {"starts": 1, "variants": False, "start": start}
-    r = lle_from_equations(
-        scene, cycles=cycles, tighten=False, check=False, method=_explicit(scene),
-        target=target, sign=sign, **fast,
-    )  # fmt: skip
-    return float(r.lle), float(r.stderr), r.attrs["failed"], _rule(r.attrs["stopped_by"])
-
-
-def _rule(stopped_by: str) -> str:
-    """An estimator's ``stopped_by`` as a point's ``rule`` ("" for the budget)."""
-    return "" if stopped_by == "budget" else stopped_by
-
-
-def _unmet(failed: str, skipped: tuple[str, ...]) -> tuple[str, ...]:
-    """The names of the conditions in an estimator's ``failed`` text (one ``name: what it
-    measured`` line each, :func:`workbench.analysis._convergence.judge`) other than the
-    ``skipped`` ones (not run on purpose); a name :data:`UNMET` does not know is ``other``."""
-    names = [line.split(":", 1)[0].strip() for line in failed.splitlines() if line.strip()]
-    return tuple(dict.fromkeys(n if n in UNMET else "other" for n in names if n not in skipped))
+    return warn_unconverged(dataclasses.replace(point, detail=notes + point.detail))
