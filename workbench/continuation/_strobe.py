@@ -330,14 +330,13 @@ class StrobeMap:
         )
         keep_cols = np.concatenate([np.arange(n), n + np.flatnonzero(~held)]).astype(int)
         live = active[~held]
-        rows = np.concatenate([W[:n], W[n + live]], axis=0)
         scale_rows = np.concatenate([s, np.ones(live.size)])
-        M = rows[:, keep_cols] / scale_rows[:, None]
-        M_check = None
-        if W_check is not None:
-            rows_c = np.concatenate([W_check[:n], W_check[n + live]], axis=0)
-            M_check = rows_c[:, keep_cols] / scale_rows[:, None]
-        return MapValue(y1, aux1, live, M, events, stats, M_check)
+
+        def reduced(W: np.ndarray) -> np.ndarray:  # the live unknowns' rows and columns, scaled
+            return np.concatenate([W[:n], W[n + live]], axis=0)[:, keep_cols] / scale_rows[:, None]
+
+        M_check = None if W_check is None else reduced(W_check)
+        return MapValue(y1, aux1, live, reduced(W), events, stats, M_check)
 
     def _copies(self, start, active: np.ndarray, t_end: float):
         """The map and its Jacobian columns (extended state per unknown: the states scaled, the
