@@ -140,7 +140,9 @@ def _rk_step(method, t, h, m, st, w):
 @njit(cache=True, nogil=True)
 def _dense_prepare(method, t, h, m, st, w, im):
     """Coefficients of the continuous extension over the last step (t, t + h). Returns the
-    hook code. DOP853 needs 3 extra stages, ARK548 one extra derivative (at t + h/3, see
+    hook code: a model failure code, else EVENT_INSIDE_STEP where an extra stage lay beyond an
+    event surface (the continuous extension then holds the other side's law), else 0. DOP853
+    needs 3 extra stages, ARK548 one extra derivative (at t + h/3, see
     :func:`workbench.solver._numerics.ark_quartic`), Radau IIA none (its collocation
     polynomial)."""
     p, ip, work = m.p, m.ip, m.work  # unpacked once: no reference counting per call
@@ -153,25 +155,30 @@ def _dense_prepare(method, t, h, m, st, w, im):
     F = w.F
     ytmp = w.ytmp
     y_new = w.y_new
+    inside = 0
     if method == DOP853:
         for r in range(3):
             s = 13 + r
             stage_point(K, DOP853_A_EXTRA[r], s, h, y, ytmp)
             st.stats[ST_RHS] += 1
             code = rhs(t + DOP853_C_EXTRA[r] * h, ytmp, p, ip, st.aux, work, K[s])
-            if code != 0 and code != EVENT_INSIDE_STEP:
+            if code == EVENT_INSIDE_STEP:
+                inside = EVENT_INSIDE_STEP
+            elif code != 0:
                 return code
         dop853_dense(K, h, y, y_new, F)
     elif method == ARK548:
         ark_cubic(K, h, y, y_new, F, ytmp)
         st.stats[ST_RHS] += 1
         code = rhs(t + h / 3.0, ytmp, p, ip, st.aux, work, K[9])
-        if code != 0 and code != EVENT_INSIDE_STEP:
+        if code == EVENT_INSIDE_STEP:
+            inside = EVENT_INSIDE_STEP
+        elif code != 0:
             return code
         ark_quartic(K, h, F, m.stiff_idx)
     else:
         dopri5_dense(K, F)
-    return 0
+    return inside
 
 
 @njit(cache=True, nogil=True)

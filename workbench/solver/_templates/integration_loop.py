@@ -372,6 +372,7 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
         # record lies inside the step (the records before an event's root lie before t_new)
         dense = i_rec < nrec and t_rec[i_rec] < t_new
         monitor = False
+        ends_cross = False  # an event function changes sign between the step's ends
         if ne > 0:
             event_values(t_new, y_new, p, ip, aux, work, g_new)
             # the rates at the end (the derivative there: FSAL stage, or Radau's f_new), and
@@ -386,16 +387,21 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
                 x_ext[k] = -1.0
                 if crossed(ev_dir[k], g_old[k], g_new[k]):
                     dense = True
+                    ends_cross = True
                 else:
                     x_ext[k] = hermite_extremum(
                         ev_dir[k], g_old[k], g_new[k], dg_old[k], dg_new[k], h
                     )
                     if x_ext[k] > 0.0:
                         monitor = True
+        polluted = False
         if dense or monitor:
             rhs_dense = stats[ST_RHS]
             code = _dense_prepare(current, t, h, m, st, w, im)
-            if code != 0:
+            # an extra stage of the continuous extension beyond an event surface that neither
+            # end of the step is beyond (below: the step is retried shorter)
+            polluted = code == EVENT_INSIDE_STEP and not ends_cross and not f_inside
+            if code != 0 and code != EVENT_INSIDE_STEP:
                 stats[ST_MODEL_CODE] = code
                 status = MODEL_FAILURE
                 break
@@ -423,13 +429,24 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
                     fired = k
                     t_stop = t_k
                     hidden = not ends
-        if hidden and t_stop - t > 2.0 * min_step(t):
+        retry = 0.0
+        if polluted and 0.5 * h > 2.0 * min_step(t):
+            # an extra stage of the continuous extension lay beyond an event surface that the
+            # step's own stages and both its ends are short of: an excursion beyond it hides
+            # inside the step, and the extension, which holds the other side's law at that
+            # stage, follows neither side (its monitored g is not the motion's). The step is
+            # retried at half its size until no stage of it or of its extension lies beyond,
+            # or an end does and the crossing is located.
+            retry = 0.5 * h
+        elif hidden and t_stop - t > 2.0 * min_step(t):
             # the earliest event is a crossing that the step's ends hide: the step's stages
             # straddled a whole excursion beyond the surface, which its dense output does not
             # follow (it passed the error control without resolving it). The step is retried
             # to end at the located root, with every stage before the excursion; its end or a
             # later step then shows the crossing. (A root within the smallest step of the
             # start fires at once, as a crossing of the ends would.)
+            retry = t_stop - t
+        if retry > 0.0:
             stats[ST_STEPS] -= 1
             stats[ST_REJECTED] += 1
             stats[ST_EVENT_RETRIES] += 1
@@ -441,7 +458,7 @@ def advance(t_end, t_pause, step_pause, s, m, st, im):
                     im.stats[IS_REJECTED] += 1
                     im.rc[RC_H_OLD] = 0.0
                     im.rc[RC_H_ACC] = 0.0
-            h_abs = t_stop - t
+            h_abs = retry
             continue
         while i_rec < nrec and t_rec[i_rec] <= t_stop:
             if t_rec[i_rec] == t_new and fired < 0:

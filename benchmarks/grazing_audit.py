@@ -1,0 +1,189 @@
+"""Grazing labels on oscillators the tests do not contain, drawn at random: where each grazing is
+located against its closed form, and whether any label contradicts its multipliers.
+
+Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
+
+- ``stop``: the stop oscillator (``stop_oscillator``) with mass 0.5-3 kg, stiffness 0.5-4 N/m,
+  damping ratio 0.03-0.2, stop stiffness 10-1000 times the spring's, force 0.1-1 N and a gap
+  between the static deflection and the resonance peak; omega continued up through the lower
+  grazing and down through the upper one (the closed form: the linear amplitude
+  F / sqrt((k - m w^2)^2 + (c w)^2) equals the gap, ``grazing_amplitude``);
+- ``stop-force-gap``: the same draws at a random omega, continued in the force (up) and in the
+  gap (down) through the grazing (closed forms: F g / A and A, A the linear amplitude);
+- ``impact``: the impact oscillator (``impact_oscillator``, m = k = F = 1) with damping ratio
+  0.05-2, restitution 0.3-0.95 and the gap set so that the grazing lies at omega 1.3-3 rad/s;
+  omega continued down through it.
+
+Per branch: the located grazing's relative error, the other labels with their critical
+multipliers, the labels that contradict them (a fold or branch point with no multiplier within
+``MULTIPLIER_TOLERANCE`` of +1, a period doubling with none of -1), the transition and its
+note, errors and the CPU time. A grazing is right where it lies within ``RELATIVE`` of the
+closed form. Prints one line per branch and a summary; records all of it.
+
+Run: ``python benchmarks/grazing_audit.py --seed 7 --cases 10 --systems stop`` (records in
+``benchmarks/records/grazing_audit/``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+from _results import record, recording  # benchmarks/_results.py: a JSON record per run
+from scipy.optimize import brentq
+
+from workbench.continuation import branch_bifurcations, continue_orbit
+from workbench.continuation._branch import MULTIPLIER_TOLERANCE
+from workbench.models.stop_oscillator import grazing_amplitude
+
+#: a grazing within this relative distance of its closed form is right (issue 38, item 8)
+RELATIVE = 1e-6
+SYSTEMS = ("stop", "stop-force-gap", "impact")
+
+
+def _roots(f, lo: float, hi: float, n: int = 4000) -> list[float]:
+    grid = np.linspace(lo, hi, n)
+    v = [f(w) for w in grid]
+    return [
+        brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15)
+        for i in range(n - 1)
+        if v[i] * v[i + 1] < 0
+    ]
+
+
+def _contradictions(r, parameter: str) -> list:
+    names = r.label.attrs["flag_meanings"].split()
+    mu = r.multiplier_real.values + 1j * r.multiplier_imag.values
+    bad = []
+    for i in np.flatnonzero(r.label.values >= 3):
+        kind = names[int(r.label.values[i])]
+        m = mu[i][np.isfinite(mu[i])]
+        target = {"fold": 1.0, "branch_point": 1.0, "period_doubling": -1.0}.get(kind)
+        if target is not None and m.size and np.min(np.abs(m - target)) > MULTIPLIER_TOLERANCE:
+            bad.append([kind, float(r[parameter][i]), [str(x) for x in m]])
+    return bad
+
+
+def _branch(system: str, case: int, params: dict, model: str, parameter: str, start, stop, exact):
+    scene = {
+        "model": {"name": model},
+        "parameters": {**params, parameter: start},
+        "run": {"transient_cycles": 300},
+    }
+    row = {"system": system, "case": case, "parameter": parameter, "start": start, "stop": stop}
+    row.update(exact=exact, parameters=params)
+    t0 = time.process_time()
+    try:
+        r = continue_orbit(scene, parameter, stop=stop)
+    except Exception as exc:  # a traceback is a finding: recorded, not raised
+        row["error"] = f"{type(exc).__name__}: {exc}"
+        row["cpu"] = time.process_time() - t0
+        return row
+    found = branch_bifurcations(r, parameter)
+    grazings = [b for b in found if b["type"] == "grazing" and b["resolved"]]
+    first = min(grazings, key=lambda b: abs(b["value"] - start)) if grazings else None
+    row["relative_error"] = abs(first["value"] - exact) / exact if first else None
+    row["transition"] = first.get("transition") if first else None
+    row["labels"] = [
+        [b["type"], b["value"], bool(b["resolved"]), str(b["critical"])] for b in found
+    ]
+    row["contradictions"] = _contradictions(r, parameter)
+    row["notes"] = r.attrs.get("bifurcation_notes", "")
+    row["ended"] = r.attrs.get("branch_ended", "")
+    row["points"] = int(r.sizes["point"])
+    row["cpu"] = time.process_time() - t0
+    return row
+
+
+def _stop_draw(rng) -> dict:
+    m, k = float(rng.uniform(0.5, 3)), float(rng.uniform(0.5, 4))
+    zeta = float(rng.uniform(0.03, 0.2))
+    c, ks, F = 2 * zeta * math.sqrt(k * m), k * float(10 ** rng.uniform(1, 3)), rng.uniform(0.1, 1)
+    return {"mass": m, "damping": c, "stiffness": k, "stop_stiffness": ks, "force": float(F)}
+
+
+def _amplitude(p: dict, w: float) -> float:
+    return grazing_amplitude({**p, "gap": 1.0, "omega": w})
+
+
+def stop_rows(rng, case: int):
+    p = _stop_draw(rng)
+    w0 = math.sqrt(p["stiffness"] / p["mass"])
+    peak = max(_amplitude(p, w) for w in np.linspace(0.3 * w0, 2 * w0, 400))
+    static = p["force"] / p["stiffness"] * 1.05
+    p["gap"] = float(static + rng.uniform(0.2, 0.8) * (peak - static))
+    g = _roots(lambda w: _amplitude(p, w) - p["gap"], 0.2 * w0, 3 * w0, 2000)
+    yield _branch("stop", case, p, "stop_oscillator", "omega", g[0] * 0.9, g[0] * 1.05, g[0])
+    yield _branch("stop", case, p, "stop_oscillator", "omega", g[-1] * 1.1, g[-1] * 0.97, g[-1])
+
+
+def stop_force_gap_rows(rng, case: int):
+    p = _stop_draw(rng)
+    p["omega"] = math.sqrt(p["stiffness"] / p["mass"]) * float(rng.uniform(0.4, 1.6))
+    a = _amplitude(p, p["omega"])
+    fg = p["force"] / a  # the force at which the amplitude is the gap 1 m
+    yield _branch(
+        "stop-force-gap", case, {**p, "gap": 1.0}, "stop_oscillator", "force", 0.8 * fg,
+        1.1 * fg, fg,
+    )  # fmt: skip
+    yield _branch("stop-force-gap", case, p, "stop_oscillator", "gap", 1.3 * a, 0.9 * a, a)
+
+
+def impact_rows(rng, case: int):
+    zeta = float(10 ** rng.uniform(-1.3, 0.3))
+    p = {"mass": 1.0, "damping": 2 * zeta, "stiffness": 1.0, "force": 1.0}
+    p["restitution"] = float(rng.uniform(0.3, 0.95))
+    p["gap"] = _amplitude(p, float(rng.uniform(1.3, 3.0)))
+    wg = max(_roots(lambda w: _amplitude(p, w) - p["gap"], 0.2, 4.0))
+    yield _branch("impact", case, p, "impact_oscillator", "omega", wg * 1.15, wg * 0.95, wg)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--cases", type=int, default=10)
+    ap.add_argument("--systems", default=",".join(SYSTEMS))
+    args = ap.parse_args()
+    systems = args.systems.split(",")
+    for name in systems:
+        if name not in SYSTEMS:
+            raise SystemExit(f"--systems: {name!r} is not one of {', '.join(SYSTEMS)}")
+    rows = []
+    for name in systems:
+        rng = np.random.default_rng(args.seed)
+        make = {"stop": stop_rows, "stop-force-gap": stop_force_gap_rows, "impact": impact_rows}
+        for case in range(args.cases):
+            for row in make[name](rng, case):
+                rows.append(row)
+                err = row.get("relative_error")
+                print(
+                    f"{row['system']:15s} {case:2d} {row['parameter']:6s} "
+                    f"grazing {'none' if err is None else f'{err:.1e}'}  "
+                    f"{row.get('transition') or ''}  "
+                    f"labels {[(b[0], round(b[1], 7)) for b in row.get('labels', [])]}  "
+                    f"contradictions {row.get('contradictions', [])} {row.get('error', '')}  "
+                    f"{row['cpu']:.1f} s",
+                    flush=True,
+                )
+    right = sum(
+        r.get("relative_error") is not None and r["relative_error"] <= RELATIVE for r in rows
+    )
+    bad = sum(bool(r.get("contradictions")) for r in rows)
+    errors = sum("error" in r for r in rows)
+    print(
+        f"{len(rows)} branches: {right} with the grazing within {RELATIVE:g} of its closed form, "
+        f"{bad} with a label its multipliers contradict, {errors} errors"
+    )
+    record(
+        {
+            "seed": args.seed, "cases": args.cases, "systems": systems, "branches": len(rows),
+            "grazing_right": right, "contradicted": bad, "errors": errors, "rows": rows,
+        }
+    )  # fmt: skip
+
+
+if __name__ == "__main__":
+    with recording(__file__):
+        main()
