@@ -483,10 +483,19 @@ SAME_STATE = 1e-6
 
 def _attractor_period(smap: StrobeMap, y, aux, p: float, cycles: int = 200) -> int:
     """The period (in forcing periods; 0: none found up to 16) of the motion from (y, aux) at
-    ``p``: after ``cycles`` forcing periods, the next :data:`ATTRACTOR_SAMPLES` strobe samples
-    are looked at, and again up to :data:`ATTRACTOR_LOOKS` times. Where they repeat with some
-    period k (:func:`strobe_period`), Newton's method on ``P^k`` from the last sample finds the
-    orbit they approach; its least period is the answer if that orbit is stable, else the
+    ``p`` (:func:`_attractor`)."""
+    return _attractor(smap, y, aux, p, cycles)[0]
+
+
+def _attractor(
+    smap: StrobeMap, y, aux, p: float, cycles: int = 200
+) -> tuple[int, OrbitPoint | None]:
+    """The period (in forcing periods; 0: none found up to 16) of the motion from (y, aux) at
+    ``p``, and the stable orbit it settles on (None where none is found): after ``cycles``
+    forcing periods, the next :data:`ATTRACTOR_SAMPLES` strobe samples are looked at, and
+    again up to :data:`ATTRACTOR_LOOKS` times. Where they repeat with some period k
+    (:func:`strobe_period`), Newton's method on ``P^k`` from the last sample finds the orbit
+    they approach; its least period is the answer if that orbit is stable, else the
     motion was passing an unstable orbit and is looked at again. A repeating stretch alone
     is not the attractor: near a grazing the motion can settle slowly, e.g. onto an orbit
     whose multiplier is near -1, whose strobe samples then repeat every two of its periods
@@ -518,8 +527,9 @@ def _attractor_period(smap: StrobeMap, y, aux, p: float, cycles: int = 200) -> i
             continue
         states = one.with_periods(k).orbit_samples(orbit.y, orbit.aux, p) / s
         moved = [np.max(np.abs(np.roll(states, -d, axis=0) - states)) for d in range(1, k + 1)]
-        return next(d for d in range(1, k + 1) if k % d == 0 and moved[d - 1] <= SAME_STATE)
-    return 0
+        least = next(d for d in range(1, k + 1) if k % d == 0 and moved[d - 1] <= SAME_STATE)
+        return least, orbit
+    return 0, None
 
 
 def _beyond_grazing(
@@ -563,8 +573,14 @@ def _beyond_grazing(
         return min(max(least, need), FARTHEST * cfg.pscale)
 
     def motion(p: float) -> str:
-        k = _attractor_period(smap, G.y, G.aux, p)
-        return f"period {k} at {p:.10g}" if k else f"no period up to 16 at {p:.10g}"
+        k, orbit = _attractor(smap, G.y, G.aux, p)
+        if not k:
+            return f"no period up to 16 at {p:.10g}"
+        text = f"period {k} at {p:.10g}"
+        if k == smap.periods and orbit is not None:  # another orbit of the branch's period
+            far = float(np.linalg.norm((orbit.y - G.y) / s))
+            text += f", on an orbit {far:.3g} (scaled) from the grazing orbit"
+        return text
 
     past = distance()
     for side in (ahead, -ahead):
