@@ -6,7 +6,8 @@ Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
 - ``stop``: the stop oscillator (``stop_oscillator``) with mass 0.5-3 kg, stiffness 0.5-4 N/m,
   damping ratio 0.03-0.2, stop stiffness 10-1000 times the spring's, force 0.1-1 N and a gap
   between the static deflection and the resonance peak; omega continued up through the lower
-  grazing and down through the upper one (the closed form: the linear amplitude
+  grazing and down through the upper one, and from the impacting side down through the lower
+  one (the closed form: the linear amplitude
   F / sqrt((k - m w^2)^2 + (c w)^2) equals the gap, ``grazing_amplitude``);
 - ``stop-force-gap``: the same draws at a random omega, continued in the force (up) and in the
   gap (down) through the grazing (closed forms: F g / A and A, A the linear amplitude);
@@ -36,6 +37,7 @@ from scipy.optimize import brentq
 
 from workbench.continuation import branch_bifurcations, continue_orbit
 from workbench.continuation._branch import MULTIPLIER_TOLERANCE
+from workbench.continuation._newton import NewtonFailure
 from workbench.models.stop_oscillator import grazing_amplitude
 
 #: a grazing within this relative distance of its closed form is right (issue 38, item 8)
@@ -77,6 +79,10 @@ def _branch(system: str, case: int, params: dict, model: str, parameter: str, st
     t0 = time.process_time()
     try:
         r = continue_orbit(scene, parameter, stop=stop)
+    except NewtonFailure as exc:  # no period-1 orbit where the transient ended: said clearly
+        row["start_failed"] = str(exc)
+        row["cpu"] = time.process_time() - t0
+        return row
     except Exception as exc:  # a traceback is a finding: recorded, not raised
         row["error"] = f"{type(exc).__name__}: {exc}"
         row["cpu"] = time.process_time() - t0
@@ -117,6 +123,8 @@ def stop_rows(rng, case: int):
     g = _roots(lambda w: _amplitude(p, w) - p["gap"], 0.2 * w0, 3 * w0, 2000)
     yield _branch("stop", case, p, "stop_oscillator", "omega", g[0] * 0.9, g[0] * 1.05, g[0])
     yield _branch("stop", case, p, "stop_oscillator", "omega", g[-1] * 1.1, g[-1] * 0.97, g[-1])
+    # from the impacting side out of the contact: down through the lower grazing
+    yield _branch("stop", case, p, "stop_oscillator", "omega", g[0] * 1.01, g[0] * 0.95, g[0])
 
 
 def stop_force_gap_rows(rng, case: int):
@@ -163,7 +171,8 @@ def main() -> None:
                     f"grazing {'none' if err is None else f'{err:.1e}'}  "
                     f"{row.get('transition') or ''}  "
                     f"labels {[(b[0], round(b[1], 7)) for b in row.get('labels', [])]}  "
-                    f"contradictions {row.get('contradictions', [])} {row.get('error', '')}  "
+                    f"contradictions {row.get('contradictions', [])} {row.get('error', '')}"
+                    f"{'no start: ' + row['start_failed'][:60] if 'start_failed' in row else ''}  "
                     f"{row['cpu']:.1f} s",
                     flush=True,
                 )
@@ -172,14 +181,17 @@ def main() -> None:
     )
     bad = sum(bool(r.get("contradictions")) for r in rows)
     errors = sum("error" in r for r in rows)
+    unstarted = sum("start_failed" in r for r in rows)
     print(
-        f"{len(rows)} branches: {right} with the grazing within {RELATIVE:g} of its closed form, "
-        f"{bad} with a label its multipliers contradict, {errors} errors"
+        f"{len(rows)} branches: {unstarted} found no period-1 orbit to start from; of the "
+        f"others {right} have the grazing within {RELATIVE:g} of its closed form, {bad} a "
+        f"label their multipliers contradict, {errors} an error"
     )
     record(
         {
             "seed": args.seed, "cases": args.cases, "systems": systems, "branches": len(rows),
-            "grazing_right": right, "contradicted": bad, "errors": errors, "rows": rows,
+            "grazing_right": right, "contradicted": bad, "errors": errors,
+            "start_failed": unstarted, "rows": rows,
         }
     )  # fmt: skip
 

@@ -160,16 +160,14 @@ def test_an_impact_shorter_than_the_samples_spacing_is_in_the_sequence():
         (ISSUE, 0.6, 1.1),
         (DRAWN[0], 0.64, 0.74),
         (DRAWN[1], 0.52, 0.61),
-        (STIFF, 1.49, 1.74),
     ],
-    ids=["issue-1.15", "issue-1.1", "drawn-0", "drawn-1", "stiff"],
+    ids=["issue-1.15", "issue-1.1", "drawn-0", "drawn-1"],
 )
 def test_grazing_of_stop_oscillators_against_the_closed_form(params, start, stop):
     """Omega continued upwards through the lower grazing: one grazing, within 1e-6 of the
     closed form (relative), whatever the stop of the range (the step sequence); every label
     confirmed by its defining quantity. Before, the issue's set was labelled at 1.0798 against
-    1.06454 (+1.4 %), with a "period doubling" whose multiplier was -0.082; the stiff stop's
-    first contact, inside one solver step, was missed (a grazing 2.8e-4 too far on)."""
+    1.06454 (+1.4 %), with a "period doubling" whose multiplier was -0.082."""
     exact = lower_grazing(params)
     r = _branch(params, start, stop)
     found = branch_bifurcations(r, "omega")
@@ -178,6 +176,29 @@ def test_grazing_of_stop_oscillators_against_the_closed_form(params, start, stop
     assert abs(grazings[0]["value"] - exact) < 1e-6 * exact, (grazings, exact)
     _assert_labels_confirmed(r)
     # below the grazing the orbit misses the stop, past it each period has one contact
+    before = r.omega.values < exact * (1 - 1e-6)
+    assert (r.crossings_per_orbit.values[before] == 0).all()
+    assert (r.crossings_per_orbit.values[r.omega.values > exact * (1 + 1e-6)] == 1).all()
+
+
+def test_a_stiff_stop_grazes_then_doubles_within_a_step_of_the_branch():
+    """The audit's stiff stop (``STIFF``): the grazing within 1e-6 of the closed form, then, 3.1e-6
+    rad/s on, where the contact's square-root law has swung the multipliers from a complex pair
+    of modulus 0.44 past -1, a period doubling with its critical multiplier at -1. The branch
+    cannot be stepped through the grazing; the doubling lies between the grazing orbit and the
+    orbit the branch resumes from, and is located there at fixed parameter values. Before, the
+    first contact, shorter than a solver step, was missed: the grazing was labelled 2.8e-4
+    (relative) too far on and the doubling from orbits whose contact went unseen."""
+    exact = lower_grazing(STIFF)
+    r = _branch(STIFF, 1.49, 1.74)
+    found = branch_bifurcations(r, "omega")
+    grazings = [b for b in found if b["type"] == "grazing" and b["resolved"]]
+    assert len(grazings) == 1 and abs(grazings[0]["value"] - exact) < 1e-6 * exact, found
+    flips = [b for b in found if b["type"] == "period_doubling"]
+    assert len(flips) == 1 and flips[0]["resolved"], found
+    assert exact < flips[0]["value"] < exact * (1 + 1e-5)
+    assert abs(flips[0]["critical"] + 1) < MULTIPLIER_TOLERANCE
+    _assert_labels_confirmed(r)
     before = r.omega.values < exact * (1 - 1e-6)
     assert (r.crossings_per_orbit.values[before] == 0).all()
     assert (r.crossings_per_orbit.values[r.omega.values > exact * (1 + 1e-6)] == 1).all()

@@ -185,10 +185,15 @@ def _tests(pt: OrbitPoint) -> dict:
     return {
         "size": m,
         "fold": float(np.linalg.det(M - np.eye(m))),
-        "pd": float(np.linalg.det(M + np.eye(m))),
+        "pd": _pd_value(pt),
         "ns": int(np.sum(cplx & (np.abs(mu) > 1.0))),
         "turn": float(pt.tau[-1]),
     }
+
+
+def _pd_value(pt: OrbitPoint) -> float:
+    M = pt.value.M
+    return float(np.linalg.det(M + np.eye(M.shape[0])))
 
 
 def _ns_value(pt: OrbitPoint) -> float:
@@ -789,6 +794,82 @@ def _grazing_within(smap: StrobeMap, out: Traced, A: OrbitPoint, h: float, pscal
     return abs(value) * span / (abs(before) - abs(value)) <= h
 
 
+#: the probe of :func:`_past_grazing`: an orbit this fraction of the way from the grazing to the
+#: orbit past it, and the largest change of a multiplier from the grazing orbit's that is not a
+#: jump (a compliant stop's multipliers move like the square root of the distance: by about
+#: 0.03 of their change over the whole way)
+PROBE = 1e-3
+JUMPED = 0.5
+#: Illinois iterations of :func:`_past_grazing` (each orbit a few evaluations of the map)
+PAST_ITERATIONS = 16
+
+
+def _past_grazing(smap: StrobeMap, G: OrbitPoint, pt: OrbitPoint, cfg: BranchSettings):
+    """Period doublings and Neimark-Sacker points between the grazing orbit ``G`` and the orbit
+    ``pt`` past it where the branch was resumed across the grazing (no step of the branch lies
+    between them to locate them on): the Illinois method on the test function at fixed
+    parameter values, each orbit by Newton from the bracket's end on pt's side. A point is
+    stored only where its critical multiplier confirms the kind. Where the multipliers jump at
+    the grazing itself (a rigid impact's square-root map, a contact law with memory: no
+    bifurcation of either side) nothing is looked for: an orbit :data:`PROBE` of the way from
+    the grazing to ``pt`` whose multipliers differ from the grazing orbit's by more than
+    :data:`JUMPED` shows that. The list of :class:`Special`."""
+    kinds = [
+        k for k in _detect(_tests(G), _tests(pt)) if k in ("period_doubling", "neimark_sacker")
+    ]
+    if not kinds:
+        return []
+    near = orbit_at(
+        smap, pt.y, pt.aux, G.p + PROBE * (pt.p - G.p), tolerance=cfg.tolerance, max_iterations=12
+    )
+    mu_g, mu_n = np.sort_complex(G.multipliers), np.sort_complex(near.multipliers)
+    if mu_g.size != mu_n.size or np.max(np.abs(mu_g - mu_n)) > JUMPED:
+        return []
+    found = []
+    for kind in kinds:
+        f = _pd_value if kind == "period_doubling" else _ns_value  # orbits without tangents
+        a, b = G, pt
+        fa, fb = f(a), f(b)
+        for _ in range(PAST_ITERATIONS):
+            if not (np.isfinite(fa) and np.isfinite(fb)) or fa == fb:
+                break
+            p = b.p - fb * (b.p - a.p) / (fb - fa)
+            if not min(a.p, b.p) < p < max(a.p, b.p):
+                p = 0.5 * (a.p + b.p)
+            try:
+                q = orbit_at(smap, b.y, b.aux, p, tolerance=cfg.tolerance, max_iterations=12)
+            except NewtonFailure:
+                break
+            fq = f(q)
+            if np.sign(fq) == np.sign(fb):
+                b, fb, fa = q, fq, fa / 2.0  # Illinois: the stale end counts half
+            else:
+                a, fa = q, fq
+            if abs(b.p - a.p) <= cfg.locate_tolerance * cfg.pscale:
+                break
+        ends = [q for q in (a, b) if q is not G and q is not pt]
+        if not ends:
+            continue
+        q = min(ends, key=lambda e: abs(f(e)))
+        ok, d, _ = _confirm(smap, kind, q, f(q), None)
+        if ok:
+            found.append(
+                Special(
+                    kind,
+                    q,
+                    0.0,
+                    min(a.p, b.p),
+                    max(a.p, b.p),
+                    True,
+                    d,
+                    _critical(q, kind),
+                    note="located at fixed parameter values between the grazing and the orbit "
+                    "past it",
+                )  # fmt: skip
+            )
+    return sorted(found, key=lambda sp: abs(sp.point.p - G.p))
+
+
 def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -> OrbitPoint | None:
     """Where the steps collapsed at A: the grazing ahead, located and typed
     (:func:`_grazing_ahead`, :func:`_beyond_grazing`) and stored; the orbit on its other side
@@ -816,6 +897,17 @@ def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -
         _with_tangent(smap, pt, direction, cfg)
     except (NewtonFailure, SceneError, SolverError):
         return None
+    try:
+        between = _past_grazing(smap, G.point, pt, cfg)
+        for sp in between:
+            _with_tangent(smap, sp.point, direction, cfg)
+    except (NewtonFailure, SceneError, SolverError):
+        between = []
+    for sp in between:
+        out.points.append(sp.point)
+        out.labels.append(sp.kind)
+        out.critical.append(sp.critical)
+        out.specials.append(sp)
     out.points.append(pt)
     out.labels.append("regular")
     out.critical.append(complex(np.nan, np.nan))
