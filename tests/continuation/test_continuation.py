@@ -660,3 +660,19 @@ def test_a_correction_onto_another_part_of_the_solution_set_is_not_taken(monkeyp
     assert jumped, "the branch never stepped past omega = 1.02"
     assert not np.isclose(r.orbit_x.values, jumped["x"], rtol=0, atol=1e-9).any()
     assert float(r.omega[-1]) == pytest.approx(1.06) and (r.omega.diff("point") > 0).all()
+
+
+def test_a_newton_iterate_the_model_cannot_start_from_is_said_so():
+    """The four-bar of studies/mechanisms (a mechanism the continuation tests do not use) is not
+    near a period-1 orbit after 50 transient cycles at 300 rpm, and Newton's fourth iterate
+    asks the joint for a penetration beyond its limit. The error says that Newton left the
+    states the map can start from and how to start closer, not only the model's "the contact
+    is too soft" (which named the symptom of a wild iterate as the cause)."""
+    from workbench.continuation._newton import NewtonFailure
+
+    scene = workbench.load_scene(ROOT / "studies" / "mechanisms" / "fourbar.toml").replace(
+        run={"transient_cycles": 50, "cycles": 1}
+    )
+    with pytest.raises(NewtonFailure, match="left the states the map can start from") as info:
+        continue_orbit(scene, "omega", stop=60.0, max_points=5)
+    assert "strobe_period" in str(info.value) and "max_penetration" in str(info.value)

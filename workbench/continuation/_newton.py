@@ -11,6 +11,7 @@ method converges through folds, where the parameter turns back.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -95,8 +96,20 @@ def orbit_at(
     """Newton's method on ``P^k(x) = x`` at the fixed parameter value ``p`` from (y, aux)."""
     s = smap.scale()
     y, aux = np.array(y, float), np.array(aux, float)
+    r = math.inf
     for it in range(max_iterations + 1):
-        v = _evaluate(smap, y, aux, p)
+        try:
+            v = _evaluate(smap, y, aux, p)
+        except NewtonFailure as exc:
+            if it == 0:
+                raise
+            raise NewtonFailure(
+                f"Newton's iterate {it} at p = {p:.10g} left the states the map can start from "
+                f"(scaled residual {r:.3g} before that step): {exc}. The start is far from a "
+                f"period-{smap.periods} orbit: a longer transient or the state of a continued "
+                "sweep may be closer; workbench.continuation.strobe_period says whether the "
+                "motion there is periodic at all"
+            ) from exc
         G = residual(v, y, aux, s)
         r = float(np.max(np.abs(G)))
         if r < tolerance:
