@@ -99,6 +99,9 @@ def _branch(system: str, case: int, params: dict, model: str, parameter: str, st
     row["notes"] = r.attrs.get("bifurcation_notes", "")
     row["ended"] = r.attrs.get("branch_ended", "")
     row["points"] = int(r.sizes["point"])
+    # contacts per period of the first orbit: a branch that starts on an impacting orbit (one
+    # that coexists with the non-impacting one) can pass the grazing value without a grazing
+    row["start_crossings"] = int(np.sum(r.crossings_per_orbit.values[0]))
     row["cpu"] = time.process_time() - t0
     return row
 
@@ -182,16 +185,21 @@ def main() -> None:
     bad = sum(bool(r.get("contradictions")) for r in rows)
     errors = sum("error" in r for r in rows)
     unstarted = sum("start_failed" in r for r in rows)
+    missed = [r for r in rows if "points" in r and r["relative_error"] is None]
+    impacting = sum(r["start_crossings"] > 0 for r in missed)
     print(
         f"{len(rows)} branches: {unstarted} found no period-1 orbit to start from; of the "
-        f"others {right} have the grazing within {RELATIVE:g} of its closed form, {bad} a "
-        f"label their multipliers contradict, {errors} an error"
+        f"others {right} have the grazing within {RELATIVE:g} of its closed form, "
+        f"{len(missed)} no grazing ({impacting} of them start on an impacting orbit, which "
+        f"coexists with the non-impacting one there), {bad} a label their multipliers "
+        f"contradict, {errors} an error"
     )
     record(
         {
             "seed": args.seed, "cases": args.cases, "systems": systems, "branches": len(rows),
             "grazing_right": right, "contradicted": bad, "errors": errors,
-            "start_failed": unstarted, "rows": rows,
+            "start_failed": unstarted, "no_grazing": len(missed),
+            "no_grazing_impacting_start": impacting, "rows": rows,
         }
     )  # fmt: skip
 
