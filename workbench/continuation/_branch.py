@@ -360,12 +360,11 @@ def _confirm(smap, kind: str, pt: OrbitPoint, f: float, graze) -> tuple[bool, fl
 
 def _locate(
     smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: BranchSettings, graze=None
-) -> tuple[Special, int]:
+) -> Special:
     """The bifurcation ``kind`` between A and B (B at arclength h from A): the Illinois method
     on its test function, the bracket kept between converged points; returns the
-    :class:`Special` (confirmed or unresolved) and the map evaluations spent."""
+    :class:`Special` (confirmed or unresolved)."""
     value = _value_function(smap, kind, graze)
-    evals = 0
     lo, hi, f_lo, f_hi = 0.0, h, value(A), value(B)
     pt_lo, pt_hi = A, B
     side = 0
@@ -393,7 +392,6 @@ def _locate(
             else:
                 note = f"{CORRECTOR_FAILED} ({exc})"
                 break
-        evals += pt.evaluations
         f = value(pt)
         if not np.isfinite(f):
             note = "the test function is not defined inside the bracket"
@@ -439,7 +437,7 @@ def _locate(
         phase=graze[1] if graze else math.nan,
         note="; ".join(x for x in (note, why) if x),
     )
-    return special, evals
+    return special
 
 
 def _on_bound(
@@ -927,17 +925,16 @@ def trace(
     ``cfg.min_step`` or ``cfg.max_points`` points are found; ``report(parameter, points)``
     after each point (progress)."""
     wall0 = time.perf_counter()
+    spent0 = smap.evaluations
     out = Traced(smap)
     if first.Pp is None:
         first.Pp = smap.parameter_derivative(
             first.y, first.aux, first.p, first.value.live, cfg.pscale
         )
-        out.evaluations += 2
     first.tau = tangent(first, direction)
     out.points.append(first)
     out.labels.append(label)
     out.critical.append(complex(np.nan, np.nan))
-    out.evaluations += first.evaluations
     lo, hi = cfg.bounds
     events = smap.prepared(first.p).problem.event_direction.size > 0
     h = cfg.step
@@ -990,7 +987,6 @@ def trace(
                 _end(smap, out, A, h, failure, cfg)
                 break
             continue
-        out.evaluations += B.evaluations
         found = [(kind, None) for kind in _detect(_tests(A), _tests(B))]
         if events:
             grazes, explained = _grazings(sequence_of(smap, A), sequence_of(smap, B))
@@ -1000,8 +996,7 @@ def trace(
             found += [("grazing", g) for g in grazes]
         specials = []
         for kind, graze in found:
-            sp, evals = _locate(smap, A, B, h, kind, cfg, graze)
-            out.evaluations += evals
+            sp = _locate(smap, A, B, h, kind, cfg, graze)
             if kind == "grazing":  # stepped through: the branch went on, or turned at it
                 if not sp.resolved and sp.note.startswith(CORRECTOR_FAILED):
                     sp = _grazing_across(smap, out, A, B, h, sp, graze, cfg)
@@ -1048,6 +1043,7 @@ def trace(
     if report is not None:
         report(out.points[-1].p, len(out.points))
     out.wall_time = time.perf_counter() - wall0
+    out.evaluations = smap.evaluations - spent0
     return out
 
 

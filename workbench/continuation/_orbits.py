@@ -140,7 +140,7 @@ def periodic_orbit(
     y, aux = _guess(smap, math.nan, state, discrete_state, None)
     cfg = BranchSettings(1.0, (-math.inf, math.inf), tolerance)
     pt = start_point(smap, y, aux, math.nan, cfg, max_iterations=int(max_iterations))
-    tr = Traced(smap, [pt], ["start"], [complex(np.nan, np.nan)], "one orbit", pt.evaluations)
+    tr = Traced(smap, [pt], ["start"], [complex(np.nan, np.nan)], "one orbit", smap.evaluations)
     tr.wall_time = time.perf_counter() - t0
     return _labelled(_computed([tr]), None, tolerance, max_iterations=int(max_iterations))
 
@@ -276,6 +276,9 @@ def continue_orbit(
         finally:
             report.close()
     ds = _labelled(_computed(branches), parameter, cfg.tolerance, max_points=max_points)
+    # every evaluation of the map and of the maps derived from it (one count): the start's
+    # Newton, the noise check and the switches between branches included
+    ds.attrs["map_evaluations"] = smap.evaluations
     ds.attrs["wall_time"] = time.perf_counter() - t0
     ds.attrs["tolerance_requested"] = tolerance
     ds.attrs["map_noise"] = noise

@@ -165,6 +165,7 @@ class StrobeMap:
             )
         self.step = float(step)
         self.check = None if check is None else float(check)
+        self._spent = [0]  # evaluations of the map (shared with the maps derived from it)
         self._samples, self._refine = SAMPLES, True  # the contact sequences' density
         self.scene: Scene = scene.replace(sweep={}) if scene.sweep else scene
         self.parameter = parameter
@@ -241,7 +242,16 @@ class StrobeMap:
         one's density."""
         other = StrobeMap(*args, **kwargs)
         other._samples, other._refine = self._samples, self._refine
+        other._spent = self._spent
         return other
+
+    @property
+    def evaluations(self) -> int:
+        """Evaluations of the map so far, failed ones included (each a run over its ``k``
+        periods, with the monodromy or without: a parameter derivative is two), by this map and
+        every map derived from it (:meth:`with_periods`, :meth:`with_rtol`): what a branch
+        cost, where its corrections failed too."""
+        return self._spent[0]
 
     def jitter(
         self, value: MapValue, y: np.ndarray, aux: np.ndarray, p: float, size: float
@@ -293,6 +303,7 @@ class StrobeMap:
         self, y: np.ndarray, aux: np.ndarray, p: float, *, tangent: bool = True
     ) -> MapValue:
         """``P^k(y, aux; p)``, with its Jacobian in the scaled unknowns when ``tangent``."""
+        self._spent[0] += 1
         prep = self.prepared(p)
         pb = prep.problem
         start = dataclasses.replace(pb, y0=np.asarray(y, float), aux0=np.asarray(aux, float))
