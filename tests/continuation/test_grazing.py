@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import STIFF_STOP
 from scipy.optimize import brentq
 
 import workbench
@@ -46,18 +47,6 @@ DRAWN = [
         "force": 0.8003,
     },
 ]
-
-
-#: a stiff stop (k_s / k = 683) drawn by benchmarks/grazing_audit.py (seed 7, case 4): grazing
-#: near 1.65569 rad/s, past which the contact is 0.4 % of the period, shorter than a DOP853 step
-STIFF = {
-    "mass": 0.5892006969339904,
-    "damping": 0.25448732539838487,
-    "stiffness": 2.3021108709497957,
-    "stop_stiffness": 1572.0334472993243,
-    "gap": 0.8268228231033374,
-    "force": 0.6663036290419094,
-}
 
 
 def lower_grazing(params: dict) -> float:
@@ -182,15 +171,15 @@ def test_grazing_of_stop_oscillators_against_the_closed_form(params, start, stop
 
 
 def test_a_stiff_stop_grazes_then_doubles_within_a_step_of_the_branch():
-    """The audit's stiff stop (``STIFF``): the grazing within 1e-6 of the closed form, then, 3.1e-6
-    rad/s on, where the contact's square-root law has swung the multipliers from a complex pair
-    of modulus 0.44 past -1, a period doubling with its critical multiplier at -1. The branch
-    cannot be stepped through the grazing; the doubling lies between the grazing orbit and the
-    orbit the branch resumes from, and is located there at fixed parameter values. Before, the
-    first contact, shorter than a solver step, was missed: the grazing was labelled 2.8e-4
-    (relative) too far on and the doubling from orbits whose contact went unseen."""
-    exact = lower_grazing(STIFF)
-    r = _branch(STIFF, 1.49, 1.74)
+    """The audit's stiff stop (``STIFF_STOP``, tests/helpers.py): the grazing within 1e-6 of
+    the closed form, then, 3.1e-6 rad/s on, where the contact's square-root law has swung the
+    multipliers from a complex pair of modulus 0.44 past -1, a period doubling with its
+    critical multiplier at -1. The branch cannot be stepped through the grazing; the doubling
+    lies between the grazing orbit and the orbit the branch resumes from, and is located there
+    at fixed parameter values. Before, the first contact, shorter than a solver step, was
+    missed by the contact sequence: the grazing was labelled 2.8e-4 (relative) too far on."""
+    exact = lower_grazing(STIFF_STOP)
+    r = _branch(STIFF_STOP, 1.49, 1.74)
     found = branch_bifurcations(r, "omega")
     grazings = [b for b in found if b["type"] == "grazing" and b["resolved"]]
     assert len(grazings) == 1 and abs(grazings[0]["value"] - exact) < 1e-6 * exact, found

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import STIFF_STOP
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
@@ -357,19 +358,6 @@ def test_every_method_sees_a_shallow_contact(method):
         assert rt.stats["events"] == 2, method
 
 
-#: a stop oscillator of the grazing audit (docs/continuation.md), none of the tests' own: a stiff
-#: stop (k_s / k = 683) and a contact 6e-5 m deep, past which DOP853 at rtol 1e-9 takes steps of
-#: 6 % of the period over a contact of 0.4 %
-AUDIT = {
-    "mass": 0.5892006969339904,
-    "damping": 0.25448732539838487,
-    "stiffness": 2.3021108709497957,
-    "stop_stiffness": 1572.0334472993243,
-    "gap": 0.8268228231033374,
-    "force": 0.6663036290419094,
-}
-
-
 def test_a_contact_seen_only_by_the_continuous_extension_is_not_taken_for_free_flight():
     """A step whose own stages and ends all lie short of the stop, but one of whose dense-output
     stages lies beyond it (the contact hides inside the step), is retried shorter: the
@@ -377,12 +365,12 @@ def test_a_contact_seen_only_by_the_continuous_extension_is_not_taken_for_free_f
     monitoring read the hidden contact's g on it as 2.5e-4 m short of the stop. Before, the
     run missed both events and ended 5.6e-4 m/s off the exact flow."""
     omega = 1.6559524339141576
-    exact = ExactStop(**AUDIT, omega=omega)
+    exact = ExactStop(**STIFF_STOP, omega=omega)
     z, switches, _ = exact.orbit(np.array([0.7046626454388176, 0.7163673303456708]))
     period = 2.0 * math.pi / omega
     assert len(switches) == 2 and 0.0035 < (switches[1] - switches[0]) / period < 0.0045
     for y0 in (np.array([0.7046626454388176, 0.7163673303456708]), z):
-        problem = _problem(y0, omega=omega, **AUDIT)
+        problem = _problem(y0, omega=omega, **STIFF_STOP)
         r = integrate(problem, np.array([period]), method="dop853", rtol=1e-9, atol=1e-11)
         end, _, _ = exact.flow(y0)
         assert r.stats["events"] == 2
