@@ -81,7 +81,8 @@ studies: $(STAMP)
 # runs under GNU time (its CPU, with the load before and after) and its indicators go to
 # data/<map>_map.nc (docs/continuation.md quotes them; tests/records/test_data.py checks the quotes),
 # its figure to docs/figures/chaos-map-<map>.png (shown on the site). Then the end of the
-# periodic motion per clearance, in steps of 0.01 pi up and down (data/periodic_end.nc).
+# periodic motion per clearance, in steps of 0.01 pi up and down (data/periodic_end.nc), drawn
+# over the (omega, c) map's figure.
 MAPS := omega_clearance clearance_friction
 chaos-maps: $(STAMP)
 	mkdir -p $(OUT)/chaos_maps
@@ -96,6 +97,7 @@ chaos-maps: $(STAMP)
 	done
 	$(PY) data/regenerate.py --periodic-end
 	$(PY) data/regenerate.py --periodic-end-hunt-crossley
+	$(PY) data/regenerate.py --map-figure
 
 # The small archives the notebooks open (tests/records/test_data.py fails when they are stale), and the
 # notebooks executed in place on them (committed with their outputs: the site shows them).

@@ -11,6 +11,10 @@ Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
   F / sqrt((k - m w^2)^2 + (c w)^2) equals the gap, ``grazing_amplitude``);
 - ``stop-force-gap``: the same draws at a random omega, continued in the force (up) and in the
   gap (down) through the grazing (closed forms: F g / A and A, A the linear amplitude);
+- ``stop-curve``: the same draws, the lower grazing located on a branch up in omega and
+  continued in the force from 0.8 to 1.25 times the drawn one (``continue_curve``): every point
+  of the grazing curve against the closed form (its largest relative error), how far the curve
+  got, its codimension-two points;
 - ``impact``: the impact oscillator (``impact_oscillator``, m = k = F = 1) with damping ratio
   0.05-2, restitution 0.3-0.95 and the gap set so that the grazing lies at omega 1.3-3 rad/s;
   omega continued down through it.
@@ -21,8 +25,8 @@ multipliers, the labels that contradict them (a fold or branch point with no mul
 note, errors and the CPU time. A grazing is right where it lies within ``RELATIVE`` of the
 closed form. Prints one line per branch and a summary; records all of it.
 
-Run: ``python benchmarks/grazing_audit.py --seed 7 --cases 10 --systems stop`` (records in
-``benchmarks/records/grazing_audit/``).
+Run: ``python benchmarks/grazing_audit.py --seed 7 --cases 10 --systems stop,stop-curve``
+(records in ``benchmarks/records/grazing_audit/``).
 """
 
 from __future__ import annotations
@@ -35,14 +39,14 @@ import numpy as np
 from _results import record, recording  # benchmarks/_results.py: a JSON record per run
 from scipy.optimize import brentq
 
-from workbench.continuation import branch_bifurcations, continue_orbit
+from workbench.continuation import branch_bifurcations, continue_curve, continue_orbit
 from workbench.continuation._branch import MULTIPLIER_TOLERANCE
 from workbench.continuation._newton import NewtonFailure
 from workbench.models.stop_oscillator import grazing_amplitude
 
 #: a grazing within this relative distance of its closed form is right (issue 38, item 8)
 RELATIVE = 1e-6
-SYSTEMS = ("stop", "stop-force-gap", "impact")
+SYSTEMS = ("stop", "stop-force-gap", "stop-curve", "impact")
 
 
 def _roots(f, lo: float, hi: float, n: int = 4000) -> list[float]:
@@ -68,7 +72,9 @@ def _contradictions(r, parameter: str) -> list:
     return bad
 
 
-def _branch(system: str, case: int, params: dict, model: str, parameter: str, start, stop, exact):
+def _branch(
+    system: str, case: int, params: dict, model: str, parameter: str, start, stop, exact, then=None
+):
     scene = {
         "model": {"name": model},
         "parameters": {**params, parameter: start},
@@ -102,6 +108,8 @@ def _branch(system: str, case: int, params: dict, model: str, parameter: str, st
     # contacts per period of the first orbit: a branch that starts on an impacting orbit (one
     # that coexists with the non-impacting one) can pass the grazing value without a grazing
     row["start_crossings"] = int(np.sum(r.crossings_per_orbit.values[0]))
+    if then is not None and first is not None:
+        then(r, row)
     row["cpu"] = time.process_time() - t0
     return row
 
@@ -142,6 +150,49 @@ def stop_force_gap_rows(rng, case: int):
     yield _branch("stop-force-gap", case, p, "stop_oscillator", "gap", 1.3 * a, 0.9 * a, a)
 
 
+def _force_curve(p: dict):
+    """Continue a branch's first grazing in the force, 0.8 .. 1.25 x ``p["force"]``, and put
+    each point of the curve against the closed form (the linear amplitude at its omega and
+    force equals the gap)."""
+    lo, hi = 0.8 * p["force"], 1.25 * p["force"]
+
+    def check(r, row) -> None:
+        try:
+            c = continue_curve(r, "force", start=lo, stop=hi, kind="grazing")
+        except Exception as exc:  # a failed curve is a finding: recorded
+            row["curve_error"] = f"{type(exc).__name__}: {exc}"
+            return
+        errors = [
+            abs(grazing_amplitude({**p, "force": float(f), "omega": float(w)}) - p["gap"])
+            / p["gap"]
+            for w, f in zip(c.omega.values, c.force.values, strict=True)
+        ]
+        names = c.label.attrs["flag_meanings"].split()
+        row["curve_points"] = int(c.sizes["curve_point"])
+        row["curve_relative_error"] = float(max(errors))
+        row["curve_force_range"] = [float(c.force.min()), float(c.force.max())]
+        row["curve_covered"] = bool(
+            c.force.min() <= lo * (1 + 1e-9) and c.force.max() >= hi * (1 - 1e-9)
+        )
+        row["curve_special"] = [names[int(v)] for v in c.special_label.values]
+        row["curve_ended"] = c.attrs.get("curve_ended", "")
+
+    return check
+
+
+def stop_curve_rows(rng, case: int):
+    p = _stop_draw(rng)
+    w0 = math.sqrt(p["stiffness"] / p["mass"])
+    peak = max(_amplitude(p, w) for w in np.linspace(0.3 * w0, 2 * w0, 400))
+    static = p["force"] / p["stiffness"] * 1.05
+    p["gap"] = float(static + rng.uniform(0.2, 0.8) * (peak - static))
+    g = _roots(lambda w: _amplitude(p, w) - p["gap"], 0.2 * w0, 3 * w0, 2000)
+    yield _branch(
+        "stop-curve", case, p, "stop_oscillator", "omega", g[0] * 0.9, g[0] * 1.05, g[0],
+        then=_force_curve(p),
+    )  # fmt: skip
+
+
 def impact_rows(rng, case: int):
     zeta = float(10 ** rng.uniform(-1.3, 0.3))
     p = {"mass": 1.0, "damping": 2 * zeta, "stiffness": 1.0, "force": 1.0}
@@ -149,6 +200,18 @@ def impact_rows(rng, case: int):
     p["gap"] = _amplitude(p, float(rng.uniform(1.3, 3.0)))
     wg = max(_roots(lambda w: _amplitude(p, w) - p["gap"], 0.2, 4.0))
     yield _branch("impact", case, p, "impact_oscillator", "omega", wg * 1.15, wg * 0.95, wg)
+
+
+def _curve_text(row: dict) -> str:
+    if "curve_error" in row:
+        return f"curve failed: {row['curve_error'][:80]}"
+    if "curve_relative_error" not in row:
+        return ""
+    return (
+        f"curve {row['curve_points']} points, error {row['curve_relative_error']:.1e}, force "
+        f"{row['curve_force_range'][0]:.4g}..{row['curve_force_range'][1]:.4g}, special "
+        f"{row['curve_special']}"
+    )
 
 
 def main() -> None:
@@ -164,7 +227,10 @@ def main() -> None:
     rows = []
     for name in systems:
         rng = np.random.default_rng(args.seed)
-        make = {"stop": stop_rows, "stop-force-gap": stop_force_gap_rows, "impact": impact_rows}
+        make = {
+            "stop": stop_rows, "stop-force-gap": stop_force_gap_rows,
+            "stop-curve": stop_curve_rows, "impact": impact_rows,
+        }  # fmt: skip
         for case in range(args.cases):
             for row in make[name](rng, case):
                 rows.append(row)
@@ -176,6 +242,7 @@ def main() -> None:
                     f"labels {[(b[0], round(b[1], 7)) for b in row.get('labels', [])]}  "
                     f"contradictions {row.get('contradictions', [])} {row.get('error', '')}"
                     f"{'no start: ' + row['start_failed'][:60] if 'start_failed' in row else ''}  "
+                    f"{_curve_text(row)}"
                     f"{row['cpu']:.1f} s",
                     flush=True,
                 )
@@ -187,6 +254,14 @@ def main() -> None:
     unstarted = sum("start_failed" in r for r in rows)
     missed = [r for r in rows if "points" in r and r["relative_error"] is None]
     impacting = sum(r["start_crossings"] > 0 for r in missed)
+    curves = [r for r in rows if "curve_relative_error" in r or "curve_error" in r]
+    curves_right = sum(r.get("curve_relative_error", math.inf) <= RELATIVE for r in curves)
+    if curves:
+        print(
+            f"{len(curves)} grazing curves: {curves_right} within {RELATIVE:g} of the closed "
+            f"form at every point, {sum(r.get('curve_covered', False) for r in curves)} "
+            f"covering their range, {sum('curve_error' in r for r in curves)} failed"
+        )
     print(
         f"{len(rows)} branches: {unstarted} found no period-1 orbit to start from; of the "
         f"others {right} have the grazing within {RELATIVE:g} of its closed form, "
@@ -199,7 +274,8 @@ def main() -> None:
             "seed": args.seed, "cases": args.cases, "systems": systems, "branches": len(rows),
             "grazing_right": right, "contradicted": bad, "errors": errors,
             "start_failed": unstarted, "no_grazing": len(missed),
-            "no_grazing_impacting_start": impacting, "rows": rows,
+            "no_grazing_impacting_start": impacting, "curves": len(curves),
+            "curves_right": curves_right, "rows": rows,
         }
     )  # fmt: skip
 

@@ -40,6 +40,9 @@ code writes.
   (a lift-off grazing typed a border collision), written by ``python
   studies/periodic_end_branch.py --start 1.86105 --stop 1.8612 -o data/periodic_end_branch.nc``
   (9 min of CPU).
+- ``--map-figure``: the (omega, c) map's figure, ``docs/figures/chaos-map-omega_clearance.png``,
+  drawn again from ``omega_clearance_map.nc`` with where ``periodic_end.nc``'s period-1 motion
+  ends (per clearance and direction, to 0.01 pi) over it (``make chaos-maps`` runs it last).
 - ``periodic_end_hunt_crossley.nc``: the same for ``studies/periodic_end_hunt_crossley.toml``
   (c = 100 um under the Hunt-Crossley law); ``python data/regenerate.py
   --periodic-end-hunt-crossley`` (minutes on 2 workers).
@@ -254,6 +257,21 @@ def periodic_end(target: Path, workers: int = 2, study: str = "periodic_end") ->
     return target
 
 
+def map_figure(target: Path) -> Path:
+    """The (omega, c) chaos map's figure from ``omega_clearance_map.nc`` with the end of the
+    period-1 motion of ``periodic_end.nc`` drawn over it, written to ``target`` (PNG)."""
+    from workbench.archive import save_figure
+    from workbench.plot import chaos_map_figure
+
+    maps = workbench.open_run(DATA / "omega_clearance_map.nc")
+    ends = workbench.open_run(DATA / "periodic_end.nc")
+    fig = chaos_map_figure(
+        maps, scales={"omega": 1 / math.pi}, labels={"omega": "crank speed omega / pi"}, ends=ends
+    )
+    save_figure(fig, target, dpi=150, close=True)
+    return target
+
+
 def fourbar_scenes() -> tuple[workbench.Scene, workbench.Scene]:
     """The scenes of ``fourbar_sweep.nc`` and ``fourbar_chaos_map.nc``: the four-bar of
     studies/mechanisms/fourbar.toml with Coulomb friction c_f = 0.1 at B, strobe samples of
@@ -324,6 +342,8 @@ if __name__ == "__main__":
     elif sys.argv[1:2] == ["--periodic-end-hunt-crossley"]:
         study = "periodic_end_hunt_crossley"
         print(periodic_end(DATA / f"{study}.nc", study=study))
+    elif sys.argv[1:2] == ["--map-figure"]:
+        print(map_figure(ROOT / "docs" / "figures" / "chaos-map-omega_clearance.png"))
     elif sys.argv[1:2] == ["--upgrade"]:
         for archive in sorted(DATA.glob("*.nc")):
             print(upgrade(archive))

@@ -373,3 +373,45 @@ def test_curves_are_drawn_over_a_chaos_map_within_its_extent(pd_curve):
     with pytest.raises(ValueError, match="cannot be drawn on a map over"):
         chaos_map_figure(other, indicators=("strobe_period",), curves=[pd_curve])
     assert curve_figure([pd_curve]).axes[0].get_xlabel().startswith("forcing amplitude")
+
+
+def test_where_a_continued_sweep_stops_being_period_1_is_drawn_over_a_chaos_map():
+    """Per direction and clearance the marker sits at the last value of the run of period-1
+    values from the bottom of omega (going up: period 1 up to 1.84 pi, then none; at the second
+    clearance the run ends at 1.82 pi though 1.84 pi is period 1 again), with a bar to the next
+    value; a clearance whose first value is not period-1 has none."""
+    from workbench.plot import chaos_map_figure
+
+    omega = np.array([1.8, 1.82, 1.84, 1.86]) * np.pi
+    c = np.array([2e-5, 4e-5, 6e-5])
+    up = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1], [0, 0, 0]], np.int8)  # (omega, clearance)
+    down = up.copy()
+    down[2, 0] = 0
+    down[0, 2] = 0
+    coords = {
+        "omega": ("omega", omega, {"units": "rad s-1", "long_name": "crank speed"}),
+        "clearance": ("clearance", c, {"units": "m", "long_name": "clearance"}),
+    }
+    ends = xr.Dataset(
+        {"strobe_period": (("direction", "omega", "clearance"), np.stack([up, down]))},
+        coords={**coords, "direction": ("direction", ["up", "down"])},
+    )
+    maps = xr.Dataset(
+        {"strobe_period": (("omega", "clearance"), up, {"units": "1"})},
+        coords=coords,
+        attrs={"campaign_dims": "omega clearance"},
+    )
+    fig = chaos_map_figure(
+        maps, indicators=("strobe_period",), scales={"omega": 1 / np.pi}, ends=ends
+    )
+    ax = fig.axes[0]
+    lines = {l.get_label(): l for l in ax.lines}
+    going_up, coming_down = lines["period 1 ends (sweep up)"], lines["period 1 ends (sweep down)"]
+    assert np.allclose(going_up.get_xdata(), [1.84, 1.8, 1.84])
+    assert np.allclose(going_up.get_ydata(), [0.02, 0.04, 0.06])  # mm
+    assert np.allclose(coming_down.get_xdata(), [1.82, 1.8])  # none at 60 um
+    assert np.allclose(coming_down.get_ydata(), [0.02, 0.04])
+    bars = [l for l in ax.lines if l.get_label().startswith("_")]
+    assert [tuple(np.round(b.get_xdata(), 6)) for b in bars[:3]] == [
+        (1.84, 1.86), (1.8, 1.82), (1.84, 1.86)
+    ]  # fmt: skip

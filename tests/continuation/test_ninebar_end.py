@@ -84,3 +84,41 @@ def test_the_map_jumps_where_that_contact_lifts_off(end):
     far, ratio_far = moved(1e-2)
     assert near.events == 40 and ratio_near < 1.0, ratio_near
     assert far.events == 42 and ratio_far > 10.0, ratio_far
+
+
+@pytest.mark.slow
+def test_a_grazing_curve_starts_from_that_dip_not_from_a_broader_extremum(end):
+    """A grazing curve (:func:`workbench.continuation.continue_curve`) starts Newton's method
+    at the touch its ``_touch`` finds. Sampled at a fixed 1024 points per period (the code
+    before) it picked another extremum of A's event function, 12 ms from the dip, with
+    h = -1.1e-4 of its scale and dh/dt far from 0; read off the refined contact sequence it
+    starts at the dip itself."""
+    from workbench.continuation._curve import _touch
+
+    smap, pt = end
+    span = smap.periods * smap.prepared(pt.p).period
+    k, theta, value = _touch(smap, pt.y, pt.aux, pt.p, 0)
+    assert k == 0 and abs(theta * span - 0.9519) < 1e-3, (k, theta * span)
+    assert 0.0 < value < 1e-10, value
+    assert _touch(smap, pt.y, pt.aux, pt.p, None)[:2] == (k, theta)
+
+
+@pytest.mark.slow
+def test_another_member_of_the_lasting_contact_family_has_not_lifted_off_past_its_grazing():
+    """The lasting-contact orbit is a family, one per held onset velocity (docs/continuation.md).
+    The member the route study continues from 1.8 pi lifts off at 1.843 pi (studies/REPORT.md).
+    At 1.845 pi, past that, Newton's method from a 200-period transient finds another member,
+    held velocities about 0.11 and 1.68 mm/s, with no event at all and its shallowest
+    penetration 3.2e-8 m, 5 % of its range: under the Lankarani-Nikravesh law the lift-off is
+    not one value of omega but one per member."""
+    scene = workbench.load_scene(SCENE).replace(sweep={})
+    smap = StrobeMap(scene, "omega", rtol=1e-10)
+    omega = 1.845 * math.pi
+    y, aux = smap.initial(omega, 200)
+    pt = orbit_at(smap, y, aux, omega, tolerance=1e-6, max_iterations=15)
+    assert pt.value.events == 0
+    assert abs(pt.aux[0] - 1.14e-4) < 1e-5 and abs(pt.aux[1] - 1.68e-3) < 1e-4, pt.aux
+    seq = smap.contact_sequence(pt.y, pt.aux, pt.p)
+    k, _, value = seq.smallest_margin()
+    assert seq.counts == (0, 0, 0, 0)
+    assert 2e-8 < value < 5e-8 and 0.02 < value / seq.scale[k] < 0.1, (value, seq.scale[k])

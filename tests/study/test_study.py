@@ -625,13 +625,14 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     report says whether the orbit loses stability or ends at a lift-off, and the history."""
     import math
 
-    from workbench.study._route_end import _last_periodic, end_bracket
+    from workbench.continuation import periodic_run_end
+    from workbench.study._route_end import end_bracket
     from workbench.study._route_report import route_section
 
     assert end_bracket([1, 1, 0, 1, 0]) == 1
     assert end_bracket([0, 0, 1]) is None and end_bracket([1, 1, 1]) is None
-    assert _last_periodic([1.0, 2.0, 3.0, 4.0], [1, 1, 2, 1]) == 2.0
-    assert _last_periodic([1.0, 2.0], [0, 1]) is None
+    assert periodic_run_end([1.0, 2.0, 3.0, 4.0], [1, 1, 2, 1]) == 2.0
+    assert periodic_run_end([1.0, 2.0], [0, 1]) is None
     pi = math.pi
     values = [1.8 * pi, 1.85 * pi, 1.9 * pi]
     sweep = {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]}

@@ -8,7 +8,8 @@ stored in given units with: lengths in mm, others as stored, the same in every f
 title broken into lines), :func:`failure_note` and :func:`run_status_note` (text on failed
 points or a failed run), :func:`mark_failed` (marks failed parameter values on given axes and
 returns a note), :func:`curve_overlay` (draws a curve of bifurcations in two parameters on
-given axes) and :func:`run_figure_names` (the file names :func:`run_figures` writes). The
+given axes), :func:`periodic_end_overlay` (draws where a continued sweep's period-1 motion
+ends) and :func:`run_figure_names` (the file names :func:`run_figures` writes). The
 overview figure that :func:`run_figures` adds for a model is the model's to declare
 (:attr:`workbench.models.Model.overview_figure`).
 """
@@ -31,6 +32,7 @@ from workbench.plot._continuation import (
     chaos_map_figure,
     curve_figure,
     curve_overlay,
+    periodic_end_overlay,
 )
 from workbench.plot._failures import failure_note, mark_failed, run_status_note
 from workbench.plot._phase import (
@@ -69,6 +71,7 @@ __all__ = [
     "chaos_map_figure",
     "curve_figure",
     "curve_overlay",
+    "periodic_end_overlay",
     "embedding_figure",
     "floquet_figure",
     "jacobian_spectrum_figure",

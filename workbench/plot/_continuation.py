@@ -176,6 +176,7 @@ def chaos_map_figure(
     scales: Mapping[str, float] | None = None,
     labels: Mapping[str, str] | None = None,
     curves: Sequence[xr.Dataset] = (),
+    ends: xr.Dataset | None = None,
 ):
     """Maps of chaos indicators over the two parameter dims of a campaign (from
     :func:`workbench.continuation.chaos_map`): one panel per indicator, the first dim on the
@@ -187,7 +188,9 @@ def chaos_map_figure(
     below the panel says so
     where any cell is marked. ``curves`` (of :func:`workbench.continuation.continue_curve` in
     the map's two parameters, either way round) are drawn over every panel
-    (:func:`curve_overlay`), within the map's extent, with a legend on the first panel."""
+    (:func:`curve_overlay`), within the map's extent, with a legend on the first panel; so is
+    where the period-1 motion of a continued sweep over the same two parameters ends
+    (``ends``, :func:`periodic_end_overlay`)."""
     scales = dict(scales or {})
     labels = dict(labels or {})
     dims = maps.attrs["campaign_dims"].split()
@@ -238,14 +241,17 @@ def chaos_map_figure(
         ax.set_xlabel(labels.get(xd, axis_label(maps[xd])))
         ax.set_ylabel(labels.get(yd, axis_label(maps[yd])))
         ax.set_title(f"{name}{units_label(maps[name].attrs.get('units'))}", fontsize=9)
-        if curves:
+        if curves or ends is not None:
             limits = ax.get_xlim(), ax.get_ylim()
+            first = ax is axes[0][0]
             for c in curves:
-                curve_overlay(ax, c, x=xd, y=yd, scales=scales, marks=ax is axes[0][0])
+                curve_overlay(ax, c, x=xd, y=yd, scales=scales, marks=first)
+            if ends is not None:
+                periodic_end_overlay(ax, ends, x=xd, y=yd, scales=scales, marks=first)
             ax.set_xlim(*limits[0])
             ax.set_ylim(*limits[1])
-            if ax is axes[0][0]:
-                ax.legend(fontsize=7, loc="best", framealpha=0.8)
+            if first:
+                ax.legend(fontsize=7, loc="upper left", framealpha=0.8)
     fig.tight_layout()
     return fig
 
@@ -317,6 +323,65 @@ def curve_overlay(
             ax.annotate(text, (xs[i], ys[i]), textcoords="offset points", xytext=(4, 4),
                         fontsize=7)
         )  # fmt: skip
+    return drawn
+
+
+#: marker and name of each direction of a continued sweep's periodic end (periodic_end_overlay)
+END_MARKS = {"up": (">", "sweep up"), "down": ("<", "sweep down")}
+
+
+def periodic_end_overlay(
+    ax,
+    ends: xr.Dataset,
+    *,
+    x: str = "omega",
+    y: str | None = None,
+    scales: Mapping[str, float] | None = None,
+    marks: bool = True,
+) -> list:
+    """Draw where the period-1 motion of a continued sweep ends (``ends``: ``strobe_period``
+    over ``x``, ``y`` and ``direction``, e.g. ``data/periodic_end.nc``) on given axes, e.g. a
+    chaos map's panel: per direction and value of ``y`` (default the other dim), a marker at
+    the last value of the run of period-1 values from the bottom of ``x``
+    (:func:`workbench.continuation.periodic_run_end`: going up, where the periodic motion
+    ends; coming down, where it has set in again) and a bar to the next value of ``x``, the
+    bracket the end lies in. ``scales`` as in :func:`curve_overlay`; with ``marks`` legend
+    entries. Returns the artists drawn."""
+    from workbench.continuation import periodic_run_end
+
+    period = ends["strobe_period"]
+    if y is None:
+        others = [d for d in period.dims if d not in (x, "direction")]
+        if len(others) != 1:
+            raise ValueError(
+                f"ends: strobe_period over {list(period.dims)!r}; give y, the dim other than "
+                f"{x!r} and 'direction'"
+            )
+        y = others[0]
+    scales = dict(scales or {})
+    sx = scales.get(x, display_unit(ends[x].attrs.get("units"))[0])
+    sy = scales.get(y, display_unit(ends[y].attrs.get("units"))[0])
+    xs = ends[x].values
+    drawn = []
+    for direction in ends["direction"].values:
+        marker, name = END_MARKS.get(str(direction), ("o", str(direction)))
+        line_x, line_y = [], []
+        for yv in ends[y].values:
+            runs = period.sel({"direction": direction, y: yv}).transpose(x).values
+            last = periodic_run_end(list(xs), [int(k) for k in runs])
+            if last is None:
+                continue
+            i = int(np.flatnonzero(xs == last)[0])
+            bar = [last, xs[min(i + 1, xs.size - 1)]]
+            drawn += ax.plot(np.array(bar) * sx, [yv * sy] * 2, "-", color="k", lw=1.0)
+            line_x.append(last * sx)
+            line_y.append(yv * sy)
+        drawn += ax.plot(
+            line_x, line_y, "--" + marker, color="k", lw=0.8, ms=6, mfc="white", mew=1.2,
+            label=f"period 1 ends ({name})" if marks else None,
+        )  # fmt: skip
+    return drawn
+
     return drawn
 
 

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench._errors import WorkbenchError
+from workbench.continuation import periodic_run_end
 from workbench.study._route_parts import branch_summary, indicators, settled
 
 __all__ = ["HELD_FACTORS", "end_bracket", "periodic_end"]
@@ -51,18 +52,6 @@ def end_bracket(periods: list[int]) -> int | None:
         if periods[i] == 1 and periods[i + 1] != 1:
             return i
     return None
-
-
-def _last_periodic(values: list[float], periods: list[int]) -> float | None:
-    """The end of the run of period-1 values at the bottom of the range (None: the first value
-    is not period-1). For the upward sweep, where its periodic motion ends; for the downward
-    one, where periodic motion has set in again once the sweep comes down."""
-    last = None
-    for v, k in zip(values, periods, strict=True):
-        if k != 1:
-            break
-        last = v
-    return last
 
 
 def periodic_end(
@@ -100,8 +89,8 @@ def periodic_end(
         "values": fine,
         "transient_cycles": transient,
         "directions": fper,
-        "last_periodic_up": _last_periodic(fine, fper["up"]["period"]),
-        "last_periodic_down": _last_periodic(fine, fper["down"]["period"]),
+        "last_periodic_up": periodic_run_end(fine, fper["up"]["period"]),
+        "last_periodic_down": periodic_run_end(fine, fper["down"]["period"]),
         "cpu_time": float(ds.attrs["campaign_cpu_time"]),
     }
     if out["last_periodic_up"] is None:
