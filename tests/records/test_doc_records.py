@@ -381,3 +381,27 @@ def test_the_models_page_quotes_the_lugre_damping_record():
     peak = re.search(r"constant damping \(316\.2 s/m\) reaches ([\d.]+),", record).group(1)
     assert f"|F_t|/F_n to tens ({peak} on the paper's Sec. 4.2 case" in _page("models.md")
     assert 10 <= float(peak) < 100  # "tens"
+
+
+def test_the_grazing_curves_of_the_audit_are_the_newest_stop_curve_record():
+    """docs/continuation.md, the grazing audit's curves in the force: the newest
+    ``grazing_audit.py --systems stop-curve`` record, its command, counts and the curves that
+    turn at the least grazing force (within the audit's 1e-6 of it)."""
+    page = _page("continuation.md")
+    runs = [r for r in records("grazing_audit.py") if "stop-curve" in r["command"]]
+    newest = runs[-1]
+    out = newest["figures"]
+    rows = out["rows"]
+    assert newest["command"].endswith("--seed 13 --cases 10 --systems stop-curve")
+    assert "`python benchmarks/grazing_audit.py --seed 13 --cases 10 --systems stop-curve`" in page
+    right = sum(r["curve_relative_error"] <= 1e-6 for r in rows)
+    covered = sum(r["curve_covered"] for r in rows)
+    assert (out["curves"], out["curves_right"], right, covered) == (10, 10, 10, 10)
+    assert "10 grazing curves, 10 within 1e-06 of the closed form at every point, 10 covering" in (
+        page
+    )
+    turned = [r for r in rows if r["curve_force_range"][0] > 0.8 * r["parameters"]["force"]]
+    assert len(turned) == 2 and "two of them turn in the force" in page
+    for r in turned:
+        assert "second_parameter_turn" in r["curve_special"]
+        assert abs(r["curve_force_range"][0] / r["least_force"] - 1) < 1e-6
