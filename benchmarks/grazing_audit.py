@@ -126,13 +126,19 @@ def _amplitude(p: dict, w: float) -> float:
     return grazing_amplitude({**p, "gap": 1.0, "omega": w})
 
 
-def stop_rows(rng, case: int):
+def _stop_with_gap(rng) -> tuple[dict, list[float]]:
+    """A stop oscillator drawn with its gap between the static deflection and the resonance
+    peak, and the omegas where its linear orbit grazes (the closed form's roots)."""
     p = _stop_draw(rng)
     w0 = math.sqrt(p["stiffness"] / p["mass"])
     peak = max(_amplitude(p, w) for w in np.linspace(0.3 * w0, 2 * w0, 400))
     static = p["force"] / p["stiffness"] * 1.05
     p["gap"] = float(static + rng.uniform(0.2, 0.8) * (peak - static))
-    g = _roots(lambda w: _amplitude(p, w) - p["gap"], 0.2 * w0, 3 * w0, 2000)
+    return p, _roots(lambda w: _amplitude(p, w) - p["gap"], 0.2 * w0, 3 * w0, 2000)
+
+
+def stop_rows(rng, case: int):
+    p, g = _stop_with_gap(rng)
     yield _branch("stop", case, p, "stop_oscillator", "omega", g[0] * 0.9, g[0] * 1.05, g[0])
     yield _branch("stop", case, p, "stop_oscillator", "omega", g[-1] * 1.1, g[-1] * 0.97, g[-1])
     # from the impacting side out of the contact: down through the lower grazing
@@ -191,12 +197,7 @@ def _force_curve(p: dict):
 
 
 def stop_curve_rows(rng, case: int):
-    p = _stop_draw(rng)
-    w0 = math.sqrt(p["stiffness"] / p["mass"])
-    peak = max(_amplitude(p, w) for w in np.linspace(0.3 * w0, 2 * w0, 400))
-    static = p["force"] / p["stiffness"] * 1.05
-    p["gap"] = float(static + rng.uniform(0.2, 0.8) * (peak - static))
-    g = _roots(lambda w: _amplitude(p, w) - p["gap"], 0.2 * w0, 3 * w0, 2000)
+    p, g = _stop_with_gap(rng)
     yield _branch(
         "stop-curve", case, p, "stop_oscillator", "omega", g[0] * 0.9, g[0] * 1.05, g[0],
         then=_force_curve(p),

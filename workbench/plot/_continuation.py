@@ -382,8 +382,6 @@ def periodic_end_overlay(
         )  # fmt: skip
     return drawn
 
-    return drawn
-
 
 def _flag(da: xr.DataArray, code: int) -> str:
     """The flag meaning of ``code`` in a CF-flagged variable."""
