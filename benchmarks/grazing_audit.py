@@ -18,7 +18,8 @@ Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
   codimension-two points;
 - ``impact``: the impact oscillator (``impact_oscillator``, m = k = F = 1) with damping ratio
   0.05-2, restitution 0.3-0.95 and the gap set so that the grazing lies at omega 1.3-3 rad/s;
-  omega continued down through it.
+  omega continued down through it;
+- ``impact-curve``: the same draws, the grazing continued in the force as for ``stop-curve``.
 
 Per branch: the located grazing's relative error, the other labels with their critical
 multipliers, the labels that contradict them (a fold or branch point with no multiplier within
@@ -47,7 +48,7 @@ from workbench.models.stop_oscillator import grazing_amplitude
 
 #: a grazing within this relative distance of its closed form is right (issue 38, item 8)
 RELATIVE = 1e-6
-SYSTEMS = ("stop", "stop-force-gap", "stop-curve", "impact")
+SYSTEMS = ("stop", "stop-force-gap", "stop-curve", "impact", "impact-curve")
 
 
 def _roots(f, lo: float, hi: float, n: int = 4000) -> list[float]:
@@ -204,13 +205,27 @@ def stop_curve_rows(rng, case: int):
     )  # fmt: skip
 
 
-def impact_rows(rng, case: int):
+def _impact_with_gap(rng) -> tuple[dict, float]:
+    """An impact oscillator drawn with its gap, and the omega where its linear orbit grazes
+    (the closed form's upper root)."""
     zeta = float(10 ** rng.uniform(-1.3, 0.3))
     p = {"mass": 1.0, "damping": 2 * zeta, "stiffness": 1.0, "force": 1.0}
     p["restitution"] = float(rng.uniform(0.3, 0.95))
     p["gap"] = _amplitude(p, float(rng.uniform(1.3, 3.0)))
-    wg = max(_roots(lambda w: _amplitude(p, w) - p["gap"], 0.2, 4.0))
+    return p, max(_roots(lambda w: _amplitude(p, w) - p["gap"], 0.2, 4.0))
+
+
+def impact_rows(rng, case: int):
+    p, wg = _impact_with_gap(rng)
     yield _branch("impact", case, p, "impact_oscillator", "omega", wg * 1.15, wg * 0.95, wg)
+
+
+def impact_curve_rows(rng, case: int):
+    p, wg = _impact_with_gap(rng)
+    yield _branch(
+        "impact-curve", case, p, "impact_oscillator", "omega", wg * 1.15, wg * 0.95, wg,
+        then=_force_curve(p),
+    )  # fmt: skip
 
 
 def _curve_text(row: dict) -> str:
@@ -241,6 +256,7 @@ def main() -> None:
         make = {
             "stop": stop_rows, "stop-force-gap": stop_force_gap_rows,
             "stop-curve": stop_curve_rows, "impact": impact_rows,
+            "impact-curve": impact_curve_rows,
         }  # fmt: skip
         for case in range(args.cases):
             for row in make[name](rng, case):
