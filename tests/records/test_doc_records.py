@@ -405,3 +405,21 @@ def test_the_grazing_curves_of_the_audit_are_the_newest_stop_curve_record():
     for r in turned:
         assert "second_parameter_turn" in r["curve_special"]
         assert abs(r["curve_force_range"][0] / r["least_force"] - 1) < 1e-6
+
+
+def test_the_impact_oscillator_s_grazing_curves_are_the_newest_impact_curve_record():
+    """docs/continuation.md: the audit's rigid impact oscillators, whose grazing curves in the
+    force do not get away from their start (the newest ``--systems impact-curve`` record)."""
+    page = _page("continuation.md")
+    runs = [r for r in records("grazing_audit.py") if "impact-curve" in r["command"]]
+    newest = runs[-1]
+    rows = newest["figures"]["rows"]
+    assert newest["command"].endswith("--seed 3 --cases 5 --systems impact-curve")
+    assert "benchmarks/grazing_audit.py --seed 3 --cases 5 --systems impact-curve`" in page
+    assert all(r["relative_error"] <= 1e-6 and r["curve_relative_error"] <= 1e-6 for r in rows)
+    stuck = [r for r in rows if r["curve_points"] == 1]
+    (moved,) = [r for r in rows if r["curve_points"] > 1]
+    assert len(stuck) == 4 and not any(r["curve_covered"] for r in rows)
+    low = moved["curve_force_range"][0] / moved["parameters"]["force"]
+    assert f"4 of the 5 curves stop at their first point and the fifth reaches {low:.2f}" in page
+    assert all(r["curve_ended"].count("the corrector failed at the least step") == 2 for r in rows)
