@@ -397,11 +397,18 @@ UNCHANGED = {
     "stop dop853": ("84b35013de2c043e", 371, 160, 6539, 12),
     "stop dopri5": ("69b13381e290e783", 1872, 132, 12038, 12),
     "stop ark548": ("c0d1c600131a1ca4", 2128, 142, 18225, 12),
-    "stop radau": ("bf41834428638624", 6212, 94, 31835, 12),
+    "stop radau": (None, 6212, 94, 31835, 12),  # see LAPACK_BOUND
     "stop auto": ("84b35013de2c043e", 371, 160, 6539, 12),
     "stop tangent": ("3f50912d98515379", 566, 355, 11222, 12),
     "ball": ("9e07ce71a85bf01a", 12, 5, 240, 4),
 }
+#: Radau IIA solves its stage systems with LAPACK, whose OpenBLAS kernels are chosen for the
+#: processor at run time: on an AMD EPYC the run of UNCHANGED takes 6215 steps (108 rejected)
+#: where the machine its figures were recorded on took 6212 (94), with other bits, before and
+#: after the monitoring alike. Its records are held to the DOP853 run's within this (m, m/s:
+#: both at rtol 1e-9 over 10 periods; they differ by 5.4e-9 on that EPYC), its modes to the
+#: same and its steps to 1 %.
+LAPACK_BOUND = 1e-7
 #: evaluations of one dense output where the monitoring prepares it to check an extremum that
 #: shows no crossing: DOP853's three extra stages (also in ``auto``'s DOP853 phases), ARK548's
 #: one; DOPRI5's and Radau IIA's dense outputs cost none
@@ -429,9 +436,15 @@ def test_runs_without_hidden_crossings_are_unchanged():
     method, a tangent system and a model with state updates at its events. The evaluations
     differ only by the dense outputs of extrema checked near zero (none where the method's
     dense output is free)."""
-    for name, r in _unchanged_runs():
+    runs = dict(_unchanged_runs())
+    for name, r in runs.items():
         st = r.stats
         digest, steps, rejected, evaluations, events = UNCHANGED[name]
+        if digest is None:  # the processor's LAPACK kernels set the bits (LAPACK_BOUND)
+            assert np.max(np.abs(r.Y - runs["stop dop853"].Y)) < LAPACK_BOUND, name
+            assert np.array_equal(r.AUX, runs["stop dop853"].AUX), name
+            assert st["events"] == events and abs(st["steps"] - steps) <= 0.01 * steps, name
+            continue
         assert _digest(r.Y, r.AUX) == digest, name
         assert (st["steps"], st["rejected_steps"], st["events"]) == (steps, rejected, events), name
         extra = st["rhs_evaluations"] - evaluations

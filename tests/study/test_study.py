@@ -625,7 +625,7 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     report says whether the orbit loses stability or ends at a lift-off, and the history."""
     import math
 
-    from workbench.continuation import periodic_run_end
+    from workbench.analysis import periodic_run_end
     from workbench.study._route_end import end_bracket
     from workbench.study._route_report import route_section
 

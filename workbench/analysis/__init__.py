@@ -2,7 +2,8 @@
 Lyapunov exponents (Wolf et al. 1985; Rosenstein et al. 1993 via nolds; from the equations,
 Benettin et al. 1980: two trajectories, and the spectrum from the variational equations with
 saltation at events; the largest one by protocol, :func:`largest_exponent`), the 0-1 test
-for chaos and bifurcation diagrams; a series with nothing to analyse (:func:`no_dynamics`)
+for chaos and bifurcation diagrams (with where a sweep's period-1 motion ends,
+:func:`periodic_run_end`); a series with nothing to analyse (:func:`no_dynamics`)
 and one that cannot be told from linear noise (:func:`surrogate_test`) are said so.
 
 Every estimator accepts numpy arrays and xarray DataArrays (a ``time`` coordinate gives dt) and
@@ -20,7 +21,7 @@ campaign.x)`` has ``K`` over the campaign's parameters.
 
 from workbench.analysis import _delay, _embedding, _rosenstein, _wolf, _zero_one
 from workbench.analysis._benettin import lle_from_equations
-from workbench.analysis._bifurcation import bifurcation_diagram
+from workbench.analysis._bifurcation import bifurcation_diagram, periodic_run_end
 from workbench.analysis._broadcast import over_parameters
 from workbench.analysis._convergence import ConvergenceWarning
 from workbench.analysis._degenerate import no_dynamics
@@ -57,6 +58,7 @@ __all__ = [
     "lle_from_equations",
     "lyapunov_spectrum",
     "no_dynamics",
+    "periodic_run_end",
     "phase_portrait",
     "poincare_section",
     "rosenstein_lle",

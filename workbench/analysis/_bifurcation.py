@@ -1,4 +1,5 @@
-"""Bifurcation diagrams from campaigns: stroboscopic samples against a swept parameter."""
+"""Bifurcation diagrams from campaigns: stroboscopic samples against a swept parameter, and where
+a sweep's period-1 motion ends."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from workbench.analysis._sections import poincare_section
 from workbench.archive import status_flags
 from workbench.solver import Status
 
-__all__ = ["bifurcation_diagram"]
+__all__ = ["bifurcation_diagram", "periodic_run_end"]
 
 
 def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) -> xr.Dataset:
@@ -74,3 +75,19 @@ def bifurcation_diagram(runs: xr.Dataset, var: str, param: str | None = None) ->
         samples["status"] = runs["status"]
     samples.attrs.update(diagram_parameter=param, diagram_variable=var)
     return samples
+
+
+def periodic_run_end(values, periods) -> float | None:
+    """The last of ``values`` (ascending) in the run of period-1 ``periods`` that starts at the
+    first value (None: the first is not period-1). For a sweep going up, where its periodic
+    motion ends; for one coming down, where periodic motion has set in again.
+
+    >>> periodic_run_end([1.0, 1.1, 1.2, 1.3], [1, 1, 0, 1])
+    1.1
+    """
+    last = None
+    for v, k in zip(values, periods, strict=True):
+        if k != 1:
+            break
+        last = v
+    return last

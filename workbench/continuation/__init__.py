@@ -14,7 +14,6 @@ from workbench.continuation._indicators import (
     chaos_indicators,
     chaos_map,
     lle_cycles,
-    periodic_run_end,
     strobe_period,
     strobe_zero_one,
 )
@@ -38,7 +37,6 @@ __all__ = [
     "exponent_method",
     "lle_cycles",
     "periodic_orbit",
-    "periodic_run_end",
     "point_exponent",
     "strobe_period",
     "strobe_zero_one",

@@ -119,22 +119,6 @@ LLE_FULL_PROTOCOL = flags(
 )
 
 
-def periodic_run_end(values, periods) -> float | None:
-    """The last of ``values`` (ascending) in the run of period-1 ``periods`` that starts at the
-    first value (None: the first is not period-1). For a sweep going up, where its periodic
-    motion ends; for one coming down, where periodic motion has set in again.
-
-    >>> periodic_run_end([1.0, 1.1, 1.2, 1.3], [1, 1, 0, 1])
-    1.1
-    """
-    last = None
-    for v, k in zip(values, periods, strict=True):
-        if k != 1:
-            break
-        last = v
-    return last
-
-
 def strobe_period(samples: np.ndarray, tolerance: float = PERIOD_TOLERANCE) -> int:
     """The least k (1 .. :data:`MAX_PERIOD`) such that every strobe sample of the second half
     of the series equals the one k periods later (rows: samples, columns: variables; equal

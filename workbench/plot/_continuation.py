@@ -343,11 +343,11 @@ def periodic_end_overlay(
     over ``x``, ``y`` and ``direction``, e.g. ``data/periodic_end.nc``) on given axes, e.g. a
     chaos map's panel: per direction and value of ``y`` (default the other dim), a marker at
     the last value of the run of period-1 values from the bottom of ``x``
-    (:func:`workbench.continuation.periodic_run_end`: going up, where the periodic motion
+    (:func:`workbench.analysis.periodic_run_end`: going up, where the periodic motion
     ends; coming down, where it has set in again) and a bar to the next value of ``x``, the
     bracket the end lies in. ``scales`` as in :func:`curve_overlay`; with ``marks`` legend
     entries. Returns the artists drawn."""
-    from workbench.continuation import periodic_run_end
+    from workbench.analysis import periodic_run_end
 
     period = ends["strobe_period"]
     if y is None:

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench._errors import WorkbenchError
-from workbench.continuation import periodic_run_end
+from workbench.analysis import periodic_run_end
 from workbench.study._route_parts import branch_summary, indicators, settled
 
 __all__ = ["HELD_FACTORS", "end_bracket", "periodic_end"]
