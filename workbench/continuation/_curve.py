@@ -919,18 +919,16 @@ def _touch(smap: StrobeMap, y, aux, p: float, event: int | None):
     if event is not None and not 0 <= event < ne:
         raise ValueError(f"event={event!r}: the model has {ne} event functions (0 .. {ne - 1})")
     seq = smap.contact_sequence(np.asarray(y, float), np.asarray(aux, float), p)
-    best, rel = None, math.inf
-    for k in range(ne) if event is None else (event,):
-        if seq.extrema[k].shape[0] == 0:
-            continue
-        margins = seq.margin(k)
-        j = int(np.argmin(margins))
-        if margins[j] < rel:
-            phase, value = float(seq.extrema[k][j, 0]), float(seq.extrema[k][j, 1])
-            rel, best = float(margins[j]), (k, (phase / seq.span) % 1.0, value)
-    if best is None:
+    if event is None:
+        k, phase, value = seq.smallest_margin()
+    elif seq.extrema[event].shape[0]:
+        k, j = event, int(np.argmin(seq.margin(event)))
+        phase, value = float(seq.extrema[k][j, 0]), float(seq.extrema[k][j, 1])
+    else:
+        k = -1
+    if k < 0:
         raise ValueError("kind='grazing': no local extremum of an event function along the orbit")
-    return best
+    return k, (phase / seq.span) % 1.0, value
 
 
 # -- the dataset --------------------------------------------------------------------------------
