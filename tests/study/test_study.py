@@ -714,6 +714,92 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     ) in text
 
 
+def test_the_report_says_whether_the_end_survives_another_contact_law():
+    """``[route] end_other_contact``: the highest period-1 value going up under each law, the
+    same within half the refined step (the end survives) or not (it moves, by how much), the
+    other law's non-periodic values below its end, and its orbit there."""
+    import math
+
+    from workbench.study._route_report import route_section
+
+    pi = math.pi
+    fine = [1.8 * pi + 0.01 * pi * k for k in range(11)]
+    sweep = {"period": [1, 1, 0], "spread": [0, 0, 0.1], "K": [0, 0, 0.99]}
+    route = _route_numbers([1.7 * pi, 1.8 * pi, 1.9 * pi], up=sweep, down=dict(sweep),
+                           hysteresis=[], chained_seams=0)  # fmt: skip
+    ln = [1] * 7 + [0] * 4  # period-1 up to 1.86 pi
+    hc = [1] * 5 + [0, 1] + [0] * 4  # up to 1.84 pi, not at 1.85 pi, again at 1.86 pi
+    other = {
+        "contact": "hunt_crossley",
+        "parameters": {"hunt_crossley_damping": 47.5},
+        "values": fine,
+        "directions": {"up": {"period": hc}},
+        "highest_periodic_up": fine[6],
+        "cpu_time": 180.0,
+        "last_orbit": {
+            "value": fine[6],
+            "largest_modulus": 0.5,
+            "events_per_period": 12.0,
+            "smallest_event": -2e-6,
+        },
+    }
+    route["end"] = {
+        "status": "computed",
+        "bracket": [1.8 * pi, 1.9 * pi],
+        "values": fine,
+        "directions": {"up": {"period": ln}},
+        "last_periodic_up": fine[6],
+        "last_periodic_down": fine[6],
+        "highest_periodic_up": fine[6],
+        "cpu_time": 96.0,
+        "branch_error": "not computed here",
+        "other_contact": other,
+    }
+    text = "\n".join(route_section(route))
+    assert (
+        "*Without the contact's memory* (the refined sweep again under the Hunt-Crossley law, "
+        "hunt_crossley_damping = 47.5; 3.0 min of workers' CPU): going up the strobe is "
+        "period-1 last at 1.86 pi (not at 1.85 pi below it), against 1.86 pi here. **The end "
+        "of periodic motion survives the change of contact law** (the same value, to the "
+        "refined step 0.01 pi)."
+    ) in text
+    assert "Under Hunt-Crossley, the period-1 orbit Newton finds at 1.86 pi" in text
+    assert "12 events per cycle, largest |multiplier| 0.5" in text
+    other["highest_periodic_up"] = fine[4]
+    text = "\n".join(route_section(route))
+    assert "**The end of periodic motion moves with the contact law**, by -0.02 pi." in text
+    other["highest_periodic_up"] = None
+    assert "period-1 at none of the values going up" in "\n".join(route_section(route))
+
+
+@pytest.mark.slow  # ~10 s, and the Hunt-Crossley nine-bar's kernel where not yet compiled
+def test_the_refined_sweep_runs_again_under_the_other_contact_law(tmp_path):
+    """``_under_other_contact`` sweeps with the law it names (the archive's scene says so, and
+    no onset velocity is held) and finds the orbit at its highest period-1 value."""
+    import math
+
+    from workbench import scene_from_toml
+    from workbench.archive import open_run
+    from workbench.study._route import _continued_scene
+    from workbench.study._route_end import _under_other_contact
+
+    study = load_study("bifurcation_speed")
+    scene = study.cases["sweep"].replace(run={"cycles": 8, "transient_cycles": 20})
+    cscene, _ = _continued_scene(scene, dict(study.route), True)
+    pi = math.pi
+    law = {"contact": "hunt_crossley", "hunt_crossley_damping": 47.5}
+    path = tmp_path / "hc.nc"
+    o = _under_other_contact(scene, cscene, "omega", [0.95 * pi, pi], 3, law, path, 1)
+    ran = scene_from_toml(open_run(path).attrs["scene"])
+    assert ran.effects["contact"] == "hunt_crossley"
+    assert ran.parameters["hunt_crossley_damping"] == 47.5
+    assert not [v for v in open_run(path).data_vars if "held" in v]
+    assert o["directions"]["up"]["period"] == [1, 1] and o["highest_periodic_up"] == pi
+    orbit = o["last_orbit"]
+    assert orbit["value"] == pi and orbit["events_per_period"] == 0  # lasting contact at pi
+    assert 0 < orbit["largest_modulus"] < 1 and orbit["smallest_event"] > 0
+
+
 def test_quick_route_of_the_speed_sweep(tmp_path):
     """A study's [route] end to end, shortened (no branch, no exponents): the sweep continued
     both ways, per direction the strobe spread, period and K, the hysteresis, the figures."""

@@ -24,7 +24,11 @@ period-1 while the next is not. Within that bracket:
    orbit (the mechanisms: each contact's onset velocity, which sets the Lankarani-Nikravesh
    damping, Lankarani & Nikravesh 1990, for as long as the contact lasts), the same orbit is
    found again with those held values scaled by ``HELD_FACTORS``, and its largest |multiplier|
-   reported for each: a family of orbits, one per onset velocity, not one orbit.
+   reported for each: a family of orbits, one per onset velocity, not one orbit;
+4. with ``end_other_contact`` (a table: ``contact``, the ``[effects]`` contact law, and that
+   law's ``[parameters]``, e.g. ``{contact = "hunt_crossley", hunt_crossley_damping = 47.5}``):
+   the refined sweep of 1. again under that law, and the orbit Newton finds at its last periodic
+   value, to say whether the end survives a contact law without the memory of 3.
 """
 
 from __future__ import annotations
@@ -67,32 +71,22 @@ def periodic_end(
 ) -> dict:
     """Where the period-1 motion of the continued sweep ``per`` (over ``values``) ends, and how
     (see the module docstring): a dict for the summary."""
-    from workbench.continuation import continued_sweep
-
     i = end_bracket(per["up"]["period"])
     if i is None:
         return {"status": "no end", "reason": "no period-1 value is followed by another going up"}
     lo, hi = values[i], values[i + 1]
     fine = [float(v) for v in np.linspace(lo, hi, int(spec["refine"]))]
     transient = int(spec.get("end_transient_cycles", 30))
-    sweep = {
-        param: fine,
-        "continuation": dict(cscene.continuation, segments=1, transient_cycles=transient),
-    }
     path = directory / f"{case}-refined.nc"
-    ds = continued_sweep(cscene.replace(sweep=sweep), path, workers=workers, restart=True)
-    fper, _ = indicators(ds, scene, param, fine)
-    out: dict = {
-        "status": "computed",
-        "archive": str(path),
-        "bracket": [lo, hi],
-        "values": fine,
-        "transient_cycles": transient,
-        "directions": fper,
-        "last_periodic_up": periodic_run_end(fine, fper["up"]["period"]),
-        "last_periodic_down": periodic_run_end(fine, fper["down"]["period"]),
-        "cpu_time": float(ds.attrs["campaign_cpu_time"]),
-    }
+    ds, refined = _refined(scene, cscene, param, fine, transient, path, workers)
+    out: dict = {"status": "computed", "bracket": [lo, hi], "transient_cycles": transient}
+    out |= refined
+    other = spec.get("end_other_contact")
+    if other:
+        out["other_contact"] = _under_other_contact(
+            scene, cscene, param, fine, transient, dict(other), directory / f"{case}-refined-"
+            f"{other['contact']}.nc", workers
+        )  # fmt: skip
     if out["last_periodic_up"] is None:
         out["branch_error"] = "the refined sweep is not period-1 at its first value"
         return out
@@ -119,6 +113,49 @@ def periodic_end(
         out["held"] = _held_dependence(point, param, start, out["branch"]["archive"])
         return out
     out["branch_error"] = "; ".join(tried)
+    return out
+
+
+def _refined(scene, cscene, param: str, fine: list, transient: int, path: Path, workers):
+    """The continued sweep of ``cscene`` over ``fine`` both ways (``transient`` cycles per
+    value, one segment) and what it says: the dataset and a dict of its archive, values,
+    per-direction indicators, the last periodic value each way (:func:`workbench.analysis.
+    periodic_run_end`), the last period-1 value going up with none above it, and its CPU."""
+    from workbench.continuation import continued_sweep
+
+    sweep = {
+        param: fine,
+        "continuation": dict(cscene.continuation, segments=1, transient_cycles=transient),
+    }
+    ds = continued_sweep(cscene.replace(sweep=sweep), path, workers=workers, restart=True)
+    fper, _ = indicators(ds, scene, param, fine)
+    ones = [v for v, k in zip(fine, fper["up"]["period"], strict=True) if k == 1]
+    return ds, {
+        "archive": str(path),
+        "values": fine,
+        "directions": fper,
+        "last_periodic_up": periodic_run_end(fine, fper["up"]["period"]),
+        "last_periodic_down": periodic_run_end(fine, fper["down"]["period"]),
+        "highest_periodic_up": ones[-1] if ones else None,
+        "cpu_time": float(ds.attrs["campaign_cpu_time"]),
+    }
+
+
+def _under_other_contact(
+    scene, cscene, param, fine, transient, other: dict, path: Path, workers
+) -> dict:
+    """:func:`_refined` under another contact law (``other``: ``contact``, the law, and its
+    parameters), with the orbit Newton finds at its highest period-1 value going up."""
+    law = other.pop("contact")
+
+    def changed(s):
+        return s.replace(effects=dict(s.effects, contact=law), parameters=s.parameters | other)
+
+    scene, cscene = changed(scene), changed(cscene)
+    ds, out = _refined(scene, cscene, param, fine, transient, path, workers)
+    out |= {"contact": law, "parameters": other}
+    if out["highest_periodic_up"] is not None:
+        out["last_orbit"] = _orbit_at(scene, ds, param, out["highest_periodic_up"])
     return out
 
 

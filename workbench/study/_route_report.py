@@ -227,22 +227,7 @@ def _end_lines(e: dict, p: str) -> list[str]:
         ),
         "",
     ]
-    o = e.get("last_orbit")
-    if o and "error" in o:
-        lines += [f"At {_v(o['value'], p)} Newton finds no period-1 orbit ({o['error']}).", ""]
-    elif o:
-        lifted = math.isfinite(o["smallest_event"]) and o["smallest_event"] < 0
-        lines += [
-            f"The period-1 orbit Newton finds at {_v(o['value'], p)} (from the refined sweep's "
-            f"state) has {o['events_per_period']:g} events per cycle, largest |multiplier| "
-            f"{o['largest_modulus']:.3g} and smallest event value {o['smallest_event']:.3g} m"
-            + (
-                ": a contact lifts off and closes again every cycle there (an impacting orbit)."
-                if lifted
-                else ": its contacts last through the cycle."
-            ),
-            "",
-        ]
+    lines += _orbit_lines(e.get("last_orbit"), p) + _other_contact_lines(e, p)
     b = e.get("branch")
     if b is None:
         lines += [f"The orbit could not be continued: {e.get('branch_error', '')}", ""]
@@ -339,3 +324,76 @@ def _end_lines(e: dict, p: str) -> list[str]:
             "",
         ]
     return lines
+
+
+def _orbit_lines(o: dict | None, p: str, law: str = "") -> list[str]:
+    """The period-1 orbit Newton found at the refined sweep's last periodic value (``law``:
+    the other contact law it was found under)."""
+    if not o:
+        return []
+    if "error" in o:
+        return [
+            f"At {_v(o['value'], p)}{' under ' + law if law else ''} Newton finds no period-1 "
+            f"orbit ({o['error']}).",
+            "",
+        ]
+    lifted = math.isfinite(o["smallest_event"]) and o["smallest_event"] < 0
+    return [
+        (f"Under {law}, the" if law else "The")
+        + f" period-1 orbit Newton finds at {_v(o['value'], p)} (from the refined sweep's "
+        f"state) has {o['events_per_period']:g} events per cycle, largest |multiplier| "
+        f"{o['largest_modulus']:.3g} and smallest event value {o['smallest_event']:.3g} m"
+        + (
+            ": a contact lifts off and closes again every cycle there (an impacting orbit)."
+            if lifted
+            else ": its contacts last through the cycle."
+        ),
+        "",
+    ]
+
+
+#: how the report names a scene's contact law (``[effects] contact``)
+CONTACT_NAMES = {"lankarani_nikravesh": "Lankarani-Nikravesh", "hunt_crossley": "Hunt-Crossley"}
+
+
+def _other_contact_lines(e: dict, p: str) -> list[str]:
+    """Whether the end survives another contact law (``[route] end_other_contact``): the
+    highest period-1 value going up (none above it in the refined range) under each law, the
+    same within half the refined step or not, and the other law's values below its end where
+    the strobe is not period-1."""
+    o = e.get("other_contact")
+    if not o:
+        return []
+    name = CONTACT_NAMES.get(o["contact"], o["contact"])
+    step = (e["bracket"][1] - e["bracket"][0]) / max(len(e["values"]) - 1, 1)
+    mine, theirs = e.get("highest_periodic_up", e["last_periodic_up"]), o["highest_periodic_up"]
+    settings = ", ".join(f"{k} = {v:g}" for k, v in o["parameters"].items())
+    head = (
+        f"*Without the contact's memory* (the refined sweep again under the {name} law"
+        + (f", {settings}" if settings else "")
+        + f"; {o['cpu_time'] / 60:.1f} min of workers' CPU): "
+    )
+    if theirs is None:
+        return [head + "the strobe is period-1 at none of the values going up: the periodic "
+                "motion does not reach this range under that law.", ""]  # fmt: skip
+    gaps = [
+        v for v, k in zip(o["values"], o["directions"]["up"]["period"], strict=True)
+        if k != 1 and v < theirs
+    ]  # fmt: skip
+    same = mine is not None and abs(theirs - mine) <= step / 2
+    text = (
+        head
+        + f"going up the strobe is period-1 last at {_v(theirs, p)}"
+        + (f" (not at {', '.join(_v(v, p) for v in gaps)} below it)" if gaps else "")
+        + f", against {_v(mine, p) if mine is not None else 'none'} here. "
+        + (
+            f"**The end of periodic motion survives the change of contact law** (the same "
+            f"value, to the refined step {_v(step, p)})."
+            if same
+            else f"**The end of periodic motion moves with the contact law**, by "
+            f"{_v(theirs - mine, p)}."
+            if mine is not None
+            else "**Periodic motion reaches this range only without the memory.**"
+        )
+    )
+    return [text, ""] + _orbit_lines(o.get("last_orbit"), p, name)

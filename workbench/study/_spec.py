@@ -84,6 +84,7 @@ ROUTE_KEYS = (
     "end_transient_cycles",
     "end_branch_points",
     "end_max_step",
+    "end_other_contact",
 )
 QUICK_REALISATIONS = 4  # the fewest for which the two-sample rank test can reach p < 0.05
 _KEYS = {
