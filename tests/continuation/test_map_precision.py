@@ -347,3 +347,24 @@ def test_a_settled_mechanism_points_floquet_exponent_takes_one_integration(monke
     assert abs(off.value - fast.value) <= 2 * math.hypot(off.error, fast.error)
     with pytest.raises(ValueError, match=r"check=0\.5: must be a factor > 1"):
         _strobe.StrobeMap(point, None, check=0.5)
+
+
+@pytest.mark.slow  # ~10 s of CPU: one nine-bar point, its fast exponent and the full protocol's
+def test_the_full_protocol_checks_a_periodic_point_on_the_orbit_its_run_ended_on():
+    """The map's subset check of a periodic point: the full protocol's Newton starts where the
+    point's run ended (the fast value's orbit, with the onset velocities it holds), so that the
+    two measure one orbit. A lasting-contact orbit of the nine-bar is one of a family under
+    Lankarani-Nikravesh contact (each contact holds its onset velocity), and integrated again
+    from the scene's start the full protocol landed on another member: at omega = pi, c = 80
+    um it read -2.651 1/s (held 0.675, 2.40 mm/s) against the fast -1.662 (held 1.11, 3.59
+    mm/s; benchmarks/chaos_map_agreement.py --same-orbit)."""
+    from workbench.continuation import chaos_indicators
+
+    scene = workbench.load_scene(ROOT / "studies/chaos_maps/omega_clearance.toml")
+    point = scene.with_parameters(omega=math.pi, clearance=8e-5)
+    run = workbench.simulate(point)
+    ind = chaos_indicators(point, run, full_protocol=True)
+    assert int(ind.strobe_period) == 1 and int(ind.lle_method) == 0  # floquet
+    fast, full = float(ind.lle), float(ind.lle_full)
+    assert fast < 0 and abs(fast - full) <= 0.01 * abs(full)  # one orbit: -1.662 both here
+    assert 0 < float(ind.lle_full_stderr) < 0.01 * abs(full)

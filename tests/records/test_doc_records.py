@@ -423,3 +423,38 @@ def test_the_impact_oscillator_s_grazing_curves_are_the_newest_impact_curve_reco
     low = moved["curve_force_range"][0] / moved["parameters"]["force"]
     assert f"4 of the 5 curves stop at their first point and the fifth reaches {low:.2f}" in page
     assert all(r["curve_ended"].count("the corrector failed at the least step") == 2 for r in rows)
+
+
+def test_the_map_check_on_the_same_orbit_is_the_newest_same_orbit_record():
+    """docs/continuation.md, the (omega, c) map's subset check: the newest
+    ``chaos_map_agreement.py --same-orbit`` record's counts (periodic points, agreement on the
+    fast value's own orbit and on the orbit integrated again, held velocities that differ, the
+    chaotic points, the points whose run now ends on another member)."""
+    page = " ".join(_page("continuation.md").split())
+    newest = [r for r in records("chaos_map_agreement.py") if "--same-orbit" in r["command"]][-1]
+    f = newest["figures"]
+    rows = f["rows"]
+    n = f["periodic"]
+    assert (n, f["agree_same_orbit"], f["agree_again"], f["held_differ"]) == (30, 29, 8, 30)
+    assert f"computed the {n} periodic points of the {f['shared']} the two maps share" in page
+    assert f"other onset velocities at all {f['held_differ']} (by more than 1 %)" in page
+    assert f"its exponent agrees with the fast one at {f['agree_again']}." in page
+    assert f"agrees at {f['agree_same_orbit']} ({round(100 * f['agree_same_orbit'] / n)} %)" in page
+    (odd,) = [r for r in rows if "lle_fast" in r and not r["agree_same_orbit"]]
+    assert odd["stderr_fast"] is None and odd["stderr_full_same_orbit"] is None  # bounds (NaN)
+    assert f"{odd['lle_fast']:.3g} and {odd['lle_full_same_orbit']:.3g} 1/s" in page
+    chaotic = [r for r in rows if "lle_fast" not in r]
+    agreeing = sum(r["agree"] for r in chaotic)
+    assert f"the {agreeing} of {len(chaotic)} chaotic" in page
+    both = agreeing + f["agree_same_orbit"]
+    assert f"{both} of the {f['shared']} points ({round(100 * both / f['shared'])} %) agree" in page
+    assert f["same_verdict"] == f["shared"] and f"all {f['shared']} have the same verdict" in page
+    moved = [
+        r for r in rows if "lle_fast" in r and abs(r["lle_fast"] - r["lle"]) > 0.1 * abs(r["lle"])
+    ]
+    assert f"At {len(moved)} of the {n} periodic points the run itself" in page
+    first = min(moved, key=lambda r: r["omega"])
+    assert (
+        f"its fast exponent reads {first['lle_fast']:.3g} 1/s against the map's {first['lle']:.3g}"
+        in page
+    )

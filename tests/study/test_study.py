@@ -642,7 +642,10 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
             "status": "computed",
             "bracket": [1.85 * pi, 1.9 * pi],
             "values": [1.85 * pi, 1.86 * pi, 1.87 * pi, 1.88 * pi, 1.89 * pi, 1.9 * pi],
-            "directions": {"up": {"period": [1, 1, 0, 0, 0, 0]}},
+            "directions": {
+                "up": {"period": [1, 1, 0, 0, 0, 0]},
+                "down": {"period": [1, 1, 0, 0, 0, 0]},
+            },
             "last_periodic_up": 1.86 * pi,
             "last_periodic_down": 1.86 * pi,
             "cpu_time": 120.0,
@@ -672,7 +675,7 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     }
     text = "\n".join(route_section(route))
     assert "going up the strobe is period-1 up to 1.86 pi and not at 1.87 pi" in text
-    assert "period-1 again from 1.86 pi (the same value: no hysteresis at the end" in text
+    assert "period-1 first at 1.86 pi (the same value: no hysteresis at the end" in text
     assert "reaches 1.864 pi and ends there: the branch turns sharply" in text
     assert "|multiplier| stays within 0.2-0.5" in text
     assert "**no multiplier leaves the unit circle**" in text
@@ -684,8 +687,13 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     )
     assert "a contact lifts off and closes again every cycle there" in text
     assert "x0.1 (0.0001, 0.0002 m s-1): 0.02; x1 (0.001, 0.002 m s-1): 0.2" in text
-    route["end"]["last_periodic_down"] = 1.85 * pi
-    assert "the two directions differ there: hysteresis" in "\n".join(route_section(route))
+    route["end"]["directions"]["down"]["period"] = [1, 2, 1, 0, 0, 0]  # as measured at c = 0.1 mm
+    text = "\n".join(route_section(route))
+    assert (
+        "coming down it is period-1 first at 1.87 pi (the two directions differ: hysteresis; "
+        "the strobe's period up / down is 1 / 2 at 1.86 pi, none / 1 at 1.87 pi)."
+    ) in text
+    route["end"]["directions"]["down"]["period"] = [1, 1, 0, 0, 0, 0]
     # a multiplier that jumps through +1 right at the lift-off is the grazing's singularity
     b = route["end"]["branch"]
     b["values"] = [1.86 * pi, 1.862 * pi, 1.86399 * pi, 1.864 * pi]
@@ -747,7 +755,7 @@ def test_the_report_says_whether_the_end_survives_another_contact_law():
         "status": "computed",
         "bracket": [1.8 * pi, 1.9 * pi],
         "values": fine,
-        "directions": {"up": {"period": ln}},
+        "directions": {"up": {"period": ln}, "down": {"period": ln}},
         "last_periodic_up": fine[6],
         "last_periodic_down": fine[6],
         "highest_periodic_up": fine[6],

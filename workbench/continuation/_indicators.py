@@ -113,9 +113,14 @@ LLE_FULL_PROTOCOL = flags(
     ["fast_only", "full_protocol"],
     comment="1 on the map's random subset (lle_full_fraction of the points, at least 3, "
     "chosen from the points' parameter values and lle_full_seed): the exponent measured again "
-    "by the full protocol (four independent starts after the transient, the separation and "
-    "growth variants, a 3 % error target; Newton from the state integrated again) in lle_full "
-    "and lle_full_stderr; the map's attributes lle_full_* say how it agrees with lle",
+    "by the full protocol (trajectory methods: four independent starts after the transient, "
+    "the separation and growth variants, a 3 % error target; floquet: Newton from where the "
+    "point's run ended, to the orbit's tolerance, at the scene's rtol, checked with a 100x "
+    "larger copies' step) in lle_full and lle_full_stderr; the map's attributes lle_full_* say "
+    "how it agrees with lle. Floquet's starts where the run ended because a periodic orbit's "
+    "multipliers can depend on its history (the Lankarani-Nikravesh law holds each contact's "
+    "onset velocity: a lasting-contact orbit is one of a family), so that integrated again it "
+    "can land on another member of the family, with another exponent",
 )
 
 
@@ -266,11 +271,13 @@ def chaos_indicators(
     out["lle_converged"] = ((), np.int8(exp.converged_code), LLE_CONVERGED)
     out["lle_unmet"] = ((), np.int16(exp.unmet_code), LLE_UNMET)
     full = None
-    if full_protocol:  # today's protocol, its own runs from scratch (start_cycles)
+    if full_protocol:  # the full protocol on the same orbit: Newton from where the run ended
         full = point_exponent(
             scene,
             period=period,
             cycles=lle_cycles(scene),
+            state=y,
+            discrete_state=aux,
             start_cycles=scene.run["transient_cycles"] + scene.run["cycles"],
         )
     out["lle_full_protocol"] = ((), np.int8(full_protocol), LLE_FULL_PROTOCOL)

@@ -209,21 +209,41 @@ def _end_lines(e: dict, p: str) -> list[str]:
         return [f"*Where the periodic motion ends*: not computed ({e.get('reason', '')}).", ""]
     lo, hi = e["bracket"]
     step = (hi - lo) / max(len(e["values"]) - 1, 1)
-    up, down = e["last_periodic_up"], e["last_periodic_down"]
-    fup = e["directions"]["up"]
+    up = e["last_periodic_up"]
+    fup, fdown = e["directions"]["up"], e["directions"]["down"]
     first_up = next((v for v, k in zip(e["values"], fup["period"], strict=True) if k != 1), None)
+    # coming down: the first period-1 value from the top, and where the directions differ
+    down = next(
+        (v for v, k in zip(e["values"][::-1], fdown["period"][::-1], strict=True) if k == 1),
+        None,
+    )
+    differ = [
+        (v, a, b)
+        for v, a, b in zip(e["values"], fup["period"], fdown["period"], strict=True)
+        if a != b
+    ]
+    kind = {0: "none", 1: "1"}
     lines = [
         f"*Where the periodic motion ends* (the continued sweep again at {len(e['values'])} values "
         f"between {_v(lo, p)} and {_v(hi, p)}, both ways, {e['cpu_time'] / 60:.1f} min of "
         "workers' CPU): going up the strobe is period-1 up to "
         + (_v(up, p) if up is not None else "none of them")
         + (f" and not at {_v(first_up, p)}" if first_up is not None else "")
-        + "; coming down it is period-1 again from "
+        + "; coming down it is period-1 first at "
         + (_v(down, p) if down is not None else "none of them")
         + (
             f" (the same value: no hysteresis at the end, to the refined step {_v(step, p)})."
-            if up is not None and up == down
-            else " (the two directions differ there: hysteresis)."
+            if up is not None and up == down and not differ
+            else " (the two directions differ: hysteresis"
+            + (
+                "; the strobe's period up / down is "
+                + ", ".join(
+                    f"{kind.get(a, a)} / {kind.get(b, b)} at {_v(v, p)}" for v, a, b in differ
+                )
+                if differ
+                else ""
+            )
+            + ")."
         ),
         "",
     ]
