@@ -27,6 +27,7 @@ from pathlib import Path
 
 from _results import record, recording  # benchmarks/_results.py: a JSON record per run
 
+import workbench
 from workbench.continuation import branch_bifurcations
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,12 +47,15 @@ def _study_branch():
     return module.branch
 
 
-def leg(name: str, start: float, stop: float) -> dict:
-    """One leg: the branch from ``start`` to ``stop`` (omega / pi) and what it cost."""
+def leg(name: str, start: float, stop: float, output: Path | None = None) -> dict:
+    """One leg: the branch from ``start`` to ``stop`` (omega / pi) and what it cost; the branch
+    saved in ``output`` (a folder) as ``ninebar_branch_<name>.nc``."""
     branch = _study_branch()
     t0, w0 = time.process_time(), time.time()
     r = branch(start * math.pi, stop * math.pi)
     cpu, wall = time.process_time() - t0, time.time() - w0
+    if output is not None:
+        workbench.save_run(r, output / f"ninebar_branch_{name}.nc", overwrite=True)
     labels = [
         {"type": b["type"], "omega_pi": b["value"] / math.pi}
         for b in branch_bifurcations(r, "omega")
@@ -70,11 +74,12 @@ def main() -> None:
         "--legs", default="lasting,impacting", help="comma-separated, of " + str(list(LEGS))
     )
     ap.add_argument("--lasting-start", type=float, default=LEGS["lasting"][0], help="omega / pi")
+    ap.add_argument("-o", "--output", type=Path, help="a folder for the legs' branches (netCDF)")
     args = ap.parse_args()
     legs = dict(LEGS, lasting=(args.lasting_start, LEGS["lasting"][1]))
     rows = []
     for name in args.legs.split(","):
-        row = leg(name, *legs[name])
+        row = leg(name, *legs[name], output=args.output)
         rows.append(row)
         shown = "; ".join(f"{b['type']} at {b['omega_pi']:.7f} pi" for b in row["labels"]) or "none"
         print(

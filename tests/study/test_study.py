@@ -780,6 +780,48 @@ def test_the_report_says_whether_the_end_survives_another_contact_law():
     assert "period-1 at none of the values going up" in "\n".join(route_section(route))
 
 
+def test_the_orbit_at_the_end_is_tried_again_at_a_tighter_tolerance(monkeypatch):
+    """Newton stagnates on the nine-bar's impacting orbit at rtol 1e-8 (the map's noise lies
+    above its tolerance): ``_orbit_at`` tries the next of ORBIT_RTOLS and says which rtol
+    found the orbit; where every one fails, the errors of each."""
+    import math
+    import types
+
+    import xarray as xr
+
+    import workbench.continuation as continuation
+    import workbench.study._route_end as route_end
+    from workbench.continuation._newton import NewtonFailure
+    from workbench.study._route_report import _orbit_lines
+
+    tried = []
+
+    def orbit(point, *, rtol, **kw):
+        tried.append(rtol)
+        if rtol > 1e-9:
+            raise NewtonFailure("did not converge (scaled residual 4.12e-05, tolerance 1e-06)")
+        return xr.Dataset({
+            "event_min": ("event", [-1.2e-6, 3e-7]),
+            "multiplier_modulus": ("multiplier", [0.735, 0.07]),
+            "events_per_period": ("periods", [36.0]),
+        })  # fmt: skip
+
+    monkeypatch.setattr(continuation, "periodic_orbit", orbit)
+    monkeypatch.setattr(route_end, "settled", lambda *a: (None, None))
+    scene = load_study("bifurcation_speed").cases["sweep"]
+    ds = types.SimpleNamespace(sel=lambda **kw: None)  # the refined sweep (settled is stubbed)
+    o = route_end._orbit_at(scene, ds, "omega", 1.86 * math.pi)
+    assert tried == list(route_end.ORBIT_RTOLS) == [1e-8, 1e-10]
+    assert o["rtol"] == 1e-10 and o["events_per_period"] == 36 and o["largest_modulus"] == 0.735
+    assert (
+        "(from the refined sweep's state, at rtol 1e-10) has 36 events"
+        in _orbit_lines(o, "omega")[0]
+    )
+    monkeypatch.setattr(route_end, "ORBIT_RTOLS", (1e-8,))
+    o = route_end._orbit_at(scene, ds, "omega", 1.86 * math.pi)
+    assert o["error"].startswith("rtol 1e-08: NewtonFailure: did not converge")
+
+
 @pytest.mark.slow  # ~10 s, and the Hunt-Crossley nine-bar's kernel where not yet compiled
 def test_the_refined_sweep_runs_again_under_the_other_contact_law(tmp_path):
     """``_under_other_contact`` sweeps with the law it names (the archive's scene says so, and

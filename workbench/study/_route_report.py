@@ -358,10 +358,11 @@ def _orbit_lines(o: dict | None, p: str, law: str = "") -> list[str]:
             "",
         ]
     lifted = math.isfinite(o["smallest_event"]) and o["smallest_event"] < 0
+    rtol = f", at rtol {o['rtol']:g}" if "rtol" in o else ""
     return [
         (f"Under {law}, the" if law else "The")
         + f" period-1 orbit Newton finds at {_v(o['value'], p)} (from the refined sweep's "
-        f"state) has {o['events_per_period']:g} events per cycle, largest |multiplier| "
+        f"state{rtol}) has {o['events_per_period']:g} events per cycle, largest |multiplier| "
         f"{o['largest_modulus']:.3g} and smallest event value {o['smallest_event']:.3g} m"
         + (
             ": a contact lifts off and closes again every cycle there (an impacting orbit)."
