@@ -923,18 +923,19 @@ def test_the_studies_page_quotes_the_reports_end_of_the_periodic_motion():
     root = Path(__file__).resolve().parents[2]
     report = (root / "studies" / "REPORT.md").read_text()
     page = " ".join((root / "docs" / "studies" / "index.md").read_text().split())
-    route = re.search(
-        r"\*\*The route\*\*: lasting contact up to the grazing at ([\d.]+) pi; .*? up to "
-        r"([\d.]+) pi; no period from ([\d.]+) pi on",
-        report,
+    report = " ".join(report.split())
+    reach = re.search(r"continued from 1.8 pi .*? reaches ([\d.]+) pi and ends there", report)
+    low = re.search(r"falls from [\d.e+-]+ to ([\d.e+-]+) m\.", report)
+    end = re.search(r"going up the strobe is period-1 up to ([\d.]+) pi and not at ([\d.]+) pi",
+                    report)  # fmt: skip
+    events = re.search(rf"Newton finds at {end.group(1)} pi .*? has ([\d.]+) events", report)
+    other = re.search(r"going up the strobe is period-1 last at ([\d.]+) pi", report)
+    assert f"lasting-contact orbit from 1.8 pi to {reach.group(1)} pi" in page
+    assert f"smallest penetration has fallen to {float(low.group(1)):.2g} m" in page
+    assert (
+        "**no multiplier leaves the unit circle**" in report and "labelled a grazing" not in report
     )
-    graze, last, first = route.groups()
-    low = re.search(r"falls from [\d.e+-]+ to ([\d.e+-]+) m; the end is labelled a grazing", report)
-    jump = re.search(r"where it jumps from ([\d.e+-]+) to ([\d.e+-]+) \(labelled", report)
-    near = re.search(r"\) within ([\d.e+-]+) pi of the lift-off", report)
-    assert f"within {float(near.group(1)):.0e} pi of it" in page
-    assert f"lasting contact at both joints up to a grazing at {graze} pi" in page
-    assert f"period-1 motion with impacts up to {last} pi, and no period from {first} pi" in page
-    assert f"falls to {float(low.group(1)):.2g} m" in page
-    before, after = (float(x) for x in jump.groups())
-    assert f"jumps from {before:.2g} to {after:.2g}" in page
+    assert f"impacts up to {end.group(1)} pi ({events.group(1)} contact events per cycle" in page
+    assert f"no period from {end.group(2)} pi going up" in page
+    assert f"the same highest period-1 value, {other.group(1)} pi" in page
+    assert other.group(1) == end.group(1) and "**The end of periodic motion survives" in report
