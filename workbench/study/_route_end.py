@@ -27,8 +27,9 @@ period-1 while the next is not. Within that bracket:
    reported for each: a family of orbits, one per onset velocity, not one orbit;
 4. with ``end_other_contact`` (a table: ``contact``, the ``[effects]`` contact law, and that
    law's ``[parameters]``, e.g. ``{contact = "hunt_crossley", hunt_crossley_damping = 47.5}``):
-   the refined sweep of 1. again under that law, and the orbit Newton finds at its last periodic
-   value, to say whether the end survives a contact law without the memory of 3.
+   the refined sweep of 1. again under that law, and the orbit Newton finds at its highest
+   period-1 value going up, to say whether the end survives a contact law without the memory
+   of 3.
 """
 
 from __future__ import annotations

@@ -347,8 +347,8 @@ def _end_lines(e: dict, p: str) -> list[str]:
 
 
 def _orbit_lines(o: dict | None, p: str, law: str = "") -> list[str]:
-    """The period-1 orbit Newton found at the refined sweep's last periodic value (``law``:
-    the other contact law it was found under)."""
+    """The period-1 orbit Newton found at the end of the refined sweep's period-1 values going
+    up (``law``: the other contact law it was found under)."""
     if not o:
         return []
     if "error" in o:
