@@ -287,3 +287,38 @@ def test_a_branch_ends_on_its_bound():
     assert float(r.omega[-1]) == pytest.approx(0.7, abs=1e-12)
     assert r.omega.values.max() <= 0.7 and "bound 0.7" in r.attrs["branch_ended"]
     assert workbench.continuation.branch_bifurcations(r, "omega") == []
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_the_parameter_column_is_taken_on_the_points_own_side_of_a_jump(side):
+    """A map whose contact structure changes, and whose value jumps, 0.3 of the stencil's step
+    from p (above or below): the parameter column is the derivative on p's own side, not the
+    jump over the step (the central difference across it is off by 1 / (2 h), ~1e3 here)."""
+    from workbench.continuation._strobe import MapValue, StrobeMap
+
+    slope = np.array([0.7, -1.3])  # d y1 / d omega, state units per rad s-1
+    p = 1.0
+    pscale = 0.5
+    h = math.sqrt(1e-8) * pscale
+    jump_at = p + side * 0.3 * h
+
+    class Jumping(StrobeMap):
+        def __call__(self, y, aux, q, *, tangent=True):
+            self._spent[0] += 1
+            touching = (q - jump_at) * side > 0.0
+            y1 = np.asarray(y, float) + slope * q + (1.0 if touching else 0.0)
+            none = np.array([], int)
+            return MapValue(y1, np.asarray(aux, float), none, None, 2 * touching, {})
+
+    scene = {"model": {"name": "stop_oscillator"}, "parameters": dict(ISSUE, omega=p)}
+    smap = Jumping(workbench.load_scene(scene), "omega", rtol=1e-8)
+    y = np.array([0.1, 0.0])
+    column = smap.parameter_derivative(y, np.zeros(0), p, np.array([], int), pscale)
+    exact = slope * pscale / smap.scale()
+    np.testing.assert_allclose(column, exact, rtol=1e-6)
+    # without a jump nearby: the central difference, two evaluations
+    jump_at = p + side * 10.0 * h
+    spent = smap.evaluations
+    column = smap.parameter_derivative(y, np.zeros(0), p, np.array([], int), pscale)
+    np.testing.assert_allclose(column, exact, rtol=1e-6)
+    assert smap.evaluations - spent == 2

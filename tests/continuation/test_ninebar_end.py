@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import workbench
+from workbench.continuation import _strobe
 from workbench.continuation._branch import BranchSettings, _with_tangent
 from workbench.continuation._newton import orbit_at
 from workbench.continuation._strobe import StrobeMap
@@ -122,3 +123,109 @@ def test_another_member_of_the_lasting_contact_family_has_not_lifted_off_past_it
     k, _, value = seq.smallest_margin()
     assert seq.counts == (0, 0, 0, 0)
     assert 2e-8 < value < 5e-8 and 0.02 < value / seq.scale[k] < 0.1, (value, seq.scale[k])
+
+
+#: the last orbit of the route study's lasting-contact branch from 1.8 pi (make studies on
+#: d2151e2, rtol 1e-8): omega (rad s-1), the states (m, m s-1) and the held onset velocities
+#: (m s-1); its smallest penetration 6.3e-9 m, at A
+LIFTING = (
+    5.789278794352008,
+    [-3.542336105985143e-05, -9.398240120230492e-05, -8.047408965093882e-05,
+     6.0434958779149184e-05, 0.004570793690678481, -0.0017190678322721402,
+     -1.0686663200902096e-05, -3.036195575738164e-05],
+    [0.0007245480609672624, 0.0019186538408065821],
+)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_the_parameter_column_stays_on_the_lasting_contacts_side_of_its_lift_off():
+    """At the lasting-contact orbit 1e-5 pi below where its contact lifts off (at fixed state),
+    the central difference over the route's stencil (sqrt(rtol) of the parameter's scale 0.1 pi)
+    straddles the lift-off: the map there has 2 more events and has jumped, and the difference
+    was 58x the derivative, which turned the branch's tangent to the state axis and collapsed
+    its steps (the route study's branch stopped at 1.8428 pi). The column is now the one-sided
+    difference on the orbit's own side: within 1 % of the central difference over a 10x shorter
+    stencil (clear of the lift-off) at rtol 1e-10 (noise 1e-5 of it), where the straddling one
+    is more than 10x off."""
+    p, y, aux = LIFTING
+    scene = workbench.load_scene(SCENE).replace(sweep={})
+    smap = StrobeMap(scene, "omega", rtol=1e-8)
+    y, aux, none = np.array(y), np.array(aux), np.array([], int)
+    pscale = 0.1 * math.pi
+    h = math.sqrt(smap.rtol) * pscale
+    here, up, down = (smap(y, aux, q, tangent=False) for q in (p, p + h, p - h))
+    assert (here.events, down.events, up.events) == (0, 0, 2)  # the stencil straddles it
+    s = smap.scale()
+    central = (up.y1 - down.y1) / (2 * h) * pscale / s
+    tight = smap.with_rtol(1e-10)
+    up, down = (tight(y, aux, q, tangent=False) for q in (p + h / 10, p - h / 10))
+    assert up.events == down.events == 0
+    reference = (up.y1 - down.y1) / (2 * h / 10) * pscale / s
+    column = smap.parameter_derivative(y, aux, p, none, pscale)
+    ratio = np.linalg.norm(central) / np.linalg.norm(reference)
+    assert 50.0 < ratio < 65.0, ratio  # docs/continuation.md: 58x
+    assert np.linalg.norm(column - reference) < 1e-2 * np.linalg.norm(reference)
+    # the tangent's parameter component (docs: 1e-4 with the straddling column, 8e-3 without)
+    M = smap(y, aux, p).M
+    m = M.shape[0]
+
+    def parameter_component(Pp):
+        t = np.linalg.solve(M - np.eye(m), -Pp)
+        return 1.0 / np.linalg.norm(np.append(t, 1.0))
+
+    assert 1e-4 < parameter_component(central) < 2e-4
+    assert 7e-3 < parameter_component(column) < 1e-2
+
+
+#: two lasting-contact orbits 2e-6 pi further on, 7.6e-9 rad/s apart (the branch continued from
+#: LIFTING with the one-sided parameter column, rtol 1e-8): at the second, 1e-6 of a state's
+#: scale moves it onto the lift-off
+NEIGHBOUR = (
+    5.789306682232579,
+    [-3.543507791054074e-05, -9.39779688250565e-05, -8.047428660420295e-05,
+     6.0434687357302536e-05, 0.004575808439302297, -0.0017215990615699235,
+     -1.265689892869157e-05, -3.314834553114128e-05],
+    [0.0007245480609672624, 0.0019186538408065821],
+)  # fmt: skip
+NEARER = (
+    5.7893066898395595,
+    [-3.543508112054039e-05, -9.397796761047747e-05, -8.047428665774988e-05,
+     6.043468728343998e-05, 0.004575809806522182, -0.0017215997525865964,
+     -1.265743149218244e-05, -3.314909952486871e-05],
+    [0.0007245480609672624, 0.0019186538408065821],
+)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_the_copies_monodromy_stays_on_the_lasting_contacts_side_of_its_lift_off(monkeypatch):
+    """At NEARER the copies moved +1e-6 (scaled) in y_A meet the lift-off (2 events, the base
+    none), so that central column was the jump over the step (norm ~1.4e6) and the largest
+    |multiplier| came out 3.3e3 for an orbit whose neighbour, 7.6e-9 rad/s back, has 0.0343
+    (a fold and a branch point were then found between them), and the copies' mean count of
+    events said 1 per period. Such a column is now the one-sided difference on its smaller
+    side: the three largest multipliers within 1e-3 of the neighbour's (NEIGHBOUR, whose copies
+    all stay on the orbit's side), no event, the column named."""
+    p, y, aux = NEARER
+    scene = workbench.load_scene(SCENE).replace(sweep={})
+    smap = StrobeMap(scene, "omega", rtol=1e-8)
+    y, aux = np.array(y), np.array(aux)
+    s = smap.scale()
+    d = np.zeros(y.size)
+    d[1] = smap.step * s[1]
+    moved = [smap(y + k * d, aux, p, tangent=False) for k in (-1, 0, 1)]
+    assert [v.events for v in moved] == [0, 0, 2]
+    fwd = np.linalg.norm((moved[2].y1 - moved[1].y1) / s) / smap.step
+    bwd = np.linalg.norm((moved[1].y1 - moved[0].y1) / s) / smap.step
+    assert fwd > 1e6 and 5.0 < bwd < 20.0, (fwd, bwd)  # docs/continuation.md: 1.4e6 against 10
+
+    def largest(p, y, aux):
+        return np.sort(np.abs(np.linalg.eigvals(smap(y, aux, p).M)))[::-1][:3]
+
+    neighbour = largest(NEIGHBOUR[0], np.array(NEIGHBOUR[1]), np.array(NEIGHBOUR[2]))
+    assert neighbour[0] < 0.05, neighbour
+    np.testing.assert_allclose(largest(p, y, aux), neighbour, atol=1e-3)
+    value = smap(y, aux, p)
+    assert value.events == 0 and 1 in value.one_sided, (value.events, value.one_sided)
+    # without the one-sided columns (the code before): docs/continuation.md's 3.3e3
+    monkeypatch.setattr(_strobe, "STRADDLE_RATIO", math.inf)
+    assert largest(p, y, aux)[0] > 1e3

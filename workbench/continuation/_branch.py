@@ -56,7 +56,7 @@ from workbench.continuation._newton import (
     orbit_at,
     tangent,
 )
-from workbench.continuation._strobe import StrobeMap
+from workbench.continuation._strobe import StrobeMap, _active
 from workbench.scene import SceneError
 from workbench.solver import SolverError
 
@@ -1083,6 +1083,8 @@ def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: BranchSettings, out
                         "grazing", A, 0.0, A.p, A.p, True, value, complex(np.nan, np.nan), k, phase
                     )
                 )
+    if A.value.one_sided:
+        out.ended += f"; {_jump_nearby(smap, A)}"
     changed = v.events != A.value.events or not np.array_equal(v.live, A.value.live)
     if changed:
         out.ended += (
@@ -1090,6 +1092,23 @@ def _mark_end(smap: StrobeMap, A: OrbitPoint, h: float, cfg: BranchSettings, out
             f"per {smap.periods} period(s) {A.value.events} -> {v.events}, live discrete states "
             f"{A.value.live.tolist()} -> {v.live.tolist()})"
         )
+
+
+def _jump_nearby(smap: StrobeMap, A: OrbitPoint) -> str:
+    """What the last orbit's copies say where some of them lay past a jump of the map
+    (:attr:`MapValue.one_sided`): which unknowns, moved by the copies' step, reach it."""
+    pb = smap.prepared(A.p).problem
+    names = [q.name for q in pb.states] + [f"discrete state {k}" for k in range(pb.aux0.size)]
+    active = _active(A.aux, pb)
+    which = [
+        names[c] if c < len(pb.states) else names[len(pb.states) + int(active[c - len(pb.states)])]
+        for c in A.value.one_sided
+    ]
+    return (
+        f"the last orbit's copies moved by {smap.step:g} (scaled) in {', '.join(which)} lie past "
+        "a jump of the map (their Jacobian columns taken one-sided): another contact "
+        "structure lies that close to the orbit in its state"
+    )
 
 
 def switch_at_doubling(
