@@ -932,6 +932,12 @@ def test_the_studies_page_quotes_the_reports_end_of_the_periodic_motion():
     other = re.search(r"going up the strobe is period-1 last at ([\d.]+) pi", report)
     assert f"lasting-contact orbit from 1.8 pi to {reach.group(1)} pi" in page
     assert f"smallest penetration has fallen to {float(low.group(1)):.2g} m" in page
+    jump = re.search(r"last orbit's copies moved by ([\d.e+-]+) \(scaled\) in .*? lie past a jump",
+                     report)  # fmt: skip
+    assert (
+        f"copies of its last orbit moved by {jump.group(1)} of a state's scale lie past a jump"
+        in page
+    )
     assert (
         "**no multiplier leaves the unit circle**" in report and "labelled a grazing" not in report
     )

@@ -111,7 +111,7 @@ def _active(aux: np.ndarray, problem) -> np.ndarray:
 
 
 #: a copies' column whose forward and backward differences differ more than this factor is
-#: checked for copies on two sides of a change of the contact structure
+#: taken to have its two copies on two sides of a jump of the map, and is taken one-sided
 #: (:meth:`StrobeMap._one_sided_columns`)
 STRADDLE_RATIO = 100.0
 #: the shortest step of :meth:`StrobeMap.parameter_derivative`'s stencil, as the power of rtol
@@ -495,7 +495,8 @@ class StrobeMap:
                 if h / 10.0 < floor:  # the shortest step: first order
                     return side * (at(p + side * h) - at(p)) / h * pscale / s
             h /= 10.0
-        # changes on both sides within the shortest step: the central difference as it is
+        # p itself lies within the shortest step of changes on both sides (on the border, for
+        # Newton's iterate): no side is clean, and the central difference is returned as it is
         return (plus - minus) / (2 * math.sqrt(self.rtol) * pscale) * pscale / s
 
     @staticmethod
