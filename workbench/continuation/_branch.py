@@ -1098,12 +1098,8 @@ def _jump_nearby(smap: StrobeMap, A: OrbitPoint) -> str:
     """What the last orbit's copies say where some of them lay past a jump of the map
     (:attr:`MapValue.one_sided`): which unknowns, moved by the copies' step, reach it."""
     pb = smap.prepared(A.p).problem
-    names = [q.name for q in pb.states] + [f"discrete state {k}" for k in range(pb.aux0.size)]
-    active = _active(A.aux, pb)
-    which = [
-        names[c] if c < len(pb.states) else names[len(pb.states) + int(active[c - len(pb.states)])]
-        for c in A.value.one_sided
-    ]
+    unknowns = [q.name for q in pb.states] + [f"discrete state {k}" for k in _active(A.aux, pb)]
+    which = [unknowns[c] for c in A.value.one_sided]
     return (
         f"the last orbit's copies moved by {smap.step:g} (scaled) in {', '.join(which)} lie past "
         "a jump of the map (their Jacobian columns taken one-sided): another contact "

@@ -453,7 +453,7 @@ class StrobeMap:
         the nine-bar's lasting contact 1e-5 pi below its lift-off it was 58x the derivative,
         and the branch's tangent turned to the state axis (its parameter component 1e-4
         instead of 8e-3), so the steps collapsed short of the grazing."""
-        h = math.sqrt(self.rtol) * pscale
+        h = h0 = math.sqrt(self.rtol) * pscale
         floor = self.rtol**SHORTEST_PARAMETER_STEP * pscale
         memo: dict[float, MapValue | None] = {}
 
@@ -497,7 +497,7 @@ class StrobeMap:
             h /= 10.0
         # p itself lies within the shortest step of changes on both sides (on the border, for
         # Newton's iterate): no side is clean, and the central difference is returned as it is
-        return (plus - minus) / (2 * math.sqrt(self.rtol) * pscale) * pscale / s
+        return (plus - minus) / (2 * h0) * pscale / s
 
     @staticmethod
     def _one_sided(at, p: float, h: float, side: float) -> np.ndarray | None:
