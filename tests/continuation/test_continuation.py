@@ -496,6 +496,29 @@ def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
         assert abs(int(text.replace(" ", "")) / steps[key] - 1) < 0.02, (key, steps)
 
 
+def test_a_maps_jacobian_is_in_its_own_scale_at_every_parameter_value():
+    """The monodromy is the derivative of the residual Newton drives to zero, in the same
+    scaled unknowns, at every value of the parameter, also where the states' characteristic
+    sizes depend on it (c omega for the nine-bar's rates). Fig. 32's scene (its own omega 2 pi)
+    at 1.5 pi: a column of M equals the central difference of the map along that unknown in
+    the map's scale. In the scale at 1.5 pi instead (the copies' own, before), every rate's row
+    of a position's column reads 2 / 1.5 of it: Newton's matrix was that far off, it converged
+    linearly and the branch from pi stalled at 1.73 pi."""
+    scene = workbench.load_scene(ROOT / "studies" / "bifurcation_speed" / "sweep.toml")
+    smap = StrobeMap(scene.replace(sweep={}), "omega")
+    w = 1.5 * math.pi
+    assert smap.value == 2 * math.pi
+    y, aux = smap.initial(w)
+    v = smap(y, aux, w)
+    s, eps = smap.scale(), 1e-4
+    for j in (1, 5):  # y_A (m) and vy_A (m s-1)
+        d = np.zeros(y.size)
+        d[j] = eps * s[j]
+        up, down = smap(y + d, aux, w, tangent=False), smap(y - d, aux, w, tangent=False)
+        column = (up.y1 - down.y1) / (2 * eps) / s
+        assert np.abs(v.M[: y.size, j] - column).max() < 1e-3 * np.abs(column).max(), (j, v.M)
+
+
 def test_detection_rules_of_the_branch():
     """Which sign changes between two branch points name which bifurcation (grazings come from
     the contact sequences: tests/continuation/test_grazing.py)."""

@@ -80,7 +80,7 @@ from workbench.continuation._strobe import MapValue, StrobeMap
 from workbench.models import get_model
 from workbench.run import provenance
 from workbench.scene import SceneSource, load_scene, scene_from_toml
-from workbench.solver import SolverError, state_scale
+from workbench.solver import SolverError
 
 __all__ = ["CURVE_KINDS", "CURVE_LABELS", "continue_curve"]
 
@@ -200,8 +200,8 @@ class _Family:
     def span(self, p: float, q: float) -> float:
         return self.periods * self.map(q).prepared(p).period
 
-    def _ratio(self, p: float, q: float) -> np.ndarray:
-        return self.s0 / state_scale(self.problem(p, q))
+    def _ratio(self, q: float) -> np.ndarray:
+        return self.s0 / self.map(q).scale()
 
     def __call__(self, y, aux, p: float, q: float, *, tangent: bool = True) -> MapValue:
         """``P^k(y, aux; p, q)``, its Jacobian (with ``tangent``) in the curve's scaled
@@ -212,7 +212,7 @@ class _Family:
             raise NewtonFailure(f"the map failed at ({p:.10g}, {q:.10g}): {exc}") from exc
         self.evaluations += 1
         if tangent:
-            d = np.concatenate([1.0 / self._ratio(p, q), np.ones(v.live.size)])
+            d = np.concatenate([1.0 / self._ratio(q), np.ones(v.live.size)])
             v.M = d[:, None] * v.M / d[None, :]
         return v
 
@@ -232,7 +232,7 @@ class _Family:
             n = np.asarray(y).size
             cols = np.concatenate([np.arange(n), n + np.searchsorted(active, live)]).astype(int)
             W = W[:, cols]
-            W[:, :n] *= self._ratio(p, q)[None, :]
+            W[:, :n] *= self._ratio(q)[None, :]
         return t, z, a, W
 
 

@@ -11,8 +11,12 @@ strobe time (non-zero) and set again during the orbit (an onset within the ``k``
 inactive one (0, no contact at the strobe time) has no influence; one held through the whole
 orbit (a contact that never ends) does not evolve and is a constant of that orbit, not an
 unknown (it would add a multiplier of exactly 1). The states are measured in scaled units
-(each divided by its characteristic size, :func:`workbench.solver.state_scale`), the discrete
-states in their own units.
+(each divided by its characteristic size, :func:`workbench.solver.state_scale`, at the map's own
+parameter value: :meth:`StrobeMap.scale`), the discrete states in their own units. That scale
+is the map's, fixed over the parameter: a state's characteristic size can depend on it (c omega
+for the mechanisms' rates), and a Jacobian in the scale at ``p`` beside a residual in the map's
+is a Newton matrix off by that ratio (on the nine-bar continued from pi to 1.73 pi, 1.73 in
+every rate's rows against its columns: Newton converged linearly and the branch stalled).
 
 The monodromy matrix comes either from the tangent system (``monodromy="tangent"``) or from
 central differences of the map by *copies* of the model integrated side by side in one step
@@ -83,7 +87,8 @@ class MapValue:
 
     ``y1``, ``aux1``: the state and discrete state after ``k`` periods; ``live``: indices of
     the live discrete states; ``M``: the Jacobian of the map in the scaled unknowns
-    ``(y / s, aux[live] / sa)`` (None without the tangent system); ``events``: events located
+    ``(y / s, aux[live])``, ``s`` the map's :meth:`StrobeMap.scale` (fixed over the
+    parameter; None without the tangent system); ``events``: events located
     over the ``k`` periods; ``stats``: solver statistics; ``M_check``: the same Jacobian at
     the map's ``check`` times larger step (copies with a ``check``, see :class:`StrobeMap`;
     else None); ``one_sided``: the unknowns (columns of the Jacobian before the held
@@ -207,6 +212,7 @@ class StrobeMap:
             analytic = jacobian_for(base.problem.hooks).HAS_ANALYTIC
             monodromy = "tangent" if analytic else "copies"
         self.monodromy = monodromy
+        self._scale = state_scale(self.prepared(self.value).problem)
         if self.method not in COMPILED_METHODS:  # pragma: no cover - guarded above
             raise ValueError(self.method)
 
@@ -283,8 +289,10 @@ class StrobeMap:
         return float(np.max(np.abs((moved.y1 - value.y1) / s - linear)))
 
     def scale(self) -> np.ndarray:
-        """The characteristic size of each state (state units)."""
-        return state_scale(self.prepared(self.value).problem)
+        """The characteristic size of each state (state units) at the map's own parameter
+        value: the scaled unknowns of its residuals, Jacobians (:attr:`MapValue.M`,
+        :meth:`flow`) and parameter derivatives, the same at every ``p``."""
+        return self._scale.copy()
 
     def initial(self, p: float, cycles: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The state after the scene's transient (``cycles`` periods, default the scene's
@@ -329,7 +337,7 @@ class StrobeMap:
             y1, aux1 = res.Y[-1].copy(), res.AUX[-1].copy()
             live = active[aux1[active] != np.asarray(aux)[active]]
             return MapValue(y1, aux1, live, None, int(res.stats["events"]), res.stats)
-        s = state_scale(pb)
+        s = self._scale
         m = n + active.size
         W_check, one_sided = None, ()
         if self.monodromy == "copies":
@@ -366,7 +374,9 @@ class StrobeMap:
         """The map and its Jacobian columns (extended state per unknown: the states scaled, the
         active discrete states in their units) by central differences of copies integrated in
         one step sequence; with :attr:`check`, forward differences at ``step`` and, as the last
-        returned item (else None), at ``check * step``, from copies started at both."""
+        returned item (else None), at ``check * step``, from copies started at both. The copies
+        start ``step`` off in the scale at the start's own parameter value (the linear range
+        there); the columns are per unit of the map's scaled unknowns (:meth:`scale`)."""
         n, na = start.y0.size, start.aux0.size
         s = state_scale(start)
         h = self.step
@@ -404,6 +414,9 @@ class StrobeMap:
                 W[:, c] = (X[1 + 2 * c] - X[0]) / step
                 W_check[:, c] = (X[2 + 2 * c] - X[0]) / (self.check * step)
         one_sided = () if W_check is not None else self._one_sided_columns(W, X, steps)
+        for w in (W, W_check):  # per unit of y / s to per unit of y / scale()
+            if w is not None:
+                w[:, :n] *= self._scale / s
         if one_sided:  # copies met contacts the orbit does not: the orbit's own count, alone
             events = int(self._solve(start, t_end).stats["events"])
         else:
@@ -526,7 +539,7 @@ class StrobeMap:
         active = _active(aux, pb)
         if not t > pb.t0:
             W = np.zeros((n + na, n + active.size))
-            W[:n, :n] = np.diag(state_scale(pb))
+            W[:n, :n] = np.diag(self._scale)
             W[n + active, n + np.arange(active.size)] = 1.0
             return y.copy(), aux.copy(), W if jacobian else None, active
         start = dataclasses.replace(pb, y0=y, aux0=aux)
