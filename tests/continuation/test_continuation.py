@@ -723,3 +723,16 @@ def test_a_branch_counts_every_evaluation_of_its_map(monkeypatch):
     }
     r = continue_orbit(scene, "omega", stop=1.9)
     assert r.attrs["map_evaluations"] == calls[0] > 0
+
+
+def test_an_iterate_whose_contact_lifts_off_says_what_its_orbit_does():
+    """A corrector iterate whose live discrete states differ from the branch's (the nine-bar's
+    lasting contact lifting off and beginning again within the orbit) says so with its events
+    and live states, not that a contact changed at the strobe time."""
+    from workbench.continuation._newton import live_changed
+    from workbench.continuation._strobe import MapValue
+
+    v = MapValue(np.zeros(8), np.zeros(2), np.array([0]), None, 2, {})
+    why = live_changed(v, 1, 0)
+    assert "(2 events per 1 period(s), live discrete states [0], against 0 where it" in why
+    assert "lifts off and begins again within it" in why

@@ -73,7 +73,7 @@ import numpy as np
 import xarray as xr
 
 from workbench._attributes import flag_meaning, flags, variable
-from workbench.continuation._newton import NewtonFailure, next_step, orbit_at
+from workbench.continuation._newton import NewtonFailure, live_changed, next_step, orbit_at
 from workbench.continuation._orbits import _guess
 from workbench.continuation._report import RangeProgress
 from workbench.continuation._strobe import MapValue, StrobeMap
@@ -539,10 +539,7 @@ class _Curve:
             raise NewtonFailure(f"the curve leaves the parameters' valid range ({why})")
         value, T, ctx = self.system.evaluate(self.fam, y, aux, p, q, extra, self.live)
         if not np.array_equal(value.live, self.live):
-            raise NewtonFailure(
-                "the live discrete states changed (a contact was held or released at the "
-                "strobe time)"
-            )
+            raise NewtonFailure(live_changed(value, self.fam.periods, self.live.size))
         return _Eval(y, aux, p, q, np.array(extra), value, self._residual(value, y, aux), T, ctx)
 
     def jacobian(self, ev: _Eval) -> tuple[np.ndarray, dict]:

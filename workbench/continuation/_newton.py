@@ -75,6 +75,16 @@ def residual(v: MapValue, y, aux, s) -> np.ndarray:
     return np.concatenate([(v.y1 - y) / s, v.aux1[live] - aux[live]])
 
 
+def live_changed(v: MapValue, periods: int, live: int) -> str:
+    """Why an iterate whose live discrete states differ from its curve's (``live`` of them)
+    cannot be corrected: what the iterate's orbit does."""
+    return (
+        f"the live discrete states changed ({v.events} events per {periods} period(s), live "
+        f"discrete states {v.live.tolist()}, against {live} where it started: a contact held "
+        "through the orbit lifts off and begins again within it, or the reverse)"
+    )
+
+
 def _evaluate(smap: StrobeMap, y, aux, p) -> MapValue:
     try:
         return smap(y, aux, p)
@@ -171,8 +181,8 @@ def correct(
         u = np.concatenate([y / s, aux[v.live], [p / pscale]])
         if u.size != tau.size:
             raise NewtonFailure(
-                "the live discrete states changed during the correction (a contact was held "
-                "or released at the strobe time); take a shorter step"
+                f"{live_changed(v, smap.periods, tau.size - 1 - n)} during the correction "
+                f"(iterate {it}); take a shorter step"
             )
         arc = float(tau @ (u - u_pred))
         if r < tolerance and abs(arc) < tolerance:
