@@ -533,6 +533,18 @@ def test_detection_rules_of_the_branch():
     assert _detect(base, dict(base, size=3, fold=-1.0)) == []  # other unknowns: not compared
 
 
+def test_a_turn_where_det_m_minus_i_keeps_its_sign_is_no_fold():
+    """Along one curve of a continuous map the tangent's parameter component has the sign of
+    det(M - I) (Feigin's rule at a border collision): a turn between two orbits with the same
+    sign is a jump, never labelled a fold; with opposite signs it can be one."""
+    from workbench.continuation._branch import _turn_without_fold
+
+    assert _turn_without_fold(-0.5, 1.0) == ""
+    why = _turn_without_fold(2.78, 0.071)
+    assert why.startswith("the tangent turns but det(M - I) keeps its sign (2.78 and 0.071 at")
+    assert "Feigin" in why and _turn_without_fold(-1.0, -2.0)
+
+
 @pytest.mark.chaotic
 def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
     """The nine-bar at omega = 0.5 pi, c = 20 um (studies/chaos_maps/omega_clearance.toml) is on

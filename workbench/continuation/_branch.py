@@ -358,6 +358,25 @@ def _confirm(smap, kind: str, pt: OrbitPoint, f: float, graze) -> tuple[bool, fl
     return True, f, ""  # nonsmooth_fold: the tangent's turn, bracketed to the tolerance
 
 
+def _turn_without_fold(det_lo: float, det_hi: float) -> str:
+    """Why the tangent's turn between two orbits with these values of det(M - I) is no fold,
+    or "" where it can be one. Along one curve of a continuous map, smooth or piecewise
+    smooth, with its tangent oriented consistently, the tangent's parameter component has the
+    sign of det(M - I) (Cramer's rule on the bordered system; at a border collision this is
+    Feigin's rule, di Bernardo, Feigin, Hogan & Homer 1999: a nonsmooth fold where the number
+    of real multipliers above +1 changes parity, persistence where it does not). A turn where
+    det(M - I) keeps its sign is then no fold: the map jumps there (contact memory) or the
+    corrector moved to another part of the solution set."""
+    if np.sign(det_lo) != np.sign(det_hi):
+        return ""
+    return (
+        f"the tangent turns but det(M - I) keeps its sign ({det_lo:.3g} and {det_hi:.3g} at "
+        "the bracket's ends: no real multiplier passes +1), which no fold of a continuous map "
+        "allows (Feigin's parity): the map jumps there, or the corrector reached another part "
+        "of the solution set"
+    )
+
+
 def _locate(
     smap, A: OrbitPoint, B: OrbitPoint, h: float, kind: str, cfg: BranchSettings, graze=None
 ) -> Special:
@@ -413,6 +432,9 @@ def _locate(
     best, sigma = (pt_lo, lo) if f_a <= f_b else (pt_hi, hi)
     f_best = value(best)
     ok, test, why = _confirm(smap, kind, best, f_best, graze)
+    if ok and kind == "nonsmooth_fold":
+        why = _turn_without_fold(_tests(pt_lo)["fold"], _tests(pt_hi)["fold"])
+        ok = not why
     if ok and kind == "nonsmooth_fold":
         # a turn is where one curve folds back: the bracket's two ends lie on it, no further
         # apart than their arclength allows; further, they lie on two parts of the solution set
