@@ -545,6 +545,28 @@ def test_a_turn_where_det_m_minus_i_keeps_its_sign_is_no_fold():
     assert "Feigin" in why and _turn_without_fold(-1.0, -2.0)
 
 
+def test_a_step_back_against_the_tangent_with_no_fold_between_is_refused():
+    """A corrected point behind the last one in the parameter, against its tangent, with
+    det(M - I) of one sign at both (here every multiplier 0.5), is refused: no curve of a
+    continuous map turns so. Past a multiplier through +1 (a fold), or across a change of the
+    events (a grazing: not Lipschitz there), it is not."""
+    from workbench.continuation._branch import BranchSettings, _went_back
+    from workbench.continuation._newton import OrbitPoint
+    from workbench.continuation._strobe import MapValue
+
+    def point(p, mu, events=0):
+        v = MapValue(np.zeros(2), np.zeros(0), np.zeros(0, int), np.diag([mu, 0.5]), events, {})
+        return OrbitPoint(p, np.zeros(2), np.zeros(0), v, 0, 0.0, tau=np.array([0.6, 0, 0.8]))
+
+    cfg = BranchSettings(pscale=1.0, bounds=(0.0, 10.0), tolerance=1e-6)
+    A = point(1.0, 0.5)
+    assert _went_back(A, point(0.999, 0.5), cfg)
+    assert not _went_back(A, point(1.001, 0.5), cfg)  # ahead
+    assert not _went_back(A, point(1.0 - 1e-7, 0.5), cfg)  # within Newton's tolerance
+    assert not _went_back(A, point(0.999, 1.5), cfg)  # a multiplier through +1: a fold
+    assert not _went_back(A, point(0.999, 0.5, events=2), cfg)  # a grazing between
+
+
 @pytest.mark.chaotic
 def test_a_contracting_nine_bar_orbit_gets_a_floquet_bound_not_the_noise_rate():
     """The nine-bar at omega = 0.5 pi, c = 20 um (studies/chaos_maps/omega_clearance.toml) is on

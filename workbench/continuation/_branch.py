@@ -358,6 +358,20 @@ def _confirm(smap, kind: str, pt: OrbitPoint, f: float, graze) -> tuple[bool, fl
     return True, f, ""  # nonsmooth_fold: the tangent's turn, bracketed to the tolerance
 
 
+def _went_back(A: OrbitPoint, B: OrbitPoint, cfg: BranchSettings) -> bool:
+    """Whether the corrected point B lies back from A in the parameter, against A's tangent
+    (by more than Newton's tolerance, scaled), with det(M - I) of one sign at both: no curve
+    of a continuous map turns so (:func:`_turn_without_fold`), so B lies on another part of
+    the solution set, e.g. on the branch's own past, where the continuation would go back
+    along itself. Only where the two orbits locate as many events: across a grazing the map of
+    an impacting system is not even Lipschitz (Nordmark's square root), and a branch can turn
+    there whatever det(M - I) does (typed by the grazing's transition)."""
+    if A.value.M.shape != B.value.M.shape or A.value.events != B.value.events:
+        return False
+    back = (B.p - A.p) / cfg.pscale * np.sign(A.tau[-1]) < -cfg.tolerance
+    return bool(back and _turn_without_fold(_tests(A)["fold"], _tests(B)["fold"]))
+
+
 def _turn_without_fold(det_lo: float, det_hi: float) -> str:
     """Why the tangent's turn between two orbits with these values of det(M - I) is no fold,
     or "" where it can be one. Along one curve of a continuous map, smooth or piecewise
@@ -974,6 +988,13 @@ def trace(
                 failure = (
                     f"the corrector reaches another part of the solution set however short the "
                     f"step ({far / h:.3g} steps away)"
+                )
+            if not sharp and _went_back(A, B, cfg):  # Newton went back along the branch
+                sharp = True
+                failure = (
+                    "the corrector goes back in the parameter against the tangent, det(M - I) "
+                    f"keeping its sign ({_tests(A)['fold']:.3g} and {_tests(B)['fold']:.3g}), "
+                    "however short the step"
                 )
         except NewtonFailure as exc:
             B, sharp, failure = None, True, f"the corrector failed ({exc})"
