@@ -707,7 +707,11 @@ def test_the_end_of_the_periodic_motion_is_bracketed_and_reported():
     for f in b["bifurcations"]:
         f.update(events_before=0.0, events_after=2.0)
     text = "\n".join(route_section(route))
-    assert "the end is labelled a grazing at 1.864 pi" in text
+    assert "; a grazing is labelled at 1.864 pi." in text
+    unresolved = dict(b["bifurcations"][1], value=1.862 * pi, resolved=False)
+    b["bifurcations"].insert(1, unresolved)  # a bracket, not a label: not cited
+    assert "; a grazing is labelled at 1.864 pi." in "\n".join(route_section(route))
+    b["bifurcations"].pop(1)
     assert "stays within 0.05-0.2 up to 1.864 pi, where it jumps from 0.05 to 1.6e+03" in text
     assert "**the lasting-contact orbit ends at the grazing, where a contact lifts off**" in text
     assert "**The route**" not in text  # the grazing (1.864 pi) lies above the last periodic value
@@ -925,22 +929,19 @@ def test_the_studies_page_quotes_the_reports_end_of_the_periodic_motion():
     page = " ".join((root / "docs" / "studies" / "index.md").read_text().split())
     report = " ".join(report.split())
     reach = re.search(r"continued from 1.8 pi .*? reaches ([\d.]+) pi and ends there", report)
-    low = re.search(r"falls from [\d.e+-]+ to ([\d.e+-]+) m\.", report)
+    low = re.search(r"falls from [\d.e+-]+ to ([\d.e+-]+) m[.;]", report)
     end = re.search(r"going up the strobe is period-1 up to ([\d.]+) pi and not at ([\d.]+) pi",
                     report)  # fmt: skip
     events = re.search(rf"Newton finds at {end.group(1)} pi .*? has ([\d.]+) events", report)
     other = re.search(r"going up the strobe is period-1 last at ([\d.]+) pi", report)
     assert f"lasting-contact orbit from 1.8 pi to {reach.group(1)} pi" in page
-    assert f"smallest penetration has fallen to {float(low.group(1)):.2g} m" in page
-    jump = re.search(r"last orbit's copies moved by ([\d.e+-]+) \(scaled\) in .*? lie past a jump",
-                     report)  # fmt: skip
-    assert (
-        f"copies of its last orbit moved by {jump.group(1)} of a state's scale lie past a jump"
-        in page
-    )
-    assert (
-        "**no multiplier leaves the unit circle**" in report and "labelled a grazing" not in report
-    )
+    assert f"smallest penetration falling to {float(low.group(1)):.2g} m" in page
+    grazes = re.search(r"grazings are labelled at ([\d.]+) pi and ([\d.]+) pi\.", report)
+    assert f"grazings labelled at {grazes.group(1)} pi and {grazes.group(2)} pi" in page
+    assert "**no multiplier leaves the unit circle**" in report
+    lift = re.search(r"\*\*The route\*\*: lasting contact up to the grazing at ([\d.]+) pi", report)
+    assert lift.group(1) == grazes.group(2)
+    assert f"lasting contact up to the grazing at {lift.group(1)} pi" in page
     assert f"impacts up to {end.group(1)} pi ({events.group(1)} contact events per cycle" in page
     assert f"no period from {end.group(2)} pi going up" in page
     assert f"the same highest period-1 value, {other.group(1)} pi" in page

@@ -255,7 +255,13 @@ def _end_lines(e: dict, p: str) -> list[str]:
     loss = next(
         (f for f in b["bifurcations"] if f["stable_before"] and not f["stable_after"]), None
     )
-    graze = next((f for f in b["bifurcations"] if f["type"] == "grazing"), None)
+    # resolved grazings only (an unresolved one is a bracket, not a label), along the branch;
+    # the route's lift-off is the last of them, the nearest to the impacting orbits
+    grazes = sorted(
+        (f for f in b["bifurcations"] if f["type"] == "grazing" and f.get("resolved", True)),
+        key=lambda f: f["value"],
+    )
+    graze = grazes[-1] if grazes else None
     low = [x for x in b["smallest_event"] if math.isfinite(x)]
     span = abs(b["values"][-1] - b["values"][0]) or 1.0
     failed = e.get("failed_starts") or []
@@ -275,7 +281,13 @@ def _end_lines(e: dict, p: str) -> list[str]:
             f" The smallest event value along the orbit (the mechanisms: the smallest "
             f"penetration of a joint in lasting contact) falls from {low[0]:.3g} to "
             f"{low[-1]:.3g} m"
-            + (f"; the end is labelled a grazing at {_v(graze['value'], p)}." if graze else ".")
+            + (
+                f"; {'a grazing is' if len(grazes) == 1 else 'grazings are'} labelled at "
+                + " and ".join(_v(g["value"], p) for g in grazes)
+                + "."
+                if grazes
+                else "."
+            )
         )
     if loss and graze and abs(loss["value"] - graze["value"]) < 0.01 * span:
         i = min(range(len(b["values"])), key=lambda k: abs(b["values"][k] - loss["value"]))
