@@ -229,3 +229,61 @@ def test_the_copies_monodromy_stays_on_the_lasting_contacts_side_of_its_lift_off
     # without the one-sided columns (the code before): docs/continuation.md's 3.3e3
     monkeypatch.setattr(_strobe, "STRADDLE_RATIO", math.inf)
     assert largest(p, y, aux)[0] > 1e3
+
+
+#: orbits of the lasting-contact branch from pi (benchmarks/ninebar_branch.py --legs lasting):
+#: omega (rad/s), strobe state (x_A, y_A, x_B, y_B m; vx_A, vy_A, vx_B, vy_B m/s), held onset
+#: velocities (m/s)
+LASTING_HELD = [0.003898158494854159, 0.0015337248002524385]
+LASTING = {
+    "1.54 pi": (4.830630302646175, [-3.69308150694779e-05, -9.340472476882394e-05,
+                -8.004623267705319e-05, 6.1022002310486546e-05, 0.00012025181141201521,
+                -4.723248271456106e-05, -8.261189117849969e-05, -0.0001077925094868075]),
+    "1.80 pi": (5.65489045132968, [-3.6000119494217616e-05, -9.375738638633801e-05,
+                -7.993755037762323e-05, 6.11449532594428e-05, -0.00016785578818796472,
+                6.588655938829422e-05, -0.00011988914376522426, -0.00015750413707293177]),
+}  # fmt: skip
+
+
+def _tangential_oscillation(omega: float, y: list[float]) -> tuple[float, float, float]:
+    """One forcing period of the lasting-contact orbit from its strobe state: Newton's residual
+    of the state (scaled, the map based at omega), the oscillations per period of joint A's
+    sliding velocity along the bearing's wall (m/s) about its mean over 1/64 period, and their
+    RMS (m/s)."""
+    from workbench.run import prepare
+
+    scene = workbench.load_scene(SCENE).replace(sweep={})
+    point = scene.with_parameters(omega=omega)
+    smap = StrobeMap(point, "omega", rtol=1e-10)
+    y, aux = np.array(y), np.array(LASTING_HELD)
+    residual = float(np.max(np.abs((smap(y, aux, omega, tangent=False).y1 - y) / smap.scale())))
+    n = 16384
+    names = ["clearance_x", "clearance_y", "clearance_vx", "clearance_vy"]
+    sc = point.replace(
+        run={"cycles": 1, "transient_cycles": 0},
+        record={"samples_per_period": n, "variables": names},
+        solver={"rtol": 1e-10, "atol": 1e-10},
+    )
+    prep = prepare(sc)
+    ds = workbench.simulate(prep.restart(prep.problem.t0, y, aux))
+    x, yy, vx, vy = (ds[k].values[:, 0] for k in names)
+    theta = np.arctan2(yy, x)
+    sliding = -np.sin(theta) * vx + np.cos(theta) * vy
+    k = n // 64
+    fast = (sliding - np.convolve(sliding, np.ones(k) / k, mode="same"))[k:-k]
+    crossings = np.count_nonzero(np.sign(fast[1:]) != np.sign(fast[:-1]))
+    return residual, crossings / 2 / (1 - 2 / 64), float(np.std(fast))
+
+
+@pytest.mark.slow
+def test_the_lasting_contact_carries_a_fast_sliding_oscillation_past_1_75_pi():
+    """Why the lasting-contact branch from pi needs short steps past 1.75 pi (docs/
+    continuation.md): its orbits there carry an oscillation of the journal along the bearing's
+    wall at about 205 cycles per forcing period (about 1160 rad/s), lightly damped by the
+    friction (c_f = 0.01). The strobe samples its phase, which turns by 2 pi per 0.0085 pi of
+    omega, so the strobe velocities loop as omega grows; at 1.54 pi it is absent."""
+    res_low, _, rms_low = _tangential_oscillation(*LASTING["1.54 pi"])
+    res, cycles, rms = _tangential_oscillation(*LASTING["1.80 pi"])
+    assert res_low < 1e-5 and res < 1e-5, (res_low, res)  # both are the periodic orbits
+    assert rms_low < 1e-6, rms_low
+    assert 200 < cycles < 210 and rms > 5e-4, (cycles, rms)
