@@ -9,8 +9,7 @@ largest multipliers) and every located bifurcation (kind, parameter, critical mu
 transition at a grazing). ``-o`` keeps the branch as netCDF.
 
 Run (one core; near the end of the branch its steps collapse at nonsmooth points of the map,
-a failed correction costing two evaluations of the map with its monodromy matrix where its
-first iterate does not halve the residual, up to eight where it creeps)::
+each failed correction costing eight evaluations of the map with its monodromy matrix)::
 
     python studies/periodic_end_branch.py --start 1.86105 --stop 1.8612 -o branch.nc
 

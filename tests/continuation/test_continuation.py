@@ -496,53 +496,6 @@ def test_the_tangent_system_of_a_mechanism_takes_more_steps_than_its_copies():
         assert abs(int(text.replace(" ", "")) / steps[key] - 1) < 0.02, (key, steps)
 
 
-class _LinearMap:
-    """P(y; p) = A y + (p, 0), its Jacobian reported as ``factor`` (A - I) + I: Newton's error
-    then contracts by 1 - 1 / factor per iterate (a Jacobian off by that much)."""
-
-    periods = 1
-
-    def __init__(self, factor: float):
-        self.A = np.array([[0.5, 0.1], [0.0, 0.3]])
-        self.factor = factor
-        self.calls = 0
-
-    def scale(self):
-        return np.ones(2)
-
-    def __call__(self, y, aux, p, tangent=True):
-        from workbench.continuation._strobe import MapValue
-
-        self.calls += 1
-        M = self.factor * (self.A - np.eye(2)) + np.eye(2)
-        return MapValue(self.A @ y + np.array([p, 0.0]), aux.copy(), np.array([], int), M, 0, {})
-
-    def parameter_derivative(self, y, aux, p, live, pscale):
-        return np.array([pscale, 0.0])
-
-
-@pytest.mark.parametrize("factor", [1.5, 3.0])
-def test_the_corrector_stops_at_an_iterate_that_does_not_halve_the_residual(factor):
-    """Newton's method contracts quadratically from a prediction in its domain of attraction;
-    a correction that creeps (here a Jacobian off by ``factor``: the error shrinks by
-    1 - 1 / factor per iterate) is given up at once, so that the branch halves its step after
-    two map evaluations instead of eight iterations. A contraction of 1/3 still converges."""
-    from workbench.continuation._newton import NewtonFailure, OrbitPoint, correct
-
-    smap = _LinearMap(factor)
-    y = np.linalg.solve(np.eye(2) - smap.A, [0.2, 0.0]) + 0.1  # the orbit at p = 0.2, off 0.1
-    pred = OrbitPoint(0.2, y, np.zeros(0), None, 0, math.inf)
-    tau = np.array([0.0, 0.0, 1.0])  # the parameter held
-    u_pred = np.array([*y, 0.2])
-    if factor == 3.0:
-        with pytest.raises(NewtonFailure, match=r"does not contract .* at iterate 1"):
-            correct(smap, pred, tau, u_pred, 1.0, tolerance=1e-3)
-        assert smap.calls == 2
-    else:
-        pt = correct(smap, pred, tau, u_pred, 1.0, tolerance=1e-3)
-        assert pt.iterations == 4 and abs(pt.residual - 0.07 / 3**4) < 1e-12, pt  # 0.07 / 3^k
-
-
 def test_a_maps_jacobian_is_in_its_own_scale_at_every_parameter_value():
     """The monodromy is the derivative of the residual Newton drives to zero, in the same
     scaled unknowns, at every value of the parameter, also where the states' characteristic

@@ -279,9 +279,9 @@ def _tangential_oscillation(omega: float, y: list[float]) -> tuple[float, float,
 def test_the_lasting_contact_carries_a_fast_sliding_oscillation_past_1_75_pi():
     """Why the lasting-contact branch from pi needs short steps past 1.75 pi (docs/
     continuation.md): its orbits there carry an oscillation of the journal along the bearing's
-    wall at about 205 cycles per forcing period (about 1160 rad/s), lightly damped by the
-    friction (c_f = 0.01). The strobe samples its phase, which turns by 2 pi per 0.0085 pi of
-    omega, so the strobe velocities loop as omega grows; at 1.54 pi it is absent."""
+    wall at about 205 cycles per forcing period (about 1160 rad/s). The strobe samples its
+    phase, which turns by 2 pi per about 0.009 pi of omega (omega / 205), so the strobe
+    velocities loop as omega grows; at 1.54 pi it is absent."""
     res_low, _, rms_low = _tangential_oscillation(*LASTING["1.54 pi"])
     res, cycles, rms = _tangential_oscillation(*LASTING["1.80 pi"])
     assert res_low < 1e-5 and res < 1e-5, (res_low, res)  # both are the periodic orbits

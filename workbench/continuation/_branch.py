@@ -448,18 +448,16 @@ def _locate(
     ok, test, why = _confirm(smap, kind, best, f_best, graze)
     if ok and kind == "nonsmooth_fold":
         why = _turn_without_fold(_tests(pt_lo)["fold"], _tests(pt_hi)["fold"])
-        ok = not why
-    if ok and kind == "nonsmooth_fold":
         # a turn is where one curve folds back: the bracket's two ends lie on it, no further
         # apart than their arclength allows; further, they lie on two parts of the solution set
         gap = _distance(smap, pt_lo, pt_hi, cfg.pscale)
         allowed = JUMP * abs(hi - lo) + 10.0 * cfg.tolerance
-        if gap > allowed:
-            ok = False
+        if not why and gap > allowed:
             why = (
                 f"the bracket's ends lie {gap:.3g} apart (scaled), more than {allowed:.3g} for "
                 "their arclength: two parts of the solution set, not a turn of one"
             )
+        ok = not why
     special = Special(
         kind=kind,
         point=best,

@@ -38,14 +38,6 @@ class NewtonFailure(WorkbenchError, RuntimeError):
     """Newton's method did not converge (or an integration failed on the way)."""
 
 
-#: the corrector gives up at an iterate whose residual is not below this fraction of the
-#: previous one. From a prediction inside its domain of attraction Newton's method contracts
-#: quadratically; one that creeps or grows (a Jacobian that does not hold over the correction:
-#: the step outran the map's curvature) costs iterations that a shorter step saves (step control
-#: by the contraction rate: Deuflhard 2004, Sec. 5.1; Allgower & Georg 2003, Sec. 6.1).
-CONTRACTION = 0.5
-
-
 @dataclass
 class OrbitPoint:
     """A converged periodic orbit: parameter ``p``, strobe state ``y`` and discrete state
@@ -175,15 +167,12 @@ def correct(
     ``tau . (u - u_pred) = 0``. The parameter column ``Pp`` (d P / d(p / pscale), central
     differences) is computed at every iterate (a column kept from the prediction slowed the
     convergence to linear near branch points); the one of the last iterate is returned with
-    the point (for its tangent). An iterate whose residual is not below :data:`CONTRACTION` of
-    the previous one ends the correction (:class:`NewtonFailure`): a shorter step is
-    cheaper than iterations that creep."""
+    the point (for its tangent)."""
     s = smap.scale()
     y, aux, p = np.array(pred.y, float), np.array(pred.aux, float), float(pred.p)
     n = y.size
     evaluations = 0
     Pp = None
-    before = math.inf  # the previous iterate's residual
     for it in range(max_iterations + 1):
         v = _evaluate(smap, y, aux, p)
         evaluations += 1
@@ -200,14 +189,6 @@ def correct(
             return OrbitPoint(p, y, aux, v, it, r, Pp=Pp, evaluations=evaluations)
         if it == max_iterations:
             break
-        now = max(r, abs(arc))
-        if now > CONTRACTION * before:
-            raise NewtonFailure(
-                f"the corrector does not contract near p = {p:.10g} (scaled residual "
-                f"{before:.3g} -> {now:.3g} at iterate {it}, at most {CONTRACTION:g} of the "
-                f"previous needed; tolerance {tolerance:.3g}); take a shorter step"
-            )
-        before = now
         try:
             Pp = smap.parameter_derivative(y, aux, p, v.live, pscale)
         except (SolverError, SceneError) as exc:
