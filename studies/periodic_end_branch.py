@@ -34,8 +34,8 @@ from workbench.continuation import branch_bifurcations, continue_orbit
 
 SCENE = Path(__file__).resolve().parent / "bifurcation_speed" / "sweep.toml"
 #: points at most per branch: the lasting-contact orbit from pi to its lift-off near 1.843 pi
-#: needs more than 400 (its strobe velocities loop with omega, the phase of a lightly damped
-#: oscillation along the bearing's wall, docs/continuation.md)
+#: needs more than 400 (its strobe velocities loop with omega, the phase of a fast oscillation
+#: along the bearing's wall, docs/continuation.md)
 MAX_POINTS = 800
 
 
