@@ -19,7 +19,13 @@ Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
 - ``impact``: the impact oscillator (``impact_oscillator``, m = k = F = 1) with damping ratio
   0.05-2, restitution 0.3-0.95 and the gap set so that the grazing lies at omega 1.3-3 rad/s;
   omega continued down through it;
-- ``impact-curve``: the same draws, the grazing continued in the force as for ``stop-curve``.
+- ``impact-curve``: the same draws, the grazing continued in the force as for ``stop-curve``;
+- ``impact-flip``: an underdamped impact oscillator (damping ratio 0.02-0.15, restitution
+  0.5-0.95, the stop 0.5 m behind to 0.3 m ahead of the rest position) whose period-one orbit
+  strikes once per period: an independent reference (``tests/continuation/_impact_reference``:
+  the flow between impacts in closed form, the impact map) follows it up in omega to its flip
+  (a multiplier through -1), and the package's branch from the reference's orbit is continued
+  across it: the located period doubling against the reference's, and every other label.
 
 Per branch: the located grazing's relative error, the other labels with their critical
 multipliers, the labels that contradict them (a fold or branch point with no multiplier within
@@ -35,7 +41,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from _results import record, recording  # benchmarks/_results.py: a JSON record per run
@@ -46,9 +54,12 @@ from workbench.continuation._branch import MULTIPLIER_TOLERANCE
 from workbench.continuation._newton import NewtonFailure
 from workbench.models.stop_oscillator import grazing_amplitude
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "continuation"))
+from _impact_reference import ImpactReference  # noqa: E402 (the checks' own reference)
+
 #: a grazing within this relative distance of its closed form is right (issue 38, item 8)
 RELATIVE = 1e-6
-SYSTEMS = ("stop", "stop-force-gap", "stop-curve", "impact", "impact-curve")
+SYSTEMS = ("stop", "stop-force-gap", "stop-curve", "impact", "impact-curve", "impact-flip")
 
 
 def _roots(f, lo: float, hi: float, n: int = 4000) -> list[float]:
@@ -228,6 +239,86 @@ def impact_curve_rows(rng, case: int):
     )  # fmt: skip
 
 
+def _reference_flip(c: float, g: float, r: float):
+    """From the first omega (1.0, 1.1, ...) with a stable period-one impacting orbit, that
+    orbit followed up in omega (steps of 0.02 rad/s, Newton from the last) to where its
+    det(J + I) changes sign: ``(w_stable, state there, w_flip)``, or None (no stable orbit
+    up to 4 rad/s, or the orbit lost before a flip)."""
+    start = None
+    for w in np.arange(1.0, 4.0, 0.1):
+        ref = ImpactReference(c, g, r, float(w))
+        for z in ref.period_one():
+            if np.max(np.abs(np.linalg.eigvals(ref.jacobian(z)))) < 0.95:
+                start = (float(w), z)
+                break
+        if start:
+            break
+    if start is None:
+        return None
+    w, z = start
+    state = ImpactReference(c, g, r, w).strobe_state(z)
+
+    def det(w: float, z) -> tuple[float, np.ndarray]:
+        ref = ImpactReference(c, g, r, w)
+        z = ref.orbit(z)
+        return float(np.linalg.det(ref.jacobian(z) + np.eye(2))), z
+
+    d0, _ = det(w, z)
+    step = 0.02
+    while w < 8.0:
+        try:
+            d1, z1 = det(w + step, z)
+        except ValueError:
+            return None
+        if ImpactReference(c, g, r, w + step).margin(z1) > 0:
+            return None  # a free swing reaches the stop first: another bifurcation
+        if np.sign(d1) != np.sign(d0):
+            flip = brentq(lambda q, z=z: det(q, z)[0], w, w + step, xtol=1e-14, rtol=1e-15)
+            return start[0], state, flip
+        w, z, d0 = w + step, z1, d1
+    return None
+
+
+def impact_flip_rows(rng, case: int):
+    zeta = float(rng.uniform(0.02, 0.15))
+    p = {"mass": 1.0, "damping": 2 * zeta, "stiffness": 1.0, "force": 1.0}
+    p["restitution"] = float(rng.uniform(0.5, 0.95))
+    p["gap"] = float(rng.uniform(-0.5, 0.3))
+    p["x0"] = min(0.0, p["gap"] - 0.3)
+    row = {"system": "impact-flip", "case": case, "parameter": "omega", "parameters": dict(p)}
+    t0 = time.process_time()
+    found = _reference_flip(p["damping"], p["gap"], p["restitution"])
+    if found is None:
+        row["start_failed"] = "the reference finds no flip of a stable period-one orbit"
+        row["cpu"] = time.process_time() - t0
+        yield row
+        return
+    w_start, state, flip = found
+    stop = flip + 0.1
+    row.update(start=w_start, stop=stop, exact=flip)
+    scene = {"model": {"name": "impact_oscillator"}, "parameters": {**p, "omega": w_start}}
+    try:
+        r = continue_orbit(scene, "omega", stop=stop, state=state)
+    except Exception as exc:  # a traceback is a finding: recorded, not raised
+        row["error"] = f"{type(exc).__name__}: {exc}"
+        row["cpu"] = time.process_time() - t0
+        yield row
+        return
+    labels = branch_bifurcations(r, "omega")
+    flips = [b for b in labels if b["type"] == "period_doubling" and b["resolved"]]
+    first = min(flips, key=lambda b: abs(b["value"] - flip)) if flips else None
+    row["relative_error"] = abs(first["value"] - flip) / flip if first else None
+    row["labels"] = [
+        [b["type"], b["value"], bool(b["resolved"]), str(b["critical"])] for b in labels
+    ]
+    row["contradictions"] = _contradictions(r, "omega")
+    row["ended"] = r.attrs.get("branch_ended", "")
+    row["points"] = int(r.sizes["point"])
+    row["start_crossings"] = int(np.sum(r.crossings_per_orbit.values[0]))
+    row["cpu"] = time.process_time() - t0
+    yield row
+
+
 def _curve_text(row: dict) -> str:
     if "curve_error" in row:
         return f"curve failed: {row['curve_error'][:80]}"
@@ -256,7 +347,7 @@ def main() -> None:
         make = {
             "stop": stop_rows, "stop-force-gap": stop_force_gap_rows,
             "stop-curve": stop_curve_rows, "impact": impact_rows,
-            "impact-curve": impact_curve_rows,
+            "impact-curve": impact_curve_rows, "impact-flip": impact_flip_rows,
         }  # fmt: skip
         for case in range(args.cases):
             for row in make[name](rng, case):
@@ -264,7 +355,8 @@ def main() -> None:
                 err = row.get("relative_error")
                 print(
                     f"{row['system']:15s} {case:2d} {row['parameter']:6s} "
-                    f"grazing {'none' if err is None else f'{err:.1e}'}  "
+                    f"{'flip' if name == 'impact-flip' else 'grazing'} "
+                    f"{'none' if err is None else f'{err:.1e}'}  "
                     f"{row.get('transition') or ''}  "
                     f"labels {[(b[0], round(b[1], 7)) for b in row.get('labels', [])]}  "
                     f"contradictions {row.get('contradictions', [])} {row.get('error', '')}"
@@ -292,7 +384,8 @@ def main() -> None:
         )
     print(
         f"{len(rows)} branches: {unstarted} found no period-1 orbit to start from; of the "
-        f"others {right} have the grazing within {RELATIVE:g} of its closed form, "
+        f"others {right} have the grazing (impact-flip: the flip) within {RELATIVE:g} of its "
+        f"closed form (impact-flip: the reference), "
         f"{len(missed)} no grazing ({impacting} of them start on an impacting orbit, which "
         f"coexists with the non-impacting one there), {bad} a label their multipliers "
         f"contradict, {errors} an error"

@@ -114,6 +114,50 @@ def test_the_sequence_sees_a_contact_between_two_samples():
     assert match_extrema(a, b, 1.0) == [(0, 1), (1, 0)]
 
 
+def _rigid_impact(n: int, phase: float, rebound: float) -> np.ndarray:
+    """Samples of x - g over a period of a mass that strikes a rigid stop at ``phase`` (in
+    samples) with speed 1 and leaves it at ``rebound`` (a free flight's parabola each side:
+    a corner at exactly 0)."""
+    t = np.arange(n) - phase
+    t = (t + n / 2) % n - n / 2  # in (-n/2, n/2]: before the impact < 0 < after
+    a = 8.0 / n  # the flight's deceleration per sample^2 (a parabola through 0 each side)
+    return np.where(t < 0, t + a * t * t / 2, -rebound * t + a * t * t / 2) / n
+
+
+@pytest.mark.parametrize("phase", [0.0, 0.03, 0.3, 0.5, 0.7, 0.97])
+@pytest.mark.parametrize("rebound", [0.2, 0.8])
+def test_a_rigid_impact_is_no_margin_whatever_the_samples_phase(phase, rebound):
+    """A rigid impact (x - g reaches 0 and turns with a jump of its rate) sampled at any phase:
+    no extremum is kept at the impact. The parabola's vertex through the corner's samples lies
+    above zero at some phases (the rates differ, r v against v), and that sign flipping from
+    one orbit to the next was labelled a grazing (an impact oscillator in the grazing audit, at
+    2.2805 rad/s). The free flight's own turning point stays a margin; a smooth extremum near
+    zero (a grazing) and a compliant impact resolved by a sample inside it stay too."""
+    n = 512
+    g = _rigid_impact(n, 100 + phase, rebound)
+    seq = contact_sequence(g[:, None], np.array([1]), 1.0)
+    phases = seq.extrema[0][:, 0] * n
+    assert not np.any(np.abs(phases - (100 + phase)) < 2), seq.extrema[0]
+    assert seq.extrema[0].shape[0] >= 1  # the flight's own top, far from the impact
+    smooth = np.cos(2 * np.pi * np.arange(n) / n) - 1.0 - 1e-9
+    assert contact_sequence(smooth[:, None], np.array([1]), 1.0).extrema[0].shape[0] == 2
+    bump = g.copy()
+    bump[100] = 2e-4  # a sample inside a compliant contact shorter than the spacing: its depth
+    kept = contact_sequence(bump[:, None], np.array([1]), 1.0).extrema[0]
+    assert np.any(np.abs(kept[:, 0] * n - 100) < 1)
+
+
+def test_an_event_that_is_no_switching_surface_has_crossings_and_no_margins():
+    """A locator's crossings are counted (they are events the integration locates) but give no
+    margins, and two orbits are compared by the surfaces' crossings alone."""
+    t = np.arange(400) / 400
+    g = np.cos(2 * np.pi * t) - 0.5
+    seq = contact_sequence(np.stack([g, g], axis=1), np.array([1, -1]), 1.0, 400, [True, False])
+    assert seq.counts == (1, 1) and seq.surface_counts == (1,)
+    assert seq.extrema[0].shape[0] == 2 and seq.extrema[1].shape[0] == 0
+    assert seq.smallest_margin()[0] == 0
+
+
 def test_an_impact_shorter_than_the_samples_spacing_is_in_the_sequence():
     """A stop of 1e8 N/m against a 1 kg mass: each impact lasts about pi sqrt(m / k_s) = 0.3 ms,
     a tenth of the 2048 samples' spacing over the 7.9 s period (3.8 ms), and reaches about

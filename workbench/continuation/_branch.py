@@ -249,7 +249,7 @@ def _grazings(seq_a: ContactSequence, seq_b: ContactSequence) -> tuple[list[tupl
         for i, j in match_extrema(ea, eb, seq_a.span):
             if np.sign(ea[i, 1]) != np.sign(eb[j, 1]):
                 found.append((k, float(ea[i, 0]), float(ea[i, 2])))
-    changed = seq_a.counts != seq_b.counts
+    changed = seq_a.surface_counts != seq_b.surface_counts
     return found, not changed or bool(found)
 
 
@@ -589,7 +589,7 @@ def _beyond_grazing(
     # they collapsed, and the grazing was then located behind A)
     tau_p = float(A.tau[-1]) if A.tau is not None else 0.0
     ahead = math.copysign(1.0, tau_p if tau_p != 0.0 else G.p - A.p)
-    counts = sequence_of(smap, A).counts
+    counts = sequence_of(smap, A).surface_counts
     s = smap.scale()
     n = G.y.size
 
@@ -632,7 +632,9 @@ def _beyond_grazing(
             )
         except NewtonFailure:
             continue
-        if sequence_of(smap, pt).counts != counts:  # the new contact: the other side's orbit
+        if (
+            sequence_of(smap, pt).surface_counts != counts
+        ):  # the new contact: the other side's orbit
             kind = "persistent" if side == ahead else "nonsmooth_fold"
             text = f"an orbit with the new contact at {p:.10g}"
             mu = float(np.max(np.abs(pt.multipliers)))

@@ -43,12 +43,17 @@ class ContactSequence:
     extrema : tuple of ndarray
         Per event function, rows ``(phase, value, kind)`` of the local extrema of ``g_k`` along
         the orbit, in order of phase: phase in s, value in the event function's units, kind +1
-        for a maximum and -1 for a minimum.
+        for a maximum and -1 for a minimum; none for a function that is no switching surface
+        (``surface``), and none at a rigid impact (a corner at zero, :func:`_corner`): those
+        are no margins to anything.
     scale : ndarray
         Per event function, the range of ``g_k`` along the orbit (event units): the size its
         margins are measured against.
     samples : int
         Samples per forcing period it was read from (0: not said).
+    surface : ndarray of bool
+        Per event function, whether it is a switching surface
+        (:attr:`workbench.solver.Problem.event_surface`; default all).
     """
 
     span: float
@@ -57,11 +62,24 @@ class ContactSequence:
     extrema: tuple[np.ndarray, ...]
     scale: np.ndarray
     samples: int = 0
+    surface: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.surface is None:
+            object.__setattr__(self, "surface", np.ones(len(self.crossings), dtype=bool))
 
     @property
     def counts(self) -> tuple[int, ...]:
-        """Crossings per event function over the orbit."""
+        """Crossings per event function over the orbit (as many as the events an integration
+        over it locates)."""
         return tuple(int(c.size) for c in self.crossings)
+
+    @property
+    def surface_counts(self) -> tuple[int, ...]:
+        """Crossings per switching surface (:attr:`surface`): what two orbits' contact sequences
+        are compared by. A locator's crossings appear and vanish in pairs with nothing
+        happening to the orbit (the impact oscillator's turning points short of the stop)."""
+        return tuple(int(c.size) for c, on in zip(self.crossings, self.surface, strict=True) if on)
 
     def margin(self, k: int) -> np.ndarray:
         """The margins of event function ``k``: ``|value|`` of each local extremum relative to
@@ -95,6 +113,36 @@ def _vertex(values: np.ndarray, i: int) -> tuple[float, float]:
     return float(off), float(b - 0.25 * (a - c) * off)
 
 
+#: an extremum whose second differences of the samples next to it exceed those three samples
+#: away this many times, and whose value lies within one sample's change of zero, is a corner
+#: at zero: a rigid impact (:func:`_corner`)
+CORNER = 10.0
+
+
+def _corner(g: np.ndarray, i: int, kind: int, value: float) -> bool:
+    """Whether the extremum at sample i of the periodic samples ``g`` is a corner at zero: the
+    event function reaches zero there and turns with a jump of its rate (a rigid impact, where
+    the velocity reverses: the impact oscillator's ``x - g`` peaks at exactly 0 at each impact).
+    Such an extremum is the event itself, not a margin to a grazing: the vertex of the parabola
+    through its samples lies above or below zero with the samples' phase (by up to a few per
+    cent of a sample's change, above it where the rates on its two sides differ, r v against
+    v), and a sign change from one orbit to the next is no grazing. Read off the samples: the
+    second differences that see the corner are of the order of the rate's jump times the
+    spacing, those three samples away of the curvature times its square; at a smooth
+    extremum (a grazing, a lasting contact's least penetration) they are alike. And its
+    sample lies on the near side of zero, or at zero (to 1 % of a sample's change): a compliant
+    contact shorter than the spacing (a stiff stop's impact, 0.3 ms against 3.8 ms) is also a
+    kink in the samples, but its depth is a margin, and a sample inside it reads it."""
+    n = g.size
+    d2 = np.array([g[(i + k - 1) % n] - 2.0 * g[(i + k) % n] + g[(i + k + 1) % n]
+                   for k in (-3, -1, 0, 1, 3)])  # fmt: skip
+    kink = float(np.max(np.abs(d2[1:4])))
+    far = float(max(abs(d2[0]), abs(d2[4])))
+    step = max(abs(g[i] - g[(i - 1) % n]), abs(g[i] - g[(i + 1) % n]))
+    near = kind * g[i] <= 0.01 * step
+    return kink > CORNER * far and abs(value) <= step and near
+
+
 def _extrema(g: np.ndarray) -> list[tuple[int, int]]:
     """``(index, kind)`` of the local extrema of periodic samples (kind +1 maximum, -1 minimum;
     a plateau counts once, at its first sample)."""
@@ -105,7 +153,11 @@ def _extrema(g: np.ndarray) -> list[tuple[int, int]]:
 
 
 def contact_sequence(
-    values: np.ndarray, directions: np.ndarray, span: float, samples: int = 0
+    values: np.ndarray,
+    directions: np.ndarray,
+    span: float,
+    samples: int = 0,
+    surface: np.ndarray | None = None,
 ) -> ContactSequence:
     """The contact sequence from event functions sampled at equal steps over whole periods.
 
@@ -120,6 +172,9 @@ def contact_sequence(
         The orbit's time (s).
     samples : int
         Samples per forcing period (recorded with the sequence; 0: not said).
+    surface : ndarray of bool, shape (ne,), optional
+        Which event functions are switching surfaces (default all): the others get their
+        crossings and no extrema.
 
     Examples
     --------
@@ -131,14 +186,17 @@ def contact_sequence(
     """
     values = np.asarray(values, dtype=float)
     n, ne = values.shape
+    surface = np.ones(ne, bool) if surface is None else np.asarray(surface, dtype=bool)
     dt = span / n
     crossings, extrema, scale = [], [], np.zeros(ne)
     for k in range(ne):
         g = values[:, k]
         scale[k] = float(np.ptp(g)) if n else 0.0
         rows = []
-        for i, kind in _extrema(g):
+        for i, kind in _extrema(g) if surface[k] else ():
             off, v = _vertex(g, i)
+            if _corner(g, i, kind, v):
+                continue
             rows.append((((i + off) * dt) % span, v, float(kind)))
         rows.sort()
         e = np.array(rows, dtype=float).reshape(-1, 3)
@@ -166,6 +224,7 @@ def contact_sequence(
         tuple(extrema),
         scale,
         int(samples),
+        surface,
     )
 
 

@@ -624,14 +624,14 @@ class StrobeMap:
         span = self.periods * self.prepared(p).period
         n = self._samples if samples is None else int(samples)
         values, events = self._sampled(y, aux, p, n)
-        seq = contact_sequence(values, pb.event_direction, span, samples=n)
+        seq = contact_sequence(values, pb.event_direction, span, n, pb.event_surface)
         if samples is not None or not self._refine:
             return seq
         finer = n
         while sum(seq.counts) < events and finer * REFINE <= MAX_SAMPLES:
             finer *= REFINE
             values, events = self._sampled(y, aux, p, finer)
-            seq_f = contact_sequence(values, pb.event_direction, span, samples=finer)
+            seq_f = contact_sequence(values, pb.event_direction, span, finer, pb.event_surface)
             if sum(seq_f.counts) >= events:
                 self._samples = finer
                 return self._near_grazing(seq_f, y, aux, p)
@@ -659,8 +659,8 @@ class StrobeMap:
                 break
             n *= REFINE
             values, _ = self._sampled(y, aux, p, n)
-            finer = contact_sequence(values, pb.event_direction, span, samples=n)
-            if finer.counts != seq.counts:
+            finer = contact_sequence(values, pb.event_direction, span, n, pb.event_surface)
+            if finer.surface_counts != seq.surface_counts:
                 break  # another sequence at this density: the crossings' own rule decides
             self._samples = max(self._samples, n)
             _, _, value_f = finer.smallest_margin()

@@ -112,6 +112,10 @@ class Model:
     initial_values: ClassVar[Mapping[str, float]] = {}
     #: per event function: +1 fires on a rising zero, -1 on a falling one, 0 on both
     event_directions: ClassVar[tuple[int, ...]] = ()
+    #: per event function: whether it is a switching surface (the vector field or the state
+    #: changes across it, so its grazings are bifurcations) or, False, a locator or a time
+    #: event (:attr:`workbench.solver.Problem.event_surface`); empty: all are surfaces
+    event_surfaces: ClassVar[tuple[bool, ...]] = ()
     #: initial discrete state ``aux`` (changed only by ``apply_event``; recorded with the run)
     initial_aux: ClassVar[tuple[float, ...]] = ()
     #: units of the event functions' values and of the discrete state (``units`` attributes of
@@ -227,10 +231,10 @@ class Model:
 
         The default serves a model with fixed states (:attr:`fixed_states`): the hooks of
         :attr:`hooks`, ``p`` = the parameters in their declared order, ``y0`` from
-        :attr:`initial_values` and ``initial``, :attr:`event_directions` and
-        :attr:`initial_aux`. Override it to pass other arrays (integer parameters ``ip``, a
-        scratch array ``work``, per-state tolerance scales ``atol_scale``, model failure
-        messages), or a state that depends on the effects.
+        :attr:`initial_values` and ``initial``, :attr:`event_directions`,
+        :attr:`event_surfaces` and :attr:`initial_aux`. Override it to pass other arrays
+        (integer parameters ``ip``, a scratch array ``work``, per-state tolerance scales
+        ``atol_scale``, model failure messages), or a state that depends on the effects.
         """
         hooks = self.hooks or type(self).__module__
         if hooks == "__main__":
@@ -249,6 +253,9 @@ class Model:
             p=np.array([float(params[p.name]) for p in self.parameters]),
             aux0=np.array(self.initial_aux, dtype=np.float64),
             event_direction=np.array(self.event_directions, dtype=np.int64),
+            event_surface=np.array(self.event_surfaces, dtype=bool)
+            if self.event_surfaces
+            else None,
         )
 
     def derive(

@@ -210,6 +210,9 @@ class ImpactOscillator(Model):
             p=p,
             aux0=np.zeros(2),
             event_direction=np.array([1, 1, -1]),
+            # the stop is the one switching surface: the release is a time event, and event 2
+            # only locates impacts between step ends (its turning points are no surface)
+            event_surface=np.array([True, False, False]),
             atol_scale=np.array([size, params["omega"] * size]),
             t0=math.pi / params["omega"],  # forcing phase pi: the module's "Time origin"
         )

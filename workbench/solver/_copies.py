@@ -46,6 +46,7 @@ def copies_problem(
     p = [problem.p, state_scale(problem)]
     aux0 = [AUX.ravel(), np.zeros(SLOTS * (k - 1))]
     direction = [np.tile(problem.event_direction, k)]
+    surface = [np.tile(problem.event_surface, k)]
     if renorm:
         sep = np.broadcast_to(np.asarray(separations, dtype=float), (k - 1,))
         gro = np.broadcast_to(np.asarray(growth, dtype=float), (k - 1,))
@@ -56,6 +57,7 @@ def copies_problem(
             )
         p.append(np.column_stack([sep, gro]).ravel())
         direction.append(np.ones(2 * (k - 1), dtype=np.int64))  # growth, shrinkage
+        surface.append(np.zeros(2 * (k - 1), dtype=bool))  # renormalisations: time events
     nm = n if measured is None else int(measured)
     meta = np.array([n, na, ne, k, problem.p.size, int(renorm), nm], dtype=np.int64)
     return Problem(
@@ -66,6 +68,7 @@ def copies_problem(
         ip=np.concatenate([problem.ip, meta]),
         aux0=np.concatenate(aux0),
         event_direction=np.concatenate(direction),
+        event_surface=np.concatenate(surface),
         atol_scale=np.tile(problem.atol_scale, k),
         t0=problem.t0,
         work_size=problem.work_size,

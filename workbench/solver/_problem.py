@@ -52,6 +52,14 @@ class Problem:
         Initial discrete state (changed only by events; recorded with the state).
     event_direction : ndarray of int64
         Per event: +1 fires on a rising zero, -1 on a falling one, 0 on both.
+    event_surface : ndarray of bool, optional
+        Per event function: whether its zero set is a switching surface, where the vector
+        field or the state changes (a contact's onset or end, an impact), so that a local
+        extremum of it through zero is a grazing (di Bernardo, Budd, Champneys & Kowalczyk
+        2008, Sec. 2.5); False for a locator (an event that only helps locate another, e.g.
+        the impact oscillator's turning points) or a time event, whose crossings appear and
+        vanish with nothing happening to the orbit. Default: all True. The solver ignores
+        it; continuation looks for grazings on the surfaces alone.
     atol_scale : ndarray
         Per state: the scene's ``atol`` is multiplied by this (a characteristic size of the
         state), so that one number means the same for states of very different magnitude.
@@ -91,6 +99,7 @@ class Problem:
     ip: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     aux0: np.ndarray = field(default_factory=lambda: np.zeros(0))
     event_direction: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    event_surface: np.ndarray | None = None
     atol_scale: np.ndarray | None = None
     aux_scale: np.ndarray | None = None
     t0: float = 0.0
@@ -108,6 +117,14 @@ class Problem:
         self.ip = np.ascontiguousarray(self.ip, dtype=np.int64)
         self.aux0 = np.ascontiguousarray(self.aux0, dtype=np.float64)
         self.event_direction = np.ascontiguousarray(self.event_direction, dtype=np.int64)
+        if self.event_surface is None:
+            self.event_surface = np.ones(self.event_direction.shape, dtype=bool)
+        self.event_surface = np.ascontiguousarray(self.event_surface, dtype=bool)
+        if self.event_surface.shape != self.event_direction.shape:
+            raise ValueError(
+                f"event_surface {self.event_surface!r}: one flag per event function "
+                f"({self.event_direction.size}, as event_direction)"
+            )
         if self.atol_scale is None:
             self.atol_scale = np.ones_like(self.y0)
         self.atol_scale = np.ascontiguousarray(self.atol_scale, dtype=np.float64)

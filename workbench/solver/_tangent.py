@@ -149,6 +149,7 @@ def tangent_problem(
         aux0=problem.aux0,
         aux_scale=problem.aux_scale,
         event_direction=problem.event_direction,
+        event_surface=problem.event_surface,
         atol_scale=atol_scale,
         t0=problem.t0,
         work_size=problem.work_size + scratch_size(n, na, m, problem.event_direction.size),
