@@ -9,6 +9,10 @@ Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
   grazing and down through the upper one, and from the impacting side down through the lower
   one (the closed form: the linear amplitude
   F / sqrt((k - m w^2)^2 + (c w)^2) equals the gap, ``grazing_amplitude``);
+- every fold and period doubling labelled on a stop oscillator's branch is checked against
+  an independent piecewise-linear reference (``tests/continuation/_stop_reference``: the flow
+  in closed form on each side of the stop): where, within 1e-4 of the label (relative), the
+  reference's multiplier passes +1 or -1;
 - ``stop-force-gap``: the same draws at a random omega, continued in the force (up) and in the
   gap (down) through the grazing (closed forms: F g / A and A, A the linear amplitude);
 - ``stop-curve``: the same draws, the lower grazing located on a branch up in omega and
@@ -57,7 +61,8 @@ from workbench.continuation._newton import NewtonFailure
 from workbench.models.stop_oscillator import grazing_amplitude
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "continuation"))
-from _impact_reference import ImpactReference  # noqa: E402 (the checks' own reference)
+from _impact_reference import ImpactReference  # noqa: E402 (the checks' own references)
+from _stop_reference import StopReference  # noqa: E402
 
 #: a grazing within this relative distance of its closed form is right (issue 38, item 8)
 RELATIVE = 1e-6
@@ -85,6 +90,39 @@ def _contradictions(r, parameter: str) -> list:
         if target is not None and m.size and np.min(np.abs(m - target)) > MULTIPLIER_TOLERANCE:
             bad.append([kind, float(r[parameter][i]), [str(x) for x in m]])
     return bad
+
+
+#: a fold or period doubling of a stop oscillator is checked against the reference in this
+#: relative window around its label
+WINDOW = 1e-4
+STOP_NAMES = ("mass", "damping", "stiffness", "stop_stiffness", "gap", "force", "omega")
+
+
+def _stop_label_checks(r, parameter: str, params: dict) -> list:
+    """Every fold and period doubling labelled on a stop oscillator's branch against the
+    piecewise-linear reference (``tests/continuation/_stop_reference``: closed-form flow on
+    each side of the stop): the reference's orbit from the label's, and the parameter value in
+    the window ``(1 +- WINDOW) x`` the label's where its det(M - I) (fold) or det(M + I)
+    (period doubling) is zero: ``[kind, label, reference or None, relative error or None]``."""
+    out = []
+    for b in branch_bifurcations(r, parameter):
+        if b["type"] not in ("fold", "period_doubling") or not b["resolved"]:
+            continue
+        i, value = b["index"], b["value"]
+        z = np.array([float(r.orbit_x[i]), float(r.orbit_v[i])])
+        sign = 1.0 if b["type"] == "period_doubling" else -1.0
+
+        def det(q: float, z=z, sign=sign) -> float:
+            ref = StopReference(*[{**params, parameter: q}[n] for n in STOP_NAMES])
+            return float(np.linalg.det(ref.jacobian(ref.orbit(z)) + sign * np.eye(2)))
+
+        try:
+            exact = brentq(det, value * (1 - WINDOW), value * (1 + WINDOW), xtol=1e-15, rtol=1e-15)
+        except ValueError:  # no sign change in the window, or no orbit: the label is not there
+            out.append([b["type"], value, None, None])
+            continue
+        out.append([b["type"], value, exact, abs(value - exact) / abs(exact)])
+    return out
 
 
 def _branch(
@@ -117,6 +155,8 @@ def _branch(
         [b["type"], b["value"], bool(b["resolved"]), str(b["critical"])] for b in found
     ]
     row["contradictions"] = _contradictions(r, parameter)
+    if model == "stop_oscillator":
+        row["label_checks"] = _stop_label_checks(r, parameter, {**params, parameter: start})
     row["notes"] = r.attrs.get("bifurcation_notes", "")
     row["ended"] = r.attrs.get("branch_ended", "")
     row["points"] = int(r.sizes["point"])
@@ -327,6 +367,18 @@ def impact_flip_rows(rng, case: int):
     yield row
 
 
+def _checks_text(row: dict) -> str:
+    if not row.get("label_checks"):
+        return ""
+    return (
+        " reference "
+        + ", ".join(
+            f"{c[0]} {'none' if c[3] is None else f'{c[3]:.1e}'}" for c in row["label_checks"]
+        )
+        + " "
+    )
+
+
 def _curve_text(row: dict) -> str:
     if "curve_error" in row:
         return f"curve failed: {row['curve_error'][:80]}"
@@ -368,6 +420,7 @@ def main() -> None:
                     f"{row.get('transition') or ''}  "
                     f"labels {[(b[0], round(b[1], 7)) for b in row.get('labels', [])]}  "
                     f"contradictions {row.get('contradictions', [])} {row.get('error', '')}"
+                    f"{_checks_text(row)}"
                     f"{'no start: ' + row['start_failed'][:60] if 'start_failed' in row else ''}  "
                     f"{_curve_text(row)}"
                     f"{row['cpu']:.1f} s",
@@ -378,6 +431,14 @@ def main() -> None:
     )
     bad = sum(bool(r.get("contradictions")) for r in rows)
     unexplained = sum(bool(r.get("unexplained_flips")) for r in rows)
+    checks = [c for r in rows for c in r.get("label_checks", [])]
+    misplaced = [c for c in checks if c[3] is None or c[3] > RELATIVE]
+    if checks:
+        print(
+            f"{len(checks)} folds and period doublings of stop oscillators against the "
+            f"piecewise-linear reference: {len(checks) - len(misplaced)} within {RELATIVE:g}, "
+            f"misplaced {misplaced}"
+        )
     errors = sum("error" in r for r in rows)
     unstarted = sum("start_failed" in r for r in rows)
     missed = [r for r in rows if "points" in r and r["relative_error"] is None]
@@ -404,7 +465,8 @@ def main() -> None:
         {
             "seed": args.seed, "cases": args.cases, "systems": systems, "branches": len(rows),
             "grazing_right": right, "contradicted": bad, "errors": errors,
-            "unexplained_flips": unexplained,
+            "unexplained_flips": unexplained, "stop_labels_checked": len(checks),
+            "stop_labels_misplaced": len(misplaced),
             "start_failed": unstarted, "no_grazing": len(missed),
             "no_grazing_impacting_start": impacting, "curves": len(curves),
             "curves_right": curves_right, "rows": rows,
