@@ -12,7 +12,7 @@ Systems (SI units; parameters drawn from ``numpy.random.default_rng(SEED)``):
 - every fold and period doubling labelled on a stop oscillator's branch is checked against
   an independent piecewise-linear reference (``tests/continuation/_stop_reference``: the flow
   in closed form on each side of the stop): where, within 1e-4 of the label (relative), the
-  reference's multiplier passes +1 or -1;
+  reference's multiplier passes -1, or its orbits' parameter turns (a fold);
 - ``stop-force-gap``: the same draws at a random omega, continued in the force (up) and in the
   gap (down) through the grazing (closed forms: F g / A and A, A the linear amplitude);
 - ``stop-curve``: the same draws, the lower grazing located on a branch up in omega and
@@ -62,7 +62,7 @@ from workbench.models.stop_oscillator import grazing_amplitude
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "continuation"))
 from _impact_reference import ImpactReference  # noqa: E402 (the checks' own references)
-from _stop_reference import StopReference  # noqa: E402
+from _stop_reference import StopReference, fold  # noqa: E402
 
 #: a grazing within this relative distance of its closed form is right (issue 38, item 8)
 RELATIVE = 1e-6
@@ -101,9 +101,10 @@ STOP_NAMES = ("mass", "damping", "stiffness", "stop_stiffness", "gap", "force", 
 def _stop_label_checks(r, parameter: str, params: dict) -> list:
     """Every fold and period doubling labelled on a stop oscillator's branch against the
     piecewise-linear reference (``tests/continuation/_stop_reference``: closed-form flow on
-    each side of the stop): the reference's orbit from the label's, and the parameter value in
-    the window ``(1 +- WINDOW) x`` the label's where its det(M - I) (fold) or det(M + I)
-    (period doubling) is zero: ``[kind, label, reference or None, relative error or None]``."""
+    each side of the stop), from the label's orbit: a period doubling where the reference's
+    det(M + I) is zero in the window ``(1 +- WINDOW) x`` the label's, a fold where its orbits'
+    parameter is extreme (over their strobe x near the label's): ``[kind, label, reference or
+    None, relative error or None]``."""
     out = []
     for b in branch_bifurcations(r, parameter):
         if b["type"] not in ("fold", "period_doubling") or not b["resolved"]:
@@ -117,7 +118,15 @@ def _stop_label_checks(r, parameter: str, params: dict) -> list:
             return float(np.linalg.det(ref.jacobian(ref.orbit(z)) + sign * np.eye(2)))
 
         try:
-            exact = brentq(det, value * (1 - WINDOW), value * (1 + WINDOW), xtol=1e-15, rtol=1e-15)
+            if b["type"] == "fold":  # no orbit past it: the extremum of the parameter
+                width = WINDOW * max(abs(z[0]), params["gap"])
+                exact = fold({**params, parameter: value}, parameter, z, value, width)
+                if not abs(exact / value - 1) < WINDOW:
+                    raise ValueError("no fold in the window")
+            else:
+                exact = brentq(
+                    det, value * (1 - WINDOW), value * (1 + WINDOW), xtol=1e-15, rtol=1e-15
+                )
         except ValueError:  # no sign change in the window, or no orbit: the label is not there
             out.append([b["type"], value, None, None])
             continue

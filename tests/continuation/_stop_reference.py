@@ -94,3 +94,50 @@ class StopReference:
 
     def multipliers(self, z) -> np.ndarray:
         return np.linalg.eigvals(self.jacobian(z))
+
+
+NAMES = ("mass", "damping", "stiffness", "stop_stiffness", "gap", "force", "omega")
+
+
+def _reference(params: dict) -> StopReference:
+    return StopReference(*[params[n] for n in NAMES])
+
+
+def parameter_at(params: dict, parameter: str, x0: float, v: float, p: float) -> float:
+    """The value of ``parameter`` at which a period-one orbit passes x = x0 at the strobe time:
+    Newton on (v, p) from (v, p), the Jacobian by central differences."""
+    u = np.array([v, p], float)
+
+    def residual(u):
+        z = np.array([x0, u[0]])
+        return _reference({**params, parameter: u[1]}).strobe(z) - z
+
+    for _ in range(40):
+        R = residual(u)
+        if np.max(np.abs(R)) < 1e-13 * max(1.0, abs(x0), abs(u[0])):
+            return float(u[1])
+        J = np.empty((2, 2))
+        for j in range(2):
+            d = np.zeros(2)
+            d[j] = 1e-7 * max(1.0, abs(u[j]))
+            J[:, j] = (residual(u + d) - residual(u - d)) / (2 * d[j])
+        u = u - np.linalg.solve(J, R)
+    raise ValueError(f"no period-one orbit through x = {x0} near {u}")
+
+
+def fold(params: dict, parameter: str, z, p: float, width: float) -> float:
+    """The fold of the period-one orbits near the orbit z (the state at the strobe time) at
+    ``parameter`` = p: the extremum of the parameter over the orbits' strobe x within
+    ``width`` of z's (the orbits are parametrised by x through the fold, which turns in p)."""
+    from scipy.optimize import minimize_scalar
+
+    x, v = float(z[0]), float(z[1])
+    at = {x + s * width: parameter_at(params, parameter, x + s * width, v, p) for s in (-1, 0, 1)}
+    sign = 1.0 if at[x] >= max(at[x - width], at[x + width]) else -1.0  # a maximum, or minimum
+    best = minimize_scalar(
+        lambda q: -sign * parameter_at(params, parameter, q, v, p),
+        bounds=(x - width, x + width),
+        method="bounded",
+        options={"xatol": 1e-12 * max(1.0, abs(x))},
+    )
+    return -sign * best.fun
