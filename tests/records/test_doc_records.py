@@ -458,3 +458,38 @@ def test_the_map_check_on_the_same_orbit_is_the_newest_same_orbit_record():
         f"its fast exponent reads {first['lle_fast']:.3g} 1/s against the map's {first['lle']:.3g}"
         in page
     )
+
+
+def test_the_audit_s_other_labels_are_the_newest_reference_records():
+    """docs/continuation.md, "The other labels against independent references": the newest
+    ``--systems stop,stop-force-gap`` record (every fold and period doubling of a stop
+    oscillator against the piecewise-linear reference) and the newest ``--systems
+    impact-flip`` record (every flip of the impact oscillator's reference labelled), their
+    commands and counts."""
+    page = " ".join(_page("continuation.md").split())
+    runs = [r for r in records("grazing_audit.py") if r["command"].endswith("stop,stop-force-gap")]
+    newest = runs[-1]
+    assert newest["command"].endswith("--seed 29 --cases 6 --systems stop,stop-force-gap")
+    assert (
+        "`python benchmarks/grazing_audit.py --seed 29 --cases 6 --systems stop,stop-force-gap`"
+        in page
+    )
+    checks = [c for r in newest["figures"]["rows"] for c in r.get("label_checks", [])]
+    right = [c for c in checks if c[3] is not None and c[3] <= 1e-6]
+    worst = max(c[3] for c in right)
+    text = f"{len(checks)} folds and period doublings, {len(right)} within 1e-6 of the reference"
+    assert text in page and f"(the largest error {worst:.1e})".replace("e-0", "e-") in page
+    assert newest["figures"]["stop_labels_misplaced"] == 0
+    flips = [r for r in records("grazing_audit.py") if r["command"].endswith("impact-flip")][-1]
+    assert flips["command"].endswith("--seed 2 --cases 12 --systems impact-flip")
+    assert "`python benchmarks/grazing_audit.py --seed 2 --cases 12 --systems impact-flip`" in page
+    rows = flips["figures"]["rows"]
+    found = [r for r in rows if r.get("reference_flips")]
+    exact = sum(len(r["reference_flips"]) for r in found)
+    back = sum(len(r["reference_flips"]) == 2 for r in found)
+    worst = max(r["relative_error"] for r in found)
+    assert f"{len(found)} of the {len(rows)} have such a flip" in page
+    within = f"{worst:.1e}".replace("e-0", "e-")
+    assert f"all {exact} flips of the reference are labelled, within {within}" in page
+    assert back == 2 and "two of them where the multiplier comes back through -1" in page
+    assert flips["figures"]["unexplained_flips"] == 0 and flips["figures"]["errors"] == 0
