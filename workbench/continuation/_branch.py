@@ -632,9 +632,8 @@ def _beyond_grazing(
             )
         except NewtonFailure:
             continue
-        if (
-            sequence_of(smap, pt).surface_counts != counts
-        ):  # the new contact: the other side's orbit
+        # the new contact: the other side's orbit
+        if sequence_of(smap, pt).surface_counts != counts:
             kind = "persistent" if side == ahead else "nonsmooth_fold"
             text = f"an orbit with the new contact at {p:.10g}"
             mu = float(np.max(np.abs(pt.multipliers)))

@@ -22,7 +22,9 @@ shallow impact can lie wholly between two step ends, where ``x - g`` is negative
 at the stop exactly, however shallow (the impacts of the square-root map near a grazing are
 all shallow). ``x - g`` peaks at exactly 0 at an impact and is negative elsewhere: along an
 impacting orbit its local maxima measure the free passes' margins to the stop, not the impacts'
-depths.
+depths. So the stop (event 0) is the model's one switching surface (``Problem.event_surface``):
+event 2 also changes sign at every turning point short of the stop, where nothing happens to
+the orbit, and event 1 marks a time; neither has grazings.
 
 **Sticking.** Where the forcing presses the mass against the stop, ``F cos(omega t) > k g``,
 the impacts accumulate: each rebound is ``r`` times slower and comes sooner, infinitely many in
