@@ -26,8 +26,8 @@ from workbench.continuation import branch_bifurcations, continue_orbit
 
 C, R = 0.1, 0.8  # N s/m, 1
 #: the package locates a bifurcation to 1e-7 of the continued range (continue_orbit's
-#: ``tolerance`` docs); the references are good to about 1e-11 rad/s (their own differences
-#: at a 10x other difference step)
+#: ``tolerance`` docs); the references to about 1e-10 rad/s (the flip moved by 7e-11 rad/s
+#: when their difference step went from 1e-6 to 1e-7)
 LOCATED = 1e-7
 
 
