@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from _differences import central_jacobian
 from scipy.optimize import brentq, minimize_scalar
 
 
@@ -76,13 +77,7 @@ class ImpactReference:
 
     def jacobian(self, z, h: float = 1e-6) -> np.ndarray:
         """The impact map's Jacobian at z by central differences."""
-        z = np.asarray(z, float)
-        J = np.empty((2, 2))
-        for j in range(2):
-            d = np.zeros(2)
-            d[j] = h * max(1.0, abs(z[j]))
-            J[:, j] = (self.impact_map(z + d) - self.impact_map(z - d)) / (2 * d[j])
-        return J
+        return central_jacobian(self.impact_map, z, h)
 
     def orbit(self, z, tolerance: float = 1e-12) -> np.ndarray:
         """The fixed point of the impact map near z, by Newton's method."""

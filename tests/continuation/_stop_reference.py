@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from _differences import central_jacobian
 from scipy.optimize import brentq
 
 
@@ -74,13 +75,7 @@ class StopReference:
             t, side = ts1, 1 - side
 
     def jacobian(self, z, h: float = 1e-7) -> np.ndarray:
-        z = np.asarray(z, float)
-        J = np.empty((2, 2))
-        for j in range(2):
-            d = np.zeros(2)
-            d[j] = h * max(1.0, abs(z[j]))
-            J[:, j] = (self.strobe(z + d) - self.strobe(z - d)) / (2 * d[j])
-        return J
+        return central_jacobian(self.strobe, z, h)
 
     def orbit(self, z, tolerance: float = 1e-12) -> np.ndarray:
         """The period-one orbit near z (the state at t = 0), by Newton's method."""
@@ -116,12 +111,7 @@ def parameter_at(params: dict, parameter: str, x0: float, v: float, p: float) ->
         R = residual(u)
         if np.max(np.abs(R)) < 1e-13 * max(1.0, abs(x0), abs(u[0])):
             return float(u[1])
-        J = np.empty((2, 2))
-        for j in range(2):
-            d = np.zeros(2)
-            d[j] = 1e-7 * max(1.0, abs(u[j]))
-            J[:, j] = (residual(u + d) - residual(u - d)) / (2 * d[j])
-        u = u - np.linalg.solve(J, R)
+        u = u - np.linalg.solve(central_jacobian(residual, u, 1e-7), R)
     raise ValueError(f"no period-one orbit through x = {x0} near {u}")
 
 
