@@ -14,8 +14,13 @@ from scipy.optimize import brentq
 
 import workbench
 from workbench.continuation import branch_bifurcations, continue_orbit
-from workbench.continuation._branch import MARGIN_TOLERANCE, MULTIPLIER_TOLERANCE
-from workbench.continuation._contacts import contact_sequence, match_extrema
+from workbench.continuation._branch import MARGIN_TOLERANCE, MULTIPLIER_TOLERANCE, _grazings
+from workbench.continuation._contacts import (
+    ContactSequence,
+    ambiguous,
+    contact_sequence,
+    match_extrema,
+)
 from workbench.models.stop_oscillator import grazing_amplitude
 
 #: the issue's stop oscillator (none of the suite's other sets): grazing near 1.0645 rad/s
@@ -112,6 +117,59 @@ def test_the_sequence_sees_a_contact_between_two_samples():
     a = np.array([[0.1, -0.2, 1.0], [0.6, -1.0, -1.0]])
     b = np.array([[0.58, -1.0, -1.0], [0.12, 0.1, 1.0]])
     assert match_extrema(a, b, 1.0) == [(0, 1), (1, 0)]
+
+
+def _rebounds(shift: float, depth: float, n: int = 5) -> ContactSequence:
+    """The contact sequence of an orbit whose event function has a train of minima 0.4 ms
+    apart (a journal's rebounds along the bearing's wall, as on the four-bar at 44 rad/s):
+    values rising from -2e-7 by 1e-7 each, the train moved by ``shift`` (s) and lowered by
+    ``depth`` (m); the first ``n`` of them."""
+    phases = 0.134 + 4e-4 * np.arange(n) + shift
+    values = -2e-7 + 1e-7 * np.arange(n) - depth
+    rows = np.stack([phases, values, -np.ones(n)], axis=1)
+    crossings = (np.array([0.1338 + shift]),)
+    return ContactSequence(0.14, np.array([1]), crossings, (rows,), np.array([2.2e-6]))
+
+
+def test_a_sign_change_is_no_grazing_where_the_matching_cannot_tell_the_rebounds_apart():
+    """Two orbits whose train of rebound minima moved by 0.25 ms (0.6 of their spacing, as on
+    the four-bar at 44.5 rad/s): matched by the nearest phase, a minimum is paired with its
+    neighbour's partner, which seems 0.15 ms away, and a sign change appears that no extremum
+    makes. The step is then not explained (it is halved); moved by 0.08 ms the pairs are told
+    apart, and the one minimum that passes zero (+1e-8 -> -1e-8, the third) is the
+    grazing."""
+    a = _rebounds(0.0, -1e-8)  # the third minimum at +1e-8 above zero
+    far = _rebounds(2.5e-4, 1e-8, 4)  # the last one moved out of the window
+    near = _rebounds(0.8e-4, 1e-8)
+    ea, eb = a.extrema[0], far.extrema[0]
+    pairs = match_extrema(ea, eb, a.span)
+    assert any(ambiguous(ea, eb, i, j, a.span) for i, j in pairs)
+    assert not _grazings(a, far)[1]
+    found, explained = _grazings(a, near)
+    assert explained and found == [(0, pytest.approx(0.1348), -1.0)]
+    en = near.extrema[0]
+    assert not any(ambiguous(ea, en, i, j, a.span) for i, j in match_extrema(ea, en, a.span))
+
+
+def test_the_grazing_search_follows_its_extremum_along_the_step():
+    """Inside a step the margin is read on the extremum the step's detection matched (at the
+    bracket's ends), and in between nearest to the phase interpolated between theirs: here the
+    train moves by 0.08 ms over the step and its third minimum passes zero; the search reads
+    that minimum at every trial point, its value linear in the arclength as built."""
+    from types import SimpleNamespace
+
+    import workbench.continuation._branch as branch
+
+    smap = SimpleNamespace(samples=0)
+    orbit = lambda shift, depth: SimpleNamespace(sequence=_rebounds(shift, depth))  # noqa: E731
+    A, B = orbit(0.0, -1e-8), orbit(0.8e-4, 1e-8)
+    found, explained = _grazings(A.sequence, B.sequence)
+    assert explained and found == [(0, pytest.approx(0.1348), -1.0)]
+    follow = branch._margin_follower(smap, A, B, 1.0, found[0])
+    assert follow(A, 0.0) == pytest.approx(1e-8) and follow(B, 1.0) == pytest.approx(-1e-8)
+    for sigma in (0.75, 0.25, 0.5, 0.9):  # the train moved by 0.8e-4 sigma
+        pt = orbit(0.8e-4 * sigma, (2.0 * sigma - 1.0) * 1e-8)
+        assert follow(pt, sigma) == pytest.approx((1.0 - 2.0 * sigma) * 1e-8, abs=1e-20)
 
 
 def _rigid_impact(n: int, phase: float, rebound: float) -> np.ndarray:
@@ -263,6 +321,44 @@ def test_a_grazing_the_corrector_cannot_cross_is_located_at_fixed_parameters(mon
     assert abs(found[0]["value"] - exact) < 1e-6 * exact, (found, exact)
     assert found[0]["transition"] == "persistent"
     assert "located at fixed parameter values" in r.attrs["bifurcation_notes"]
+    _assert_labels_confirmed(r)
+
+
+def test_a_grazing_bracketed_on_a_jump_is_located_at_fixed_parameters(monkeypatch):
+    """A contact law with memory can make the corrector converge, near the grazing, onto
+    another orbit past it (the four-bar at 44.75 rad/s: the orbit just past holds the new
+    contact's onset velocity, near zero; the bracket closed with the margin at 5.7e-12 m
+    against a tolerance of 2.5e-12 m on one side and a jump on the other). Here every
+    correction inside the search's bracket within 2e-5 short of the grazing returns the orbit
+    2e-6 past it. The search along the
+    arclength then closes on the jump, unconfirmed; the grazing is located at fixed parameter
+    values from the side the branch came from, within 1e-6 of the closed form."""
+    import workbench.continuation._branch as branch
+
+    exact = lower_grazing(DRAWN[1])  # a branch whose steps cross it (ISSUE's fail there)
+    correct, locate = branch.correct, branch._locate
+    inside = []
+
+    def jumping(smap, pred, *args, **kwargs):
+        pt = correct(smap, pred, *args, **kwargs)
+        if inside and -2e-5 * exact < pt.p - exact < 0.0:
+            return branch.orbit_at(smap, pt.y, pt.aux, exact * (1 + 2e-6), tolerance=1e-9)
+        return pt
+
+    def search(*args, **kwargs):
+        inside.append(True)
+        try:
+            return locate(*args, **kwargs)
+        finally:
+            inside.pop()
+
+    monkeypatch.setattr(branch, "correct", jumping)
+    monkeypatch.setattr(branch, "_locate", search)
+    r = _branch(DRAWN[1], 0.9 * exact, 1.1 * exact)
+    found = [b for b in branch_bifurcations(r, "omega") if b["type"] == "grazing"]
+    assert len(found) == 1 and found[0]["resolved"], (found, r.attrs["bifurcation_notes"])
+    assert abs(found[0]["value"] - exact) < 1e-6 * exact, (found, exact)
+    assert branch.JUMPED_ACROSS in r.attrs["bifurcation_notes"]
     _assert_labels_confirmed(r)
 
 

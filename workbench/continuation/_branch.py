@@ -47,7 +47,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from workbench.continuation._contacts import ContactSequence, match_extrema
+from workbench.continuation._contacts import (
+    ContactSequence,
+    ambiguous,
+    match_extrema,
+    nearest_extremum,
+)
 from workbench.continuation._newton import (
     NewtonFailure,
     OrbitPoint,
@@ -106,6 +111,10 @@ POLISH = 1e-3
 POLISHED = 1e-9
 #: how a bifurcation's note starts where the corrector failed inside its bracket
 CORRECTOR_FAILED = "the corrector failed inside the bracket"
+#: note of a grazing whose bracket closed on a jump: its two ends further apart than their
+#: arclength allows, the margin not within tolerance at either (a contact law with memory:
+#: the orbit just past the grazing holds the new contact's onset velocity, near zero)
+JUMPED_ACROSS = "the orbit jumps across the bracket"
 
 
 def _distance(smap, A: OrbitPoint, B: OrbitPoint, pscale: float) -> float:
@@ -241,16 +250,19 @@ def _surfaces(seq: ContactSequence) -> list[int]:
 
 def _grazings(seq_a: ContactSequence, seq_b: ContactSequence) -> tuple[list[tuple], bool]:
     """The grazings between two orbits: ``(k, phase, kind)`` of each local extremum whose value
-    changes sign (matched by phase), and whether the change of the crossings per event function
-    is explained by them (False: the sequence changed in a way no extremum accounts for)."""
-    found = []
+    changes sign (matched by phase), and whether the step is explained by them (False: the
+    sequence changed in a way no extremum accounts for, or a sign change comes from a pair the
+    matching cannot tell from its neighbours, :func:`~._contacts.ambiguous`: a shorter step
+    is needed to compare the two)."""
+    found, unclear = [], False
     for k in _surfaces(seq_a):
         ea, eb = seq_a.extrema[k], seq_b.extrema[k]
         for i, j in match_extrema(ea, eb, seq_a.span):
             if np.sign(ea[i, 1]) != np.sign(eb[j, 1]):
                 found.append((k, float(ea[i, 0]), float(ea[i, 2])))
+                unclear |= ambiguous(ea, eb, i, j, seq_a.span)
     changed = seq_a.surface_counts != seq_b.surface_counts
-    return found, not changed or bool(found)
+    return found, not unclear and (not changed or bool(found))
 
 
 def _extremum_value(smap: StrobeMap, k: int, phase: float, kind: float):
@@ -259,13 +271,41 @@ def _extremum_value(smap: StrobeMap, k: int, phase: float, kind: float):
 
     def value(pt: OrbitPoint) -> float:
         seq = sequence_of(smap, pt)
-        e = seq.extrema[k]
-        e = e[e[:, 2] == kind]
-        if e.shape[0] == 0:
-            return float("nan")
-        d = np.abs(e[:, 0] - phase)
-        d = np.minimum(d, seq.span - d)
-        return float(e[int(np.argmin(d)), 1])
+        i = nearest_extremum(seq.extrema[k], phase, kind, seq.span)
+        return float(seq.extrema[k][i, 1]) if i >= 0 else math.nan
+
+    return value
+
+
+def _margin_follower(smap: StrobeMap, A: OrbitPoint, B: OrbitPoint, h: float, graze: tuple):
+    """The test function of a grazing inside the step from A to B (arclength ``h``):
+    ``value(pt, sigma)``, the value of event function ``k``'s extremum of ``kind`` (``graze``)
+    on the orbit ``pt`` at arclength ``sigma``, read nearest to the phase interpolated between
+    the extremum's phases on the orbits already read on either side of ``sigma``. The extremum
+    moves along the orbit with the parameter; where others of its kind lie close by (rebounds
+    along a wall), a fixed phase would read one, then the next, and the jump from one to the
+    other would pass for a zero. B's extremum is the one matched to A's, as the step's
+    detection (:func:`_grazings`) matched it."""
+    k, phase, kind = graze
+    seq_a, seq_b = sequence_of(smap, A), sequence_of(smap, B)
+    span = seq_a.span
+    i = nearest_extremum(seq_a.extrema[k], phase, kind, span)
+    j = dict(match_extrema(seq_a.extrema[k], seq_b.extrema[k], span)).get(i, -1)
+    seen = {0.0: float(seq_a.extrema[k][i, 0]) if i >= 0 else phase}
+    seen[h] = float(seq_b.extrema[k][j, 0]) if j >= 0 else seen[0.0]
+
+    def value(pt: OrbitPoint, sigma: float) -> float:
+        below = max((s for s in seen if s <= sigma), default=min(seen))
+        above = min((s for s in seen if s >= sigma), default=max(seen))
+        p0, p1 = seen[below], seen[above]
+        w = (sigma - below) / (above - below) if above != below else 0.0
+        ref = (p0 + w * ((p1 - p0 + 0.5 * span) % span - 0.5 * span)) % span  # the short way
+        seq = sequence_of(smap, pt)
+        n = nearest_extremum(seq.extrema[k], ref, kind, span)
+        if n < 0:
+            return math.nan
+        seen[sigma] = float(seq.extrema[k][n, 0])
+        return float(seq.extrema[k][n, 1])
 
     return value
 
@@ -396,13 +436,28 @@ def _locate(
 ) -> Special:
     """The bifurcation ``kind`` between A and B (B at arclength h from A): the Illinois method
     on its test function, the bracket kept between converged points; returns the
-    :class:`Special` (confirmed or unresolved)."""
-    value = _value_function(smap, kind, graze)
-    lo, hi, f_lo, f_hi = 0.0, h, value(A), value(B)
+    :class:`Special` (confirmed or unresolved). A grazing's margin is followed along the bracket
+    (:func:`_margin_follower`); where it has one sign at A and B, the step's sign change came
+    from another extremum and nothing is located (unresolved: the step is shortened)."""
+    if kind == "grazing":
+        value = _margin_follower(smap, A, B, h, graze)
+    else:
+        plain = _value_function(smap, kind, graze)
+
+        def value(pt: OrbitPoint, sigma: float) -> float:
+            return plain(pt)
+
+    lo, hi, f_lo, f_hi = 0.0, h, value(A, 0.0), value(B, h)
     pt_lo, pt_hi = A, B
     side = 0
     note = ""
-    for _ in range(60):
+    one_sign = kind == "grazing" and f_lo * f_hi > 0.0
+    if one_sign:
+        note = (
+            f"the extremum followed from one end of the step to the other keeps its sign "
+            f"({f_lo:.3g} and {f_hi:.3g}): the sign change seen was another extremum's"
+        )
+    for _ in range(0 if one_sign else 60):
         if abs(hi - lo) * max(abs(A.tau[-1]), 1e-3) < cfg.locate_tolerance:
             break
         if not (np.isfinite(f_lo) and np.isfinite(f_hi)) or f_lo == f_hi:
@@ -425,7 +480,7 @@ def _locate(
             else:
                 note = f"{CORRECTOR_FAILED} ({exc})"
                 break
-        f = value(pt)
+        f = value(pt, mid)
         if not np.isfinite(f):
             note = "the test function is not defined inside the bracket"
             break
@@ -442,10 +497,14 @@ def _locate(
         if f == 0.0:
             break
     # the located point: the bracket's end with the smaller test value (both converged)
-    f_a, f_b = abs(value(pt_lo)), abs(value(pt_hi))
-    best, sigma = (pt_lo, lo) if f_a <= f_b else (pt_hi, hi)
-    f_best = value(best)
+    f_a, f_b = value(pt_lo, lo), value(pt_hi, hi)
+    best, sigma, f_best = (pt_lo, lo, f_a) if abs(f_a) <= abs(f_b) else (pt_hi, hi, f_b)
     ok, test, why = _confirm(smap, kind, best, f_best, graze)
+    ok = ok and not one_sign
+    if kind == "grazing" and not ok and not note:
+        gap = _distance(smap, pt_lo, pt_hi, cfg.pscale)
+        if gap > JUMP * abs(hi - lo) + 10.0 * cfg.tolerance:
+            note = f"{JUMPED_ACROSS} ({gap:.3g} apart, scaled, over {abs(hi - lo):.3g})"
     if ok and kind == "nonsmooth_fold":
         why = _turn_without_fold(_tests(pt_lo)["fold"], _tests(pt_hi)["fold"])
         # a turn is where one curve folds back: the bracket's two ends lie on it, no further
@@ -747,14 +806,14 @@ def _grazing_across(
     cfg: BranchSettings,
 ) -> Special:
     """A grazing stepped across (A and B converged on its two sides) whose search along the
-    arclength failed because the corrector does not converge between them (the map is not
-    smooth, or not even continuous, at the grazing: e.g. a lift-off so short that the contact
-    after it starts with an onset velocity near zero, which a contact law with memory divides
-    by): located instead at fixed parameter values from A's side (:func:`_grazing_ahead` on the
-    extremum ``graze`` that changed sign, with the point before A), with the distance from the
-    grazing orbit to B in the note beside what the step allows (a jump: the orbit past the
-    grazing is not the continuation of the grazing orbit). ``sp`` where that does not confirm
-    it."""
+    arclength failed because the corrector does not converge between them, or converges on
+    either side of a jump (:data:`JUMPED_ACROSS`; the map is not smooth, or not even
+    continuous, at the grazing: e.g. a lift-off so short that the contact after it starts
+    with an onset velocity near zero, which a contact law with memory divides by): located at
+    fixed parameter values from A's side (:func:`_grazing_ahead` on the extremum ``graze``
+    that changed sign, with the point before A), with the distance from the grazing orbit to B
+    in the note beside what the step allows (a jump: the orbit past the grazing is not the
+    continuation of the grazing orbit). ``sp`` where that does not confirm it."""
     prev = next((q for q in reversed(out.points) if q is not A and abs(q.p - A.p) > 0), None)
     if prev is None:
         return sp
@@ -1040,7 +1099,7 @@ def trace(
         for kind, graze in found:
             sp = _locate(smap, A, B, h, kind, cfg, graze)
             if kind == "grazing":  # stepped through: the branch went on, or turned at it
-                if not sp.resolved and sp.note.startswith(CORRECTOR_FAILED):
+                if not sp.resolved and sp.note.startswith((CORRECTOR_FAILED, JUMPED_ACROSS)):
                     sp = _grazing_across(smap, out, A, B, h, sp, graze, cfg)
                 turned = np.sign(A.tau[-1]) != np.sign(B.tau[-1])
                 sp.transition = "nonsmooth_fold" if turned else "persistent"
