@@ -493,3 +493,28 @@ def test_the_audit_s_other_labels_are_the_newest_reference_records():
     assert f"all {exact} flips of the reference are labelled, within {within}" in page
     assert back == 2 and "two of them where the multiplier comes back through -1" in page
     assert flips["figures"]["unexplained_flips"] == 0 and flips["figures"]["errors"] == 0
+
+
+def test_the_declared_four_bar_s_grazings_are_the_newest_fourbar_branch_record():
+    """docs/continuation.md, "A declared mechanism, grazing after grazing": the newest
+    ``benchmarks/fourbar_branch.py`` record (its default range): how far the branch reached,
+    at what cost, and each grazing with its events on either side, resolved and bracketed by
+    simulation."""
+    page = " ".join(_page("continuation.md").split())
+    newest = [r for r in records("fourbar_branch.py") if r["command"].endswith("fourbar_branch.py")]
+    fig = newest[-1]["figures"]
+    assert "`python benchmarks/fourbar_branch.py`" in page
+    grazings = [b for b in fig["labels"] if b["type"] == "grazing"]
+    assert all(b["resolved"] for b in fig["labels"]) and fig["unresolved"] == 0
+    assert all(c["bracketed"] for c in fig["checks"]) and len(fig["checks"]) == len(grazings)
+    text = (
+        f"the branch reached {fig['reached']:.4f} rad/s in {fig['cpu']:.0f} s of CPU "
+        f"({fig['points']} points), with {len(grazings)} grazings, all resolved, and all "
+        f"{len(fig['checks'])} bracketed by simulation"
+    )
+    assert text in page, text
+    for i, c in enumerate(fig["checks"]):
+        events = " events" if i == 0 else ""
+        step = f"{c['below']['branch']:g} -> {c['above']['branch']:g}{events} at {c['omega']:.7f}"
+        assert step in page, step
+    assert fig["ended"].startswith("the corrector failed") and "the corrector stagnates" in page
