@@ -184,6 +184,8 @@ class Traced:
     evaluations: int = 0
     wall_time: float = 0.0
     specials: list[Special] = field(default_factory=list)
+    #: where Newton's tolerance was raised to the map's noise: (parameter, old, new, noise)
+    raised: list[tuple[float, float, float, float]] = field(default_factory=list)
 
 
 def _tests(pt: OrbitPoint) -> dict:
@@ -1033,7 +1035,7 @@ def trace(
     events = smap.prepared(first.p).problem.event_direction.size > 0
     h = cfg.step
     A = first
-    resumed = short = 0
+    resumed = short = raised = 0
     tried = None  # the last point from which the grazing ahead was looked for (_through)
     while len(out.points) < cfg.max_points:
         try:
@@ -1084,6 +1086,10 @@ def trace(
                     A, h = nxt, cfg.step
                     continue
                 if failure.startswith("the corrector failed"):
+                    if raised < MAX_RAISES and _raise_to_noise(smap, out, A, cfg):
+                        raised += 1
+                        h = cfg.step
+                        continue
                     failure += ", at the smallest step"
                 _end(smap, out, A, h, failure, cfg)
                 break
@@ -1268,6 +1274,29 @@ def start_point(
 
 #: Newton's tolerance must lie this far above the map's noise (:meth:`StrobeMap.jitter`)
 NOISE_MARGIN = 10.0
+#: how often a branch's Newton tolerance is raised to the map's noise along it
+MAX_RAISES = 3
+
+
+def _raise_to_noise(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -> bool:
+    """Where the corrector fails at the smallest step from A: whether the map's noise at A
+    (:meth:`StrobeMap.jitter`) has grown above what Newton's tolerance allows
+    (:data:`NOISE_MARGIN`). :func:`settle_noise` measured it at the branch's first orbit; an
+    orbit with many more contacts is noisier (the declared four-bar's 16-event orbit at
+    50.21 rad/s: the residual stagnated at 1.1e-7, scaled, against a tolerance of 1e-8, and
+    the steps collapsed). If so, Newton's tolerance is raised to the noise times the margin
+    for the rest of the branch, in ``cfg`` and in ``out.raised``; True."""
+    try:
+        noise = smap.jitter(A.value, A.y, A.aux, A.p, cfg.tolerance)
+    except (SceneError, SolverError):
+        return False
+    if not np.isfinite(noise) or NOISE_MARGIN * noise <= cfg.tolerance:
+        return False
+    out.raised.append((A.p, cfg.tolerance, NOISE_MARGIN * noise, noise))
+    cfg.tolerance = NOISE_MARGIN * noise
+    return True
+
+
 #: the tightest integration tolerance the map is taken to, to bring its noise under Newton's
 TIGHTEST_RTOL = 1e-12
 

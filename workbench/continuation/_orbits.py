@@ -192,7 +192,10 @@ def continue_orbit(
         the current branch.
     tolerance : float
         Newton's tolerance on the scaled residual; bifurcations are located to
-        ``1e-7 |stop - start|`` in the parameter.
+        ``1e-7 |stop - start|`` in the parameter. The map is integrated tighter at the start
+        until its noise lies 10x below it (else it is raised); where the corrector fails
+        further on and the map's noise there has outgrown it, it is raised to 10x that noise
+        for the rest of the branch (attribute ``tolerance_raised``, at most 3 times).
     step, max_step : float
         First and largest arclength step, in scaled units (states by their characteristic
         sizes, the parameter by ``|stop - start|``).
@@ -284,6 +287,12 @@ def continue_orbit(
     ds.attrs["wall_time"] = time.perf_counter() - t0
     ds.attrs["tolerance_requested"] = tolerance
     ds.attrs["map_noise"] = noise
+    raised = [r for b in branches for r in b.raised]
+    if raised:  # the map's noise outgrew Newton's tolerance along a branch (_raise_to_noise)
+        ds.attrs["tolerance_raised"] = "; ".join(
+            f"at {p:.10g}: from {old:.3g} to {new:.3g} (the map's noise there {n:.3g}, scaled)"
+            for p, old, new, n in raised
+        )
     return ds
 
 
