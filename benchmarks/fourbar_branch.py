@@ -14,7 +14,7 @@ motion over cycles 10 to 30 are compared with the branch's. Where both agree and
 each other, the simulation alone brackets the grazing between those two omegas.
 
 Prints the branch's cost (CPU, points, map evaluations), how far it reached and why it ended,
-its labels, and per grazing the check.
+where Newton's tolerance was raised to the map's noise, its labels, and per grazing the check.
 
 Run: ``python benchmarks/fourbar_branch.py [--start 44] [--stop 52] [--max-points 400]`` (one
 core; records in ``benchmarks/records/fourbar_branch/``).
@@ -111,6 +111,8 @@ def main() -> None:
     )
     events = sorted({int(e) for e in r.events_per_period.values})
     print(f"events per period along it: {events}")
+    raised = str(r.attrs.get("tolerance_raised", ""))
+    print(f"Newton's tolerance raised to the map's noise: {raised or 'no'}")
     for b in labels:
         state = "resolved" if b["resolved"] else "UNRESOLVED"
         print(f"  {b['type']} at {b['omega']:.7f} rad/s, {state}, {b['transition'] or '-'}")
@@ -139,7 +141,8 @@ def main() -> None:
         {"start": args.start, "stop": args.stop, "cpu": cpu, "wall": wall,
          "points": int(r.sizes["point"]), "map_evaluations": int(r.attrs["map_evaluations"]),
          "reached": float(r.omega.max()), "ended": str(r.attrs["branch_ended"]),
-         "events_per_period": events, "labels": labels, "unresolved": unresolved,
+         "events_per_period": events, "tolerance_raised": raised, "labels": labels,
+         "unresolved": unresolved,
          "checks": checks}
     )  # fmt: skip
 
