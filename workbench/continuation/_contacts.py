@@ -249,8 +249,7 @@ def match_extrema(a: np.ndarray, b: np.ndarray, span: float) -> list[tuple[int, 
     the circle of length ``span``, each used once, the closest pairs first."""
     if a.shape[0] == 0 or b.shape[0] == 0:
         return []
-    d = np.abs(a[:, 0][:, None] - b[:, 0][None, :])
-    d = np.minimum(d, span - d)
+    d = _circular(a[:, 0][:, None], b[:, 0][None, :], span)
     d[a[:, 2][:, None] != b[:, 2][None, :]] = np.inf
     pairs, used_a, used_b = [], set(), set()
     for flat in np.argsort(d, axis=None):
@@ -280,14 +279,13 @@ def ambiguous(a: np.ndarray, b: np.ndarray, i: int, j: int, span: float) -> bool
     nearest phase may have paired one rebound with the next. A sign change read from such a
     pair is no grazing; a shorter step tells them apart (the drift shrinks with the step, the
     spacing does not)."""
-    shift = _circular(float(a[i, 0]), float(b[j, 0]), span)
+    shift = _circular(a[i, 0], b[j, 0], span)
     gaps = [
-        _circular(float(e[n, 0]), float(e[m, 0]), span)
+        _circular(e[n, 0], e[others, 0], span)
         for e, n in ((a, i), (b, j))
-        for m in range(e.shape[0])
-        if m != n and e[m, 2] == e[n, 2]
+        if (others := np.flatnonzero((e[:, 2] == e[n, 2]) & (np.arange(e.shape[0]) != n))).size
     ]
-    return bool(gaps) and shift >= UNAMBIGUOUS * min(gaps)
+    return bool(gaps) and shift >= UNAMBIGUOUS * min(float(g.min()) for g in gaps)
 
 
 def nearest_extremum(e: np.ndarray, phase: float, kind: float, span: float) -> int:
@@ -297,11 +295,11 @@ def nearest_extremum(e: np.ndarray, phase: float, kind: float, span: float) -> i
     rows = np.flatnonzero(e[:, 2] == kind) if e.shape[0] else np.zeros(0, int)
     if rows.size == 0:
         return -1
-    d = np.abs(e[rows, 0] - phase)
-    return int(rows[int(np.argmin(np.minimum(d, span - d)))])
+    return int(rows[int(np.argmin(_circular(e[rows, 0], phase, span)))])
 
 
-def _circular(x: float, y: float, span: float) -> float:
-    """Distance (s) between phases x and y on the circle of length ``span`` (s)."""
-    d = abs(x - y) % span
-    return min(d, span - d)
+def _circular(x, y, span: float):
+    """Distance (s) between phases x and y (s, arrays broadcast) on the circle of length
+    ``span`` (s)."""
+    d = np.abs(np.asarray(x) - np.asarray(y)) % span
+    return np.minimum(d, span - d)
