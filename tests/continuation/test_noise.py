@@ -61,3 +61,38 @@ def test_where_the_map_is_quiet_a_failing_corrector_ends_the_branch(monkeypatch)
     assert float(r.gamma.max()) < NOISY + 1e-3
     assert "tolerance_raised" not in r.attrs
     assert "at the smallest step" in r.attrs["branch_ended"]
+
+
+def _noisy_start(monkeypatch, noise: float) -> None:
+    """Newton at the branch's start stagnates below a tolerance of 1e-6 (it stops at the orbit
+    found to 1e-6, as the four-bar's from 50 rad/s stopped at a scaled residual of 8.7e-8),
+    and the map's noise reads ``noise`` everywhere."""
+    orbit_at = branch.orbit_at
+
+    def stagnating(smap, y, aux, p, *, tolerance, max_iterations=30):
+        if tolerance < 1e-6:
+            pt = orbit_at(smap, y, aux, p, tolerance=1e-6, max_iterations=max_iterations)
+            raise NewtonFailure("Newton's method did not converge (emulated)", last=pt)
+        return orbit_at(smap, y, aux, p, tolerance=tolerance, max_iterations=max_iterations)
+
+    monkeypatch.setattr(branch, "orbit_at", stagnating)
+    monkeypatch.setattr(StrobeMap, "jitter", lambda self, value, y, aux, p, size: noise)
+
+
+def test_a_branch_that_starts_on_a_noisy_map_raises_its_tolerance_there(monkeypatch):
+    """Newton stagnates at the start and the noise reads 1e-7: the tolerance is raised to 1e-6
+    at the start (not a failure the user must work around) and the branch reaches its stop."""
+    _noisy_start(monkeypatch, 1e-7)
+    r = continue_orbit(DUFFING, "gamma", stop=0.26)
+    assert float(r.gamma.max()) == pytest.approx(0.26, abs=1e-12)
+    assert r.attrs["tolerance_raised"].startswith(
+        "at 0.25: from 1e-08 to 1e-06 (the map's noise there 1e-07, scaled)"
+    )
+
+
+def test_a_start_that_fails_on_a_quiet_map_still_fails(monkeypatch):
+    """The same stagnation with the noise reading 1e-14 is not the noise's: the start's
+    failure is raised as it was."""
+    _noisy_start(monkeypatch, 1e-14)
+    with pytest.raises(NewtonFailure, match="did not converge"):
+        continue_orbit(DUFFING, "gamma", stop=0.26)

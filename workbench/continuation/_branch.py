@@ -1278,23 +1278,51 @@ NOISE_MARGIN = 10.0
 MAX_RAISES = 3
 
 
-def _raise_to_noise(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -> bool:
-    """Where the corrector fails at the smallest step from A: whether the map's noise at A
-    (:meth:`StrobeMap.jitter`) has grown above what Newton's tolerance allows
-    (:data:`NOISE_MARGIN`). :func:`settle_noise` measured it at the branch's first orbit; an
-    orbit with many more contacts is noisier (the declared four-bar's 16-event orbit at
-    50.21 rad/s: the residual stagnated at 1.1e-7, scaled, against a tolerance of 1e-8, and
-    the steps collapsed). If so, Newton's tolerance is raised to the noise times the margin
-    for the rest of the branch, in ``cfg`` and in ``out.raised``; True."""
+def _noise_raise(smap: StrobeMap, pt: OrbitPoint, cfg: BranchSettings):
+    """Whether the map's noise at ``pt`` (:meth:`StrobeMap.jitter`) lies above what Newton's
+    tolerance allows (:data:`NOISE_MARGIN`); if so, the tolerance is raised to the noise times
+    the margin in ``cfg``, and ``(p, old, new, noise)`` returned; else None (a quiet map, or the
+    noise could not be measured: the failure is not the noise's)."""
     try:
-        noise = smap.jitter(A.value, A.y, A.aux, A.p, cfg.tolerance)
+        noise = smap.jitter(pt.value, pt.y, pt.aux, pt.p, cfg.tolerance)
     except (SceneError, SolverError):
-        return False
+        return None
     if not np.isfinite(noise) or NOISE_MARGIN * noise <= cfg.tolerance:
-        return False
-    out.raised.append((A.p, cfg.tolerance, NOISE_MARGIN * noise, noise))
+        return None
+    raised = (pt.p, cfg.tolerance, NOISE_MARGIN * noise, noise)
     cfg.tolerance = NOISE_MARGIN * noise
-    return True
+    return raised
+
+
+def _raise_to_noise(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -> bool:
+    """Where the corrector fails at the smallest step from A: whether the map's noise at A has
+    grown above what Newton's tolerance allows (:func:`_noise_raise`). :func:`settle_noise`
+    measured it at the branch's first orbit; an orbit with many more contacts is noisier (the
+    declared four-bar's 16-event orbit at 50.21 rad/s: the residual stagnated at 1.1e-7,
+    scaled, against a tolerance of 1e-8, and the steps collapsed). If so, Newton's tolerance
+    is raised to the noise times the margin for the rest of the branch, in ``cfg`` and in
+    ``out.raised``; True."""
+    raised = _noise_raise(smap, A, cfg)
+    if raised is not None:
+        out.raised.append(raised)
+    return raised is not None
+
+
+def noisy_start(smap: StrobeMap, y, aux, p: float, cfg: BranchSettings):
+    """The branch's first orbit (:func:`start_point`). Where Newton runs out of iterations
+    because the map's noise at its last iterate lies above what the tolerance allows
+    (:func:`_noise_raise`: the declared four-bar from 50 rad/s, a scaled residual of 8.7e-8
+    against 1e-8), the tolerance is raised to the noise times the margin and Newton goes on
+    from that iterate. Returns the orbit and the raise, ``[(p, old, new, noise)]`` or ``[]``;
+    a failure that is not the noise's is raised as it was."""
+    try:
+        return start_point(smap, y, aux, p, cfg), []
+    except NewtonFailure as exc:
+        last = exc.last
+        raised = None if last is None else _noise_raise(smap, last, cfg)
+        if raised is None:
+            raise
+    return start_point(smap, last.y, last.aux, p, cfg), [raised]
 
 
 #: the tightest integration tolerance the map is taken to, to bring its noise under Newton's

@@ -35,7 +35,18 @@ __all__ = [
 
 
 class NewtonFailure(WorkbenchError, RuntimeError):
-    """Newton's method did not converge (or an integration failed on the way)."""
+    """Newton's method did not converge (or an integration failed on the way).
+
+    Attributes
+    ----------
+    last : OrbitPoint or None
+        Where Newton ran out of iterations: its last iterate (the map evaluated there, its
+        residual above the tolerance); None where an integration or a linear solve failed.
+    """
+
+    def __init__(self, message: str, last: OrbitPoint | None = None) -> None:
+        super().__init__(message)
+        self.last = last
 
 
 @dataclass
@@ -132,7 +143,8 @@ def orbit_at(
     raise NewtonFailure(
         f"Newton's method did not converge at p = {p:.10g} in {max_iterations} iterations "
         f"(scaled residual {r:.3g}, tolerance {tolerance:.3g}); start closer to the orbit (a "
-        "longer transient, or the state of a continued sweep) or loosen the tolerance"
+        "longer transient, or the state of a continued sweep) or loosen the tolerance",
+        last=OrbitPoint(p, y, aux, v, it, r, evaluations=it + 1),
     )
 
 

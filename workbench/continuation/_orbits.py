@@ -19,6 +19,7 @@ from workbench.continuation._branch import (
     TRANSITIONS,
     BranchSettings,
     Traced,
+    noisy_start,
     sequence_of,
     settle_noise,
     start_point,
@@ -256,11 +257,12 @@ def continue_orbit(
     try:  # the first orbit (after the transient) is part of the first branch's progress
         y, aux = _guess(smap, p0, state, discrete_state, None)
         t0 = time.perf_counter()
-        first = start_point(smap, y, aux, p0, cfg)
+        first, raised_at_start = noisy_start(smap, y, aux, p0, cfg)
         smap, first, cfg.tolerance, noise = settle_noise(smap, first, cfg)
         direction = np.zeros(first.value.M.shape[0] + 1)
         direction[-1] = math.copysign(1.0, stop - p0)
         branches = [trace(smap, first, direction, cfg, report=report)]
+        branches[0].raised[:0] = raised_at_start
     finally:
         report.close()
     for _ in range(doublings):
