@@ -34,9 +34,9 @@ Prints the branch's cost (CPU, points, map evaluations), how far it reached and 
 where Newton's tolerance was raised to the map's noise, its labels and each one's check.
 
 Run: ``python benchmarks/declared_branch.py [--system fourbar] [--start W] [--stop W]
-[--max-points 400] [-o BRANCH.nc] [--branch BRANCH.nc]`` (one core; ``--branch`` checks a
-stored branch instead of continuing: the record then has no cost; records in
-``benchmarks/records/declared_branch/``).
+[--max-points 400] [--rtol R] [--tolerance T] [-o BRANCH.nc] [--branch BRANCH.nc]`` (one
+core; ``--branch`` checks a stored branch instead of continuing: the record then has no cost;
+records in ``benchmarks/records/declared_branch/``).
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ BEYOND = (1e-4, 1e-3)
 #: per system: the default range of omega (rad/s) and the clearance's parameter
 SYSTEMS = {
     "fourbar": {"start": 44.0, "stop": 52.0, "clearance": "clearance_B"},
-    "slider_crank": {"start": 300.0, "stop": 450.0, "clearance": "clearance_B"},
+    "slider_crank": {"start": 300.0, "stop": 700.0, "clearance": "clearance_B"},
 }
 
 
@@ -293,6 +293,8 @@ def main() -> None:
     ap.add_argument("--start", type=float, help="omega at the start, rad/s")
     ap.add_argument("--stop", type=float, help="omega to stop at, rad/s")
     ap.add_argument("--max-points", type=int, default=400)
+    ap.add_argument("--rtol", type=float, help="the strobe map's rtol (default: its own)")
+    ap.add_argument("--tolerance", type=float, default=1e-8, help="Newton's (scaled)")
     ap.add_argument("-o", "--output", type=Path, help="write the branch to this netCDF file")
     ap.add_argument("--branch", type=Path, help="check this stored branch (no continuation)")
     args = ap.parse_args()
@@ -307,7 +309,12 @@ def main() -> None:
     else:
         t0, w0 = time.process_time(), time.time()
         r = continue_orbit(
-            scene.with_parameters(omega=start), "omega", stop=stop, max_points=args.max_points
+            scene.with_parameters(omega=start),
+            "omega",
+            stop=stop,
+            max_points=args.max_points,
+            rtol=args.rtol,
+            tolerance=args.tolerance,
         )
         cost = {"cpu": time.process_time() - t0, "wall": time.time() - w0}
         if args.output is not None:
@@ -369,6 +376,7 @@ def main() -> None:
     )
     record(
         {"system": args.system, "start": start, "stop": stop, **cost,
+         "rtol": float(r.attrs["rtol"]), "tolerance": args.tolerance,
          "branch_file": str(args.branch) if args.branch else "",
          "points": int(r.sizes["point"]), "map_evaluations": int(r.attrs["map_evaluations"]),
          "reached": reached, "ended_at": float(on[-1]), "ended": str(r.attrs["branch_ended"]),
