@@ -7,8 +7,10 @@ import re
 import pytest
 
 import workbench
+import workbench.continuation._branch as branch_module
 from workbench.archive import open_run
 from workbench.cli import main
+from workbench.continuation._newton import NewtonFailure
 
 DUFFING = {
     "model": {"name": "duffing"},
@@ -59,9 +61,9 @@ def test_orbit_writes_the_branch_and_names_its_period_doubling(tmp_path, capsys)
         (["--param", "gamma", "--stop", "0.26", "--figure", "f.png"], "--figure needs --state"),
         (["--param", "gamma", "--stop", "0.26", "--diagram", "s.nc"], "--diagram needs"),
         (["--param", "nope", "--stop", "0.26"], "nope"),
-        # Newton cannot reach the tolerance at the branch's start: one line, no traceback
+        # Newton fails at the branch's start (emulated below): one line, no traceback
         (
-            ["--param", "gamma", "--stop", "0.26", "--tolerance", "1e-20", "-q"],
+            ["--param", "gamma", "--stop", "0.26", "-q", "--fail-start"],
             "no first orbit for the branch in 'gamma': Newton's method did not converge at "
             "p = 0.25",
         ),
@@ -70,10 +72,30 @@ def test_orbit_writes_the_branch_and_names_its_period_doubling(tmp_path, capsys)
 def test_orbit_errors_are_one_line(tmp_path, capsys, monkeypatch, extra, message):
     monkeypatch.chdir(tmp_path)
     path = _scene_file(tmp_path, DUFFING)
+    if "--fail-start" in extra:  # a failure that is not the map's noise: it is not papered over
+        extra = [e for e in extra if e != "--fail-start"]
+
+        def failing(*args, **kwargs):
+            raise NewtonFailure("Newton's method did not converge at p = 0.25 (emulated)")
+
+        monkeypatch.setattr(branch_module, "orbit_at", failing)
     assert main(["orbit", path, "-o", "b.nc", *extra]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "b.nc").exists()
+
+
+def test_a_tolerance_below_the_maps_noise_is_raised_at_the_start(tmp_path, capsys):
+    """``--tolerance 1e-20`` lies far below the map's noise: Newton stagnates at the branch's
+    start, the tolerance is raised to ten times the noise there, and the branch is continued
+    (before, the command ended with "no first orbit for the branch"); the archive says where,
+    from what and to what."""
+    path = _scene_file(tmp_path, DUFFING)
+    out = tmp_path / "b.nc"
+    args = ["orbit", path, "-o", str(out), "--param", "gamma", "--stop", "0.26", "-q"]
+    assert main([*args, "--tolerance", "1e-20"]) == 0
+    raised = open_run(out).attrs["tolerance_raised"]
+    assert raised.startswith("at 0.25: from 1e-20 to "), raised
 
 
 def test_orbit_curve_holds_both_parameters_along_the_curve(tmp_path, capsys):

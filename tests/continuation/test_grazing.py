@@ -14,13 +14,20 @@ from scipy.optimize import brentq
 
 import workbench
 from workbench.continuation import branch_bifurcations, continue_orbit
-from workbench.continuation._branch import MARGIN_TOLERANCE, MULTIPLIER_TOLERANCE, _grazings
+from workbench.continuation._branch import (
+    MARGIN_TOLERANCE,
+    MULTIPLIER_TOLERANCE,
+    _grazings,
+    flips_at,
+)
 from workbench.continuation._contacts import (
     ContactSequence,
     ambiguous,
     contact_sequence,
     match_extrema,
 )
+from workbench.continuation._newton import OrbitPoint
+from workbench.continuation._strobe import MapValue
 from workbench.models.stop_oscillator import grazing_amplitude
 
 #: the issue's stop oscillator (none of the suite's other sets): grazing near 1.0645 rad/s
@@ -289,10 +296,48 @@ def test_a_stiff_stop_grazes_then_doubles_within_a_step_of_the_branch():
     assert len(flips) == 1 and flips[0]["resolved"], found
     assert abs(flips[0]["value"] - exact - 3.1e-6) < 0.05e-6  # docs/continuation.md
     assert abs(flips[0]["critical"] + 1) < MULTIPLIER_TOLERANCE
+    # the multiplier beyond -1 past the grazing is the doubling's, located between: no flip
+    assert grazings[0]["transition"] == "persistent", found
     _assert_labels_confirmed(r)
     before = r.omega.values < exact * (1 - 1e-6)
     assert (r.crossings_per_orbit.values[before] == 0).all()
     assert (r.crossings_per_orbit.values[r.omega.values > exact * (1 + 1e-6)] == 1).all()
+
+
+def _orbit_with(multipliers) -> OrbitPoint:
+    """An orbit whose monodromy has these eigenvalues (a complex one with its conjugate)."""
+    blocks = []
+    for mu in multipliers:
+        mu = complex(mu)
+        if mu.imag == 0.0:
+            blocks.append(np.array([[mu.real]]))
+        else:
+            blocks.append(np.array([[mu.real, -mu.imag], [mu.imag, mu.real]]))
+    n = sum(b.shape[0] for b in blocks)
+    M, i = np.zeros((n, n)), 0
+    for b in blocks:
+        M[i : i + b.shape[0], i : i + b.shape[0]] = b
+        i += b.shape[0]
+    value = MapValue(np.zeros(n), np.zeros(0), np.zeros(0, int), M, 0, {})
+    return OrbitPoint(1.0, np.zeros(n), np.zeros(0), value, 0, 0.0)
+
+
+@pytest.mark.parametrize(
+    "near, far, doublings, flip",
+    [
+        ([-0.5236, -0.0063], [-1.1105, -0.039], 0, True),  # the declared four-bar at 50.2374
+        ([-0.5236, -0.0063], [-1.1105, -0.039], 1, False),  # a doubling located between
+        ([0.3 + 0.3j, 0.1], [-1.2, 0.1], 1, False),  # the stiff stop: a pair swung past -1
+        ([-0.9, 0.2], [-0.95, 0.3], 0, False),  # inside on both sides
+        ([-1.3, 0.2], [-1.2, -1.1], 0, True),  # one beyond -1, then two
+        ([0.5, 0.1], [0.7 + 0.9j, 0.1], 0, False),  # a complex pair leaves: no flip
+    ],
+)
+def test_a_multiplier_jumping_across_minus_one_at_a_grazing_is_a_flip(near, far, doublings, flip):
+    """Feigin's rule (di Bernardo, Feigin, Hogan & Homer 1999): the real multipliers below -1
+    on the grazing's two sides and the period doublings located between them sum to an odd
+    number exactly where a real multiplier jumps across -1 at the grazing itself."""
+    assert flips_at(_orbit_with(near), _orbit_with(far), doublings) is flip
 
 
 def test_a_grazing_the_corrector_cannot_cross_is_located_at_fixed_parameters(monkeypatch):

@@ -568,8 +568,30 @@ FARTHEST = 1e-2
 #: transitions at a grazing (``transition`` of a grazing bifurcation): the orbit crosses it with
 #: the new contact (persistent); the branch turns back at it (a nonsmooth fold, di Bernardo et
 #: al. 2008, Sec. 3.5); no orbit of the branch's period found beyond it, the motion there of
-#: another period (a border collision, with the period in the text) or of none up to 16
-TRANSITIONS = ("persistent", "nonsmooth_fold", "border_collision", "not_typed")
+#: another period (a border collision, with the period in the text) or of none up to 16; the
+#: orbit crosses it and a real multiplier jumps across -1 there (persistent_flip,
+#: :func:`flips_at`). Appended in this order: an archive's flag values keep their meaning.
+TRANSITIONS = ("persistent", "nonsmooth_fold", "border_collision", "not_typed", "persistent_flip")
+
+
+def beyond_minus_one(pt: OrbitPoint) -> int:
+    """Feigin's count sigma-: the orbit's real Floquet multipliers below -1."""
+    mu = pt.multipliers
+    return int(np.sum((mu.imag == 0.0) & (mu.real < -1.0)))
+
+
+def flips_at(a: OrbitPoint, b: OrbitPoint, smooth: int = 0) -> bool:
+    """Whether a real multiplier jumps across -1 at a grazing between the orbits ``a`` and
+    ``b`` on its two sides, where ``smooth`` period doublings were located between them: the
+    counts :func:`beyond_minus_one` of the two sides and ``smooth`` sum to an odd number.
+    Feigin's rule for a border collision of a fixed point (di Bernardo, Feigin, Hogan & Homer
+    1999, Chaos Solitons Fractals 10:1881): in a continuous piecewise-smooth map a period-2
+    orbit is born there, and the orbit is unstable on one side. The declared four-bar at
+    50.2374 rad/s: -0.5236 on the 16-event side, -1.1105 on the 18-event side, and the motion
+    past it has period 2."""
+    return (beyond_minus_one(a) + beyond_minus_one(b) + smooth) % 2 == 1
+
+
 #: strobe samples per look at the motion, and looks at most after the transient
 ATTRACTOR_SAMPLES = 64
 ATTRACTOR_LOOKS = 4
@@ -997,6 +1019,10 @@ def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -
             _with_tangent(smap, sp.point, direction, cfg)
     except (NewtonFailure, SceneError, SolverError):
         between = []
+    if transition == "persistent":
+        doublings = sum(sp.kind == "period_doubling" for sp in between)
+        if flips_at(G.point, pt, doublings):
+            G.transition = "persistent_flip"
     for sp in between:
         out.points.append(sp.point)
         out.labels.append(sp.kind)
@@ -1108,7 +1134,14 @@ def trace(
                 if not sp.resolved and sp.note.startswith((CORRECTOR_FAILED, JUMPED_ACROSS)):
                     sp = _grazing_across(smap, out, A, B, h, sp, graze, cfg)
                 turned = np.sign(A.tau[-1]) != np.sign(B.tau[-1])
-                sp.transition = "nonsmooth_fold" if turned else "persistent"
+                doublings = sum(x.kind == "period_doubling" and x.resolved for x in specials)
+                sp.transition = (
+                    "nonsmooth_fold"
+                    if turned
+                    else "persistent_flip"
+                    if flips_at(A, B, doublings)
+                    else "persistent"
+                )
             specials.append(sp)
         if any(not sp.resolved for sp in specials) and h / 2.0 >= cfg.approach:
             h /= 2.0  # approach it: a shorter step brackets it closer, with easier corrections

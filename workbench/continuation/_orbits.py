@@ -638,7 +638,11 @@ def _bifurcation_attrs(model, p_attrs: dict | None) -> dict[str, dict]:
         "bifurcation_transition": flags(
             "how the orbit passes a grazing: persistent (it crosses with the new contact), "
             "nonsmooth_fold (the branch turns at it), border_collision (no orbit of the "
-            "branch's period past it: the period there in the note), not_typed",
+            "branch's period past it: the period there in the note), not_typed, "
+            "persistent_flip (it crosses, and a real multiplier jumps across -1 there: "
+            "Feigin's counts of real multipliers below -1 on the two sides, with the period "
+            "doublings located between them, sum to an odd number; a period-2 orbit is born "
+            "in a continuous piecewise-smooth map, di Bernardo, Feigin, Hogan & Homer 1999)",
             {v: k for k, v in TRANSITION_FLAGS.items()},
         ),
     }
