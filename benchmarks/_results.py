@@ -46,6 +46,13 @@ RECORDS = ROOT / "benchmarks" / "records"
 NOTES = ROOT / "benchmarks" / "NOTES.md"
 PAGE = ROOT / "benchmarks" / "RESULTS.md"
 
+#: benchmarks whose script was replaced: their records stay (each names the commit whose script
+#: made it), and the page says what replaced the script
+RETIRED = {
+    "fourbar_branch.py": "`declared_branch.py --system fourbar` (every label checked, not only "
+    "the grazings)",
+}
+
 #: the figures of the recording under way (None outside one)
 _figures: dict | None = None
 
@@ -281,7 +288,10 @@ def render(entries: list[dict], notes: str) -> str:
         )
     for name in benchmarks:
         runs = [e for e in entries if e["benchmark"] == name]
-        lines += ["", f"## {name}", "", "What the newest run of each command printed:", ""]
+        lines += ["", f"## {name}", ""]
+        if name in RETIRED:
+            lines += [f"Retired: replaced by {RETIRED[name]}; its records stay.", ""]
+        lines += ["What the newest run of each command printed:", ""]
         for e in [e for e in newest.values() if e["benchmark"] == name]:
             outcome = "" if e["outcome"] == "completed" else f" ({e['outcome']})"
             lines += [f"`{e['command']}`, {_when(e)}, {e['commit']}{outcome}:", ""]

@@ -206,6 +206,7 @@ def orbit_check(scene, r, names: list[str], i: int) -> dict:
     return {
         "omega": omega,
         "stable": stable,
+        "largest_multiplier": float(np.nanmax(r.multiplier_modulus.values[i])),
         "branch_events": branch_events,
         "one_period_events": one["events"],
         "one_period_distance": one["distance"],

@@ -13,6 +13,7 @@ import math
 import re
 from pathlib import Path
 
+import pytest
 from _records import NOTES, ROOT, records
 
 #: `benchmarks/lle.py` records made before the copies were renormalised on shrinkage as well
@@ -501,43 +502,114 @@ def test_the_audit_s_other_labels_are_the_newest_reference_records():
     assert flips["figures"]["unexplained_flips"] == 0 and flips["figures"]["errors"] == 0
 
 
-def test_the_declared_four_bar_s_grazings_are_the_newest_fourbar_branch_record():
-    """docs/continuation.md, "A declared mechanism, grazing after grazing": the newest
-    ``benchmarks/fourbar_branch.py`` record (its default range): how far the branch reached,
-    at what cost, each label, each grazing's check by simulation and where Newton's tolerance
+def _declared(system: str, *, tight: bool = False) -> dict:
+    """The newest ``benchmarks/declared_branch.py`` record of ``system`` that continued its
+    default range (not a stored branch): at the default knobs, or (``tight``) at
+    ``--rtol 1e-11 --tolerance 5e-9``."""
+    runs = [
+        r["figures"]
+        for r in records("declared_branch.py")
+        if r["figures"]["system"] == system
+        and not r["figures"]["branch_file"]
+        and ("--rtol 1e-11 --tolerance 5e-9" in r["command"]) == tight
+        and "--stop" not in r["command"]
+        and "--start" not in r["command"]
+    ]
+    return runs[-1]
+
+
+def _declared_summary(fig: dict) -> str:
+    """How the page sums up a declared branch's record."""
+    resolved = [b for b in fig["labels"] if b["resolved"]]
+    return (
+        f"the branch reached {fig['reached']:.4f} rad/s and ended at {fig['ended_at']:.4f} "
+        f"({fig['points']} points, {fig['cpu']:.0f} s of CPU); {len(resolved)} of its "
+        f"{len(fig['labels'])} labels are resolved and {fig['confirmed']} of those confirmed "
+        "by simulation"
+    )
+
+
+@pytest.mark.parametrize("system", ["fourbar", "slider_crank"])
+def test_the_declared_branches_are_their_newest_records(system):
+    """docs/continuation.md, "Declared mechanisms, every label checked by simulation": the
+    newest ``benchmarks/declared_branch.py`` record of each system (its default range and
+    knobs): how far the branch reached, at what cost, how many labels are resolved and how many
+    of those confirmed by simulation, each label's value, and the noise where Newton's tolerance
     was raised."""
     page = " ".join(_page("continuation.md").split())
-    newest = [r for r in records("fourbar_branch.py") if r["command"].endswith("fourbar_branch.py")]
-    fig = newest[-1]["figures"]
-    assert "`python benchmarks/fourbar_branch.py`" in page
-    grazings = [b for b in fig["labels"] if b["type"] == "grazing"]
-    assert all(b["resolved"] for b in fig["labels"]) and fig["unresolved"] == 0
-    checks = fig["checks"]
-    bracketed = [c for c in checks if c["bracketed"]]
-    text = (
-        f"the branch reached {fig['reached']:.4f} rad/s in {fig['cpu']:.0f} s of CPU "
-        f"({fig['points']} points), with {len(grazings)} grazings, all resolved, and "
-        f"{len(bracketed)} of the {len(checks)} bracketed by simulation"
-    )
-    assert text in page, text
-    for i, c in enumerate(bracketed):
-        events = " events" if i == 0 else ""
-        step = f"{c['below']['branch']:g} -> {c['above']['branch']:g}{events} at {c['omega']:.7f}"
-        assert step in page, step
-    for c in checks:
-        if not c["bracketed"]:  # the orbit checked lies within 4e-7 rad/s of the grazing
-            assert abs(c["below"]["omega"] - c["omega"]) < 4e-7 and f"{c['omega']:.7f}" in page
-    doublings = [b for b in fig["labels"] if b["type"] == "period_doubling"]
-    shown = " and ".join(f"{b['omega']:.7f}" for b in doublings)
-    assert f"two period doublings, resolved, at {shown} rad/s" in page and len(doublings) == 2
-    raised = re.search(r"at ([\d.]+): from ([\d.e+-]+) to ([\d.e+-]+) .*noise there ([\d.e+-]+)",
-                       fig["tolerance_raised"])  # fmt: skip
-    at, old, new, noise = (raised[1], *(_g(x) for x in raised.groups()[1:]))
-    assert f"{float(at):.4f} rad/s Newton's residual stagnated" in page
+    fig = _declared(system)
+    assert f"`python benchmarks/declared_branch.py --system {system}`" in page
+    summary = _declared_summary(fig)
+    assert summary in page, summary
+    # a confirmed label is a resolved one (the page counts "of those")
+    assert all(c["resolved"] for c in fig["checks"] if c["confirmed"])
+    for b in fig["labels"]:
+        # every resolved label's value to 1e-7 rad/s, an unresolved one's to 1e-5
+        assert (f"{b['value']:.7f}" if b["resolved"] else f"{b['value']:.5f}") in page, b
+    raised = re.search(r"noise there ([\d.e+-]+)", fig["tolerance_raised"])
+    assert f"{_g(raised[1])} (scaled)" in page
+
+
+def test_the_slider_crank_s_labels_move_with_the_knobs_as_the_page_says():
+    """docs/continuation.md: the slider-crank's branch at the default knobs and at rtol 1e-11
+    with Newton's tolerance 5e-9: the same labels in the same order; how far each moved; the
+    lift-off's margin slope and the placement its uncertainty allows."""
+    page = " ".join(_page("continuation.md").split())
+    base, tight = _declared("slider_crank"), _declared("slider_crank", tight=True)
+    assert [b["type"] for b in base["labels"]] == [b["type"] for b in tight["labels"]]
+    moves = [
+        abs(a["value"] - b["value"]) for a, b in zip(base["labels"], tight["labels"], strict=True)
+    ]
+    rest = moves[1:]
     said = (
-        f"the map's noise measured there, {noise} (scaled), had outgrown the tolerance of {old}, "
-        f"which was raised to {new} and the branch went on"
+        f"the located values move by {_g(f'{min(rest):.1g}')} to {max(rest):.2g} rad/s, except the "
+        f"lift-off's, by {moves[0]:.2g} rad/s"
     )
     assert said in page, said
-    assert fig["ended"].startswith("the grazing ahead lies within a step that failed; the branch")
-    assert "It ends where it turns sharply however short the step" in page
+    before = base["checks"][0]["before"]
+    slope = abs(before["margin"]) / before["distance_from_label"]
+    uncertainty = base["uncertainty"]
+    said = (
+        f"its margin grows by {_g(f'{slope:.2g}')} m per rad/s, so the default orbit's "
+        f"uncertainty of {_g(f'{uncertainty:.2g}')} m"
+    )
+    assert said in page, said
+    assert f"to some {base['uncertainty'] / slope:.1g} rad/s" in page
+    assert f", {tight['cpu']:.0f} s of CPU)" in page
+    now = sum(
+        a["resolved"] < b["resolved"] for a, b in zip(base["labels"], tight["labels"], strict=True)
+    )
+    assert f"{now} of the {base['unresolved']} unresolved ones" in page
+
+
+def test_the_four_bar_s_grazing_types_are_the_newest_record_s():
+    """docs/continuation.md, the four-bar: which grazings are `persistent` and which
+    `persistent_flip`, the unlabelled return of the multiplier after the first flip (the
+    distance of the stable orbit past it), and the border collision left unconfirmed."""
+    page = " ".join(_page("continuation.md").split())
+    fig = _declared("fourbar")
+    grazings = [c for c in fig["checks"] if c["type"] == "grazing"]
+    types = {f"{b['value']:.7f}": b["transition"] for b in fig["labels"]}
+    steady = [c for c in grazings if types[f"{c['omega']:.7f}"] == "persistent"]
+    flips = [c for c in grazings if types[f"{c['omega']:.7f}"] == "persistent_flip"]
+    said = "The grazings at " + ", ".join(
+        f"{c['omega']:.7f} ({c['before']['branch_events']:g} -> {c['after']['branch_events']:g}"
+        + (" events per period)" if i == 0 else ")")
+        for i, c in enumerate(steady[:-1])
+    )
+    said += f" and {steady[-1]['omega']:.7f} ({steady[-1]['before']['branch_events']:g} -> "
+    said += f"{steady[-1]['after']['branch_events']:g}) are `persistent`"
+    assert said in page, said
+    assert all(c["before"]["stable"] and c["after"]["stable"] for c in steady)
+    first, second = flips
+    assert not second["after"]["stable"] and second["after"]["simulated_period"] == 2
+    assert f"At {second['omega']:.7f} (16 -> 18) the orbit past the grazing is unstable" in page
+    assert first["before"]["stable"] and first["after"]["stable"] and first["confirmed"]
+    said = (
+        f"The grazing at {first['omega']:.7f} (8 -> 16) is typed `persistent_flip` too, but the "
+        f"branch's orbit past it is stable again within {first['after']['distance_from_label']:.2g}"
+    )
+    assert said in page, said
+    end = [c for c in grazings if types[f"{c['omega']:.7f}"] == "border_collision"]
+    assert len(end) == 1 and not end[0]["confirmed"] and "after" not in end[0]
+    assert f"The border collision at {end[0]['omega']:.7f}" in page

@@ -586,9 +586,8 @@ def flips_at(a: OrbitPoint, b: OrbitPoint, smooth: int = 0) -> bool:
     counts :func:`beyond_minus_one` of the two sides and ``smooth`` sum to an odd number.
     Feigin's rule for a border collision of a fixed point (di Bernardo, Feigin, Hogan & Homer
     1999, Chaos Solitons Fractals 10:1881): in a continuous piecewise-smooth map a period-2
-    orbit is born there, and the orbit is unstable on one side. The declared four-bar at
-    50.2374 rad/s: -0.5236 on the 16-event side, -1.1105 on the 18-event side, and the motion
-    past it has period 2."""
+    orbit is born there, and the orbit is unstable on one side (docs/continuation.md: the
+    declared four-bar)."""
     return (beyond_minus_one(a) + beyond_minus_one(b) + smooth) % 2 == 1
 
 
