@@ -934,8 +934,10 @@ def _past_grazing(smap: StrobeMap, G: OrbitPoint, pt: OrbitPoint, cfg: BranchSet
     ]
     if not kinds:
         return []
+    # from the grazing orbit, the nearer start: from pt, Newton 1e-3 of the way to it may not
+    # converge where the map is nearly nonsmooth (the declared four-bar at 50.1284 rad/s)
     near = orbit_at(
-        smap, pt.y, pt.aux, G.p + PROBE * (pt.p - G.p), tolerance=cfg.tolerance, max_iterations=12
+        smap, G.y, G.aux, G.p + PROBE * (pt.p - G.p), tolerance=cfg.tolerance, max_iterations=12
     )
     mu_g, mu_n = np.sort_complex(G.multipliers), np.sort_complex(near.multipliers)
     if mu_g.size != mu_n.size or np.max(np.abs(mu_g - mu_n)) > JUMPED:
@@ -1019,8 +1021,11 @@ def _through(smap: StrobeMap, out: Traced, A: OrbitPoint, cfg: BranchSettings) -
     except (NewtonFailure, SceneError, SolverError):
         between = []
     if transition == "persistent":
+        # the near side's orbit: the grazing orbit where it still has A's contacts, else A
+        # (located on the far side, its multipliers are the far side's: the four-bar at 50.1284)
+        same = sequence_of(smap, G.point).surface_counts == sequence_of(smap, A).surface_counts
         doublings = sum(sp.kind == "period_doubling" for sp in between)
-        if flips_at(G.point, pt, doublings):
+        if flips_at(G.point if same else A, pt, doublings):
             G.transition = "persistent_flip"
     for sp in between:
         out.points.append(sp.point)
