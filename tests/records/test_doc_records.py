@@ -604,10 +604,17 @@ def test_the_four_bar_s_grazing_types_are_the_newest_record_s():
     first, second = flips
     assert not second["after"]["stable"] and second["after"]["simulated_period"] == 2
     assert f"At {second['omega']:.7f} (16 -> 18) the orbit past the grazing is unstable" in page
-    assert first["before"]["stable"] and first["after"]["stable"] and first["confirmed"]
+    # the first flip and the doubling that brings the multiplier back: no orbit between them
+    back = fig["checks"][fig["checks"].index(first) + 1]
+    assert back["type"] == "period_doubling" and "after" not in first and "before" not in back
+    assert first["before"]["stable"] and back["after"]["stable"]
+    assert not first["confirmed"] and not back["confirmed"]
     said = (
-        f"The grazing at {first['omega']:.7f} (8 -> 16) is typed `persistent_flip` too, but the "
-        f"branch's orbit past it is stable again within {first['after']['distance_from_label']:.2g}"
+        f"The grazing at {first['omega']:.7f} (8 -> 16) is typed `persistent_flip` too, and the "
+        f"period doubling at {back['omega']:.7f} brings the multiplier back inside; the "
+        f"simulation confirms the orbits stable {first['before']['distance_from_label']:.2g} "
+        f"rad/s before the grazing and {back['after']['distance_from_label']:.2g} rad/s after "
+        "the doubling"
     )
     assert said in page, said
     end = [c for c in grazings if types[f"{c['omega']:.7f}"] == "border_collision"]
